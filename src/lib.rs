@@ -1,0 +1,17 @@
+//! luster: a ray tracer whose heart is a procedural shading language.
+//!
+//! The flow of data follows the flow of a render:
+//!
+//! ```text
+//! scene file ─parse─▶ scene::Description ─build─▶ render::Scene ─▶ integrator ─▶ image
+//! (XML/JSON/PLY)      (plain data + locations)    (BVH, lights, Sync)
+//! ```
+//!
+//! The renderer never sees XML or JSON: [`scene`] turns either encoding of the
+//! CENG795 format into one typed description that remembers where each value
+//! came from, and [`render`] builds an immutable scene from it.
+#![warn(missing_docs)]
+
+pub mod accel;
+pub mod image;
+pub mod math;
