@@ -14,4 +14,8 @@
 
 pub mod accel;
 pub mod image;
+pub mod geometry;
 pub mod math;
+pub mod render;
+pub mod scene;
+pub mod shading;

@@ -1,1 +1,3 @@
 //! Reading, writing and comparing images.
+
+pub mod output;

@@ -1,0 +1,81 @@
+//! A sphere in object space; its object's transform makes ellipsoids of it.
+
+use crate::math::{Aabb, Ray, Vec3};
+
+/// A sphere.
+#[derive(Clone, Copy, Debug)]
+pub struct Sphere {
+    /// Centre.
+    pub center: Vec3,
+    /// Radius.
+    pub radius: f32,
+}
+
+impl Sphere {
+    /// The nearest `t` in `(t_min, t_max)` where the ray meets the sphere. The
+    /// direction need not be unit length (rays moved into object space keep
+    /// their scale so `t` is the same in both spaces).
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+        let oc = ray.o - self.center;
+        let a = ray.d.length_squared();
+        let half_b = oc.dot(ray.d);
+        // Computing c - b²/a as |oc - (oc·d/a) d|² - r² (Hearn & Baker's form, used by
+        // Ray Tracing Gems ch. 7) avoids the cancellation of the textbook discriminant.
+        let f = oc - ray.d * (half_b / a);
+        let disc = a * (self.radius * self.radius - f.length_squared());
+        if disc < 0.0 {
+            return None;
+        }
+        let c = oc.length_squared() - self.radius * self.radius;
+        let q = -half_b - disc.sqrt().copysign(half_b);
+        let (mut t0, mut t1) = (c / q, q / a);
+        if t0 > t1 {
+            std::mem::swap(&mut t0, &mut t1);
+        }
+        if t0 > t_min && t0 < t_max {
+            Some(t0)
+        } else if t1 > t_min && t1 < t_max {
+            Some(t1)
+        } else {
+            None
+        }
+    }
+
+    /// The outward normal at a point on the sphere.
+    #[inline]
+    pub fn normal(&self, p: Vec3) -> Vec3 {
+        (p - self.center) / self.radius
+    }
+
+    /// Bounds.
+    pub fn bounds(&self) -> Aabb {
+        Aabb::new(self.center - Vec3::splat(self.radius), self.center + Vec3::splat(self.radius))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hits_front_and_back() {
+        let s = Sphere { center: Vec3::new(0.0, 0.0, -5.0), radius: 1.0 };
+        let r = Ray::new(Vec3::ZERO, -Vec3::Z);
+        assert!((s.intersect(&r, 0.0, f32::INFINITY).unwrap() - 4.0).abs() < 1e-5);
+        // From inside, the far wall.
+        let r = Ray::new(Vec3::new(0.0, 0.0, -5.0), -Vec3::Z);
+        assert!((s.intersect(&r, 0.0, f32::INFINITY).unwrap() - 1.0).abs() < 1e-5);
+        // A scaled direction scales t.
+        let r = Ray::new(Vec3::ZERO, -Vec3::Z * 2.0);
+        assert!((s.intersect(&r, 0.0, f32::INFINITY).unwrap() - 2.0).abs() < 1e-5);
+        assert!(s.intersect(&Ray::new(Vec3::ZERO, Vec3::Z), 0.0, f32::INFINITY).is_none());
+    }
+
+    #[test]
+    fn far_small_sphere_is_precise() {
+        let s = Sphere { center: Vec3::new(0.0, 0.0, -10000.0), radius: 0.01 };
+        let t = s.intersect(&Ray::new(Vec3::ZERO, -Vec3::Z), 0.0, f32::INFINITY).unwrap();
+        assert!((t - 9999.99).abs() < 0.01, "{t}");
+    }
+}

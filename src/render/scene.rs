@@ -1,0 +1,300 @@
+//! The render scene: immutable, `Sync`, built once from a [`Description`].
+//!
+//! Geometry is two-level. Every mesh (inline, PLY, or a single `Triangle`) is
+//! built once in its own object space with its own BVH; objects — meshes,
+//! instances of meshes, spheres — are primitives of a top-level BVH, each with
+//! an optional object-to-world transform. Rays are moved into object space
+//! without renormalizing, so `t` means the same in both spaces. Infinite planes
+//! have no box and are tested beside the BVH.
+
+use crate::accel::Bvh;
+use crate::geometry::{Mesh, Plane, Sphere};
+use crate::math::{Aabb, Ray, Transform, Vec3};
+use crate::render::camera::Camera;
+use crate::scene::description::{Description, MeshSource, Shape};
+use crate::scene::ply::read_ply;
+use crate::scene::{SceneError, Warning};
+use crate::shading::{Material, PointLight};
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// What a top-level primitive is.
+#[derive(Clone, Copy, Debug)]
+enum Geom {
+    Mesh(u32),
+    Sphere(Sphere),
+}
+
+/// A primitive of the top-level BVH.
+struct Prim {
+    geom: Geom,
+    material: u32,
+    /// `None` when the object's transform is the identity, which skips two
+    /// matrix-vector products per ray.
+    xf: Option<Box<Transform>>,
+}
+
+/// Everything about the closest hit that shading needs, in world space.
+#[derive(Clone, Copy, Debug)]
+pub struct Hit {
+    /// Ray parameter.
+    pub t: f32,
+    /// Position.
+    pub p: Vec3,
+    /// Unit geometric normal, facing where the winding (or the sphere's outside) says.
+    pub ng: Vec3,
+    /// Unit shading normal, on the same side as `ng`.
+    pub ns: Vec3,
+    /// Material index.
+    pub material: u32,
+}
+
+/// A scene ready to render.
+pub struct Scene {
+    meshes: Vec<Mesh>,
+    prims: Vec<Prim>,
+    tlas: Bvh,
+    planes: Vec<(Plane, u32)>,
+    /// Materials.
+    pub materials: Vec<Material>,
+    /// Point lights.
+    pub lights: Vec<PointLight>,
+    /// Ambient light.
+    pub ambient: Vec3,
+    /// Colour of rays that miss.
+    pub background: Vec3,
+    /// Offset of secondary ray origins.
+    pub shadow_epsilon: f32,
+    /// Smallest accepted hit distance.
+    pub intersection_epsilon: f32,
+    /// Bounces after the camera ray.
+    pub max_depth: u32,
+    /// Cameras.
+    pub cameras: Vec<Camera>,
+    /// Notes from building (e.g. degenerate triangles a PLY file had).
+    pub warnings: Vec<Warning>,
+}
+
+impl Scene {
+    /// Builds the render scene: loads PLY files and builds every BVH, meshes in parallel.
+    pub fn build(desc: &Description) -> Result<Scene, SceneError> {
+        // Meshes: one per Mesh or Triangle object; instances share their base's.
+        let mesh_objects: Vec<usize> = desc
+            .objects
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| matches!(o.shape, Shape::Mesh { .. } | Shape::Triangle { .. }))
+            .map(|(i, _)| i)
+            .collect();
+        let built: Vec<Result<(Mesh, Option<Warning>), SceneError>> =
+            mesh_objects.par_iter().map(|&i| build_mesh(desc, i)).collect();
+        let mut meshes = Vec::with_capacity(built.len());
+        let mut warnings = Vec::new();
+        let mut mesh_of_object = HashMap::new();
+        for (&obj, b) in mesh_objects.iter().zip(built) {
+            let (m, w) = b?;
+            warnings.extend(w);
+            mesh_of_object.insert(obj, meshes.len() as u32);
+            meshes.push(m);
+        }
+
+        let mut prims = Vec::new();
+        let mut planes = Vec::new();
+        for (i, o) in desc.objects.iter().enumerate() {
+            let xf = (!o.transform.is_identity()).then(|| Box::new(o.transform));
+            let material = o.material as u32;
+            let geom = match &o.shape {
+                Shape::Mesh { .. } | Shape::Triangle { .. } => Geom::Mesh(mesh_of_object[&i]),
+                Shape::Instance { mesh } => match mesh_of_object.get(mesh) {
+                    Some(&m) => Geom::Mesh(m),
+                    None => return Err(SceneError::at(&desc.file, &o.loc, "the instance's base is not a mesh")),
+                },
+                Shape::Sphere { center, radius } => Geom::Sphere(Sphere { center: *center, radius: *radius }),
+                Shape::Plane { point, normal } => {
+                    let p = Plane {
+                        point: o.transform.point(*point),
+                        normal: o.transform.normal_to_world(*normal).normalize(),
+                    };
+                    planes.push((p, material));
+                    continue;
+                }
+            };
+            if let Geom::Mesh(m) = geom {
+                if meshes[m as usize].triangle_count() == 0 {
+                    continue;
+                }
+            }
+            prims.push(Prim { geom, material, xf });
+        }
+        let bounds: Vec<Aabb> = prims.iter().map(|p| prim_bounds(p, &meshes)).collect();
+        let tlas = Bvh::build(&bounds);
+        // Put primitives in the BVH's leaf order so a leaf is a contiguous range.
+        let mut slots: Vec<Option<Prim>> = prims.into_iter().map(Some).collect();
+        let prims = tlas.prim_order().iter().filter_map(|&i| slots[i as usize].take()).collect();
+
+        Ok(Scene {
+            meshes,
+            prims,
+            tlas,
+            planes,
+            materials: desc.materials.iter().map(Material::from_desc).collect(),
+            lights: desc
+                .point_lights
+                .iter()
+                .map(|l| PointLight { position: l.position, intensity: l.intensity })
+                .collect(),
+            ambient: desc.ambient_light,
+            background: desc.background,
+            shadow_epsilon: desc.shadow_ray_epsilon,
+            intersection_epsilon: desc.intersection_test_epsilon,
+            max_depth: desc.max_recursion_depth,
+            cameras: desc.cameras.iter().map(Camera::from_desc).collect(),
+            warnings,
+        })
+    }
+
+    /// Total triangles over all meshes (instances not counted again).
+    pub fn triangle_count(&self) -> usize {
+        self.meshes.iter().map(Mesh::triangle_count).sum()
+    }
+
+    /// The closest hit along `ray` beyond the intersection epsilon.
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let t_min = self.intersection_epsilon;
+        let mut best_t = f32::INFINITY;
+        let mut best: Option<(usize, Option<crate::accel::TriHit>)> = None;
+        for (i, (pl, _)) in self.planes.iter().enumerate() {
+            if let Some(t) = pl.intersect(ray, t_min, best_t) {
+                best_t = t;
+                best = Some((usize::MAX - i, None));
+            }
+        }
+        self.tlas.closest(ray, best_t, |range, t_max| {
+            let mut hit = false;
+            for pi in range {
+                let p = &self.prims[pi];
+                let local = match &p.xf {
+                    Some(xf) => Ray::new(xf.inv_point(ray.o), xf.inv_vector(ray.d)),
+                    None => *ray,
+                };
+                match p.geom {
+                    Geom::Mesh(m) => {
+                        if let Some(h) = self.meshes[m as usize].intersect(&local, t_min, *t_max) {
+                            *t_max = h.t;
+                            best = Some((pi, Some(h)));
+                            hit = true;
+                        }
+                    }
+                    Geom::Sphere(s) => {
+                        if let Some(t) = s.intersect(&local, t_min, *t_max) {
+                            *t_max = t;
+                            best = Some((pi, None));
+                            hit = true;
+                        }
+                    }
+                }
+            }
+            if hit {
+                best_t = *t_max;
+            }
+            hit
+        });
+        let (pi, tri) = best?;
+        if pi > self.prims.len() {
+            let (pl, material) = self.planes[usize::MAX - pi];
+            return Some(Hit { t: best_t, p: ray.at(best_t), ng: pl.normal, ns: pl.normal, material });
+        }
+        let p = &self.prims[pi];
+        let (ng, ns, t) = match (p.geom, tri) {
+            (Geom::Mesh(m), Some(h)) => {
+                let (ng, ns) = self.meshes[m as usize].normals_at(&h);
+                (ng, ns, h.t)
+            }
+            (Geom::Sphere(s), _) => {
+                let local_p = match &p.xf {
+                    Some(xf) => xf.inv_point(ray.at(best_t)),
+                    None => ray.at(best_t),
+                };
+                let n = s.normal(local_p);
+                (n, n, best_t)
+            }
+            (Geom::Mesh(_), None) => return None,
+        };
+        let (ng, ns) = match &p.xf {
+            Some(xf) => (xf.normal_to_world(ng), xf.normal_to_world(ns)),
+            None => (ng, ns),
+        };
+        let ng = ng.normalize();
+        let mut ns = ns.normalize();
+        if ns.dot(ng) < 0.0 {
+            ns = -ns;
+        }
+        Some(Hit { t, p: ray.at(t), ng, ns, material: p.material })
+    }
+
+    /// Whether anything lies on `ray` between the intersection epsilon and `t_max`.
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        let t_min = self.intersection_epsilon;
+        if self.planes.iter().any(|(pl, _)| pl.intersect(ray, t_min, t_max).is_some()) {
+            return true;
+        }
+        self.tlas.any(ray, t_max, |range, t_max| {
+            range.into_iter().any(|pi| {
+                let p = &self.prims[pi];
+                let local = match &p.xf {
+                    Some(xf) => Ray::new(xf.inv_point(ray.o), xf.inv_vector(ray.d)),
+                    None => *ray,
+                };
+                match p.geom {
+                    Geom::Mesh(m) => self.meshes[m as usize].occluded(&local, t_min, t_max),
+                    Geom::Sphere(s) => s.intersect(&local, t_min, t_max).is_some(),
+                }
+            })
+        })
+    }
+}
+
+fn prim_bounds(p: &Prim, meshes: &[Mesh]) -> Aabb {
+    let b = match p.geom {
+        Geom::Mesh(m) => meshes[m as usize].bounds(),
+        Geom::Sphere(s) => s.bounds(),
+    };
+    match &p.xf {
+        Some(xf) => xf.aabb(&b),
+        None => b,
+    }
+}
+
+/// Builds the mesh of object `i` (a Mesh or a Triangle), in object space.
+fn build_mesh(desc: &Description, i: usize) -> Result<(Mesh, Option<Warning>), SceneError> {
+    let o = &desc.objects[i];
+    match &o.shape {
+        Shape::Triangle { vertices } => Ok((Mesh::new(vertices.to_vec(), vec![[0, 1, 2]], false), None)),
+        Shape::Mesh { source: MeshSource::Inline(tris), smooth } => {
+            // Keep only the vertices this mesh uses, renumbered.
+            let mut remap: HashMap<u32, u32> = HashMap::new();
+            let mut positions = Vec::new();
+            let local: Vec<[u32; 3]> = tris
+                .iter()
+                .map(|t| {
+                    t.map(|g| {
+                        *remap.entry(g).or_insert_with(|| {
+                            positions.push(desc.vertices[g as usize]);
+                            positions.len() as u32 - 1
+                        })
+                    })
+                })
+                .collect();
+            Ok((Mesh::new(positions, local, *smooth), None))
+        }
+        Shape::Mesh { source: MeshSource::Ply(path), smooth } => {
+            let ply = read_ply(path).map_err(|e| SceneError::at(&desc.file, &o.loc, e.to_string()))?;
+            let warning = (ply.skipped_degenerate > 0).then(|| Warning {
+                loc: o.loc.clone(),
+                message: format!("{}: {} degenerate triangle(s) skipped", path.display(), ply.skipped_degenerate),
+            });
+            Ok((Mesh::new(ply.positions, ply.triangles, *smooth), warning))
+        }
+        _ => Err(SceneError::at(&desc.file, &o.loc, "internal error: not a mesh")),
+    }
+}

@@ -1,0 +1,134 @@
+//! `Cameras/Camera`: one image each.
+//!
+//! | element | meaning |
+//! |---|---|
+//! | `Position`, `Up` | eye and up vector |
+//! | `Gaze` + `NearPlane` (l r b t) | the plain form |
+//! | `type="lookAt"`: `GazePoint` + `FovY` (degrees) | the look-at form; the horizontal extent follows the aspect ratio |
+//! | `NearDistance` | distance to the image plane |
+//! | `ImageResolution` | width height |
+//! | `ImageName` | output file name (a relative path without `..`) |
+//! | `NumSamples` | samples per pixel (default 1) |
+//!
+//! The course's `hw1/xml/spheres*.xml` give five numbers to `NearPlane`; the
+//! first four are used and a warning says so.
+
+use super::Warnings;
+use crate::scene::description::{CameraDesc, Projection};
+use crate::scene::element::{Element, Reader};
+use crate::scene::error::SceneError;
+use std::path::{Component, Path};
+
+/// Largest accepted image side, and pixel count: a scene asking for more is a
+/// mistake or an attack, not a render.
+pub const MAX_SIDE: u32 = 32768;
+/// See [`MAX_SIDE`].
+pub const MAX_PIXELS: u64 = 1 << 27;
+
+/// Reads every camera.
+pub fn read_all(r: &Reader, cams: &Element, w: &mut Warnings) -> Result<Vec<CameraDesc>, SceneError> {
+    w.unknown_children(cams, &["Camera"]);
+    cams.children_named("Camera").map(|c| read(r, c, w)).collect()
+}
+
+fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneError> {
+    let kind = c.attr("type").unwrap_or("").trim();
+    let look_at = match kind {
+        "" | "simple" => false,
+        "lookAt" => true,
+        other => return Err(r.err(c, format!("camera type \"{other}\" is unknown (expected lookAt or none)"))),
+    };
+    let known: &[&str] = &[
+        "Position", "Gaze", "Up", "NearPlane", "NearDistance", "ImageResolution", "ImageName", "NumSamples",
+        "GazePoint", "FovY",
+    ];
+    w.unknown_children(c, known);
+
+    let position = r.vec3(r.required(c, "Position")?)?;
+    let up = r.vec3(r.required(c, "Up")?)?;
+    if up.length_squared() == 0.0 {
+        return Err(r.err(c, "the camera's <Up> vector is zero"));
+    }
+    let projection = if look_at {
+        let gaze_point = r.vec3(r.required(c, "GazePoint")?)?;
+        let fy = r.required(c, "FovY")?;
+        let fov_y = r.float(fy)?;
+        if !(fov_y > 0.0 && fov_y < 180.0) {
+            return Err(r.err(fy, format!("<FovY> must be between 0 and 180 degrees, found {fov_y}")));
+        }
+        if (gaze_point - position).length_squared() == 0.0 {
+            return Err(r.err(c, "the camera's <GazePoint> is its <Position>, so it looks nowhere"));
+        }
+        Projection::LookAt { gaze_point, fov_y }
+    } else {
+        let gaze = r.vec3(r.required(c, "Gaze")?)?;
+        if gaze.length_squared() == 0.0 {
+            return Err(r.err(c, "the camera's <Gaze> vector is zero"));
+        }
+        let np = r.required(c, "NearPlane")?;
+        let v = r.floats(np)?;
+        if v.len() == 5 {
+            w.at(np, "<NearPlane> has 5 numbers (a known typo in course files); using the first 4");
+        } else if v.len() != 4 {
+            return Err(r.err(np, format!("<NearPlane> needs 4 numbers (left right bottom top), found {}", v.len())));
+        }
+        if v[0] == v[1] || v[2] == v[3] {
+            return Err(r.err(np, "<NearPlane> has zero width or height"));
+        }
+        Projection::Plane { gaze, near_plane: [v[0], v[1], v[2], v[3]] }
+    };
+    let nd = r.required(c, "NearDistance")?;
+    let near_distance = r.float(nd)?;
+    if near_distance <= 0.0 {
+        return Err(r.err(nd, format!("<NearDistance> must be positive, found {near_distance}")));
+    }
+    let res_el = r.required(c, "ImageResolution")?;
+    let res = r.floats_n(res_el, 2)?;
+    let (wpx, hpx) = (res[0], res[1]);
+    if wpx.fract() != 0.0 || hpx.fract() != 0.0 || wpx < 1.0 || hpx < 1.0 {
+        return Err(r.err(res_el, format!("<ImageResolution> must be two positive integers, found {wpx} {hpx}")));
+    }
+    if wpx > MAX_SIDE as f32 || hpx > MAX_SIDE as f32 || (wpx as u64) * (hpx as u64) > MAX_PIXELS {
+        return Err(r.err(
+            res_el,
+            format!("<ImageResolution> {wpx}x{hpx} is beyond the supported {MAX_SIDE} pixels a side and {MAX_PIXELS} pixels in all"),
+        ));
+    }
+    let name_el = r.required(c, "ImageName")?;
+    let image_name = name_el.text.trim().to_string();
+    check_image_name(r, name_el, &image_name)?;
+    let num_samples = match c.child("NumSamples") {
+        Some(ns) => {
+            let n = r.uint(ns)?;
+            if n == 0 || n > 1 << 20 {
+                return Err(r.err(ns, format!("<NumSamples> must be between 1 and {}, found {n}", 1 << 20)));
+            }
+            n
+        }
+        None => 1,
+    };
+    Ok(CameraDesc {
+        id: c.attr("id").unwrap_or("").to_string(),
+        position,
+        up,
+        projection,
+        near_distance,
+        resolution: (wpx as u32, hpx as u32),
+        image_name,
+        num_samples,
+        loc: c.loc.clone(),
+    })
+}
+
+/// Scene files come from strangers: the image name must stay inside the output
+/// folder.
+fn check_image_name(r: &Reader, el: &Element, name: &str) -> Result<(), SceneError> {
+    if name.is_empty() {
+        return Err(r.err(el, "<ImageName> is empty"));
+    }
+    let p = Path::new(name);
+    if p.components().any(|c| !matches!(c, Component::Normal(_))) {
+        return Err(r.err(el, format!("<ImageName> \"{name}\" must be a relative path without \"..\"")));
+    }
+    Ok(())
+}

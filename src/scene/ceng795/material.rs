@@ -1,0 +1,87 @@
+//! `Materials/Material`.
+//!
+//! | element | meaning | default |
+//! |---|---|---|
+//! | `type` attribute | `mirror`, `dielectric`, `conductor`, or none | none |
+//! | `AmbientReflectance`, `DiffuseReflectance`, `SpecularReflectance` | Blinn-Phong RGB | 0 |
+//! | `PhongExponent` | specular exponent | 1 |
+//! | `MirrorReflectance` | RGB weight of the reflected ray | 0 |
+//! | `RefractionIndex` | dielectric index, or a conductor's real part | 1 |
+//! | `AbsorptionCoefficient` | dielectric Beer's-law RGB coefficient | 0 |
+//! | `AbsorptionIndex` | a conductor's imaginary part | 0 |
+//!
+//! A material with no type and a non-zero `MirrorReflectance` is a mirror, as
+//! in the course's older scenes.
+
+use super::Warnings;
+use crate::math::Vec3;
+use crate::scene::description::{MaterialDesc, MaterialKind};
+use crate::scene::element::{Element, Reader};
+use crate::scene::error::SceneError;
+
+/// Reads every material.
+pub fn read_all(r: &Reader, ms: &Element, w: &mut Warnings) -> Result<Vec<MaterialDesc>, SceneError> {
+    w.unknown_children(ms, &["Material"]);
+    let mut out: Vec<MaterialDesc> = Vec::new();
+    for m in ms.children_named("Material") {
+        let desc = read(r, m, w)?;
+        if out.iter().any(|o| o.id == desc.id) {
+            w.at(m, format!("material id {} is defined twice; the first definition is used", desc.id));
+        }
+        out.push(desc);
+    }
+    Ok(out)
+}
+
+fn read(r: &Reader, m: &Element, w: &mut Warnings) -> Result<MaterialDesc, SceneError> {
+    w.unknown_children(
+        m,
+        &[
+            "AmbientReflectance",
+            "DiffuseReflectance",
+            "SpecularReflectance",
+            "MirrorReflectance",
+            "PhongExponent",
+            "RefractionIndex",
+            "AbsorptionCoefficient",
+            "AbsorptionIndex",
+        ],
+    );
+    let id = m.attr("id").map(str::trim).filter(|s| !s.is_empty());
+    let Some(id) = id else {
+        return Err(r.err(m, "<Material> has no id"));
+    };
+    let mirror = r.vec3_or(m, "MirrorReflectance", Vec3::ZERO)?;
+    let kind = match m.attr("type").map(str::trim).unwrap_or("") {
+        "" if mirror != Vec3::ZERO => MaterialKind::Mirror,
+        "" => MaterialKind::Plain,
+        "mirror" => MaterialKind::Mirror,
+        "dielectric" => MaterialKind::Dielectric,
+        "conductor" => MaterialKind::Conductor,
+        other => {
+            w.at(m, format!("material type \"{other}\" is not supported yet; treated as plain Blinn-Phong"));
+            MaterialKind::Plain
+        }
+    };
+    let refraction_index = r.float_or(m, "RefractionIndex", 1.0)?;
+    if refraction_index <= 0.0 {
+        return Err(r.err(m, format!("<RefractionIndex> must be positive, found {refraction_index}")));
+    }
+    let absorption_coefficient = r.vec3_or(m, "AbsorptionCoefficient", Vec3::ZERO)?;
+    if absorption_coefficient.min_element() < 0.0 {
+        return Err(r.err(m, "<AbsorptionCoefficient> must not be negative"));
+    }
+    Ok(MaterialDesc {
+        id: id.to_string(),
+        kind,
+        ambient: r.vec3_or(m, "AmbientReflectance", Vec3::ZERO)?,
+        diffuse: r.vec3_or(m, "DiffuseReflectance", Vec3::ZERO)?,
+        specular: r.vec3_or(m, "SpecularReflectance", Vec3::ZERO)?,
+        mirror,
+        phong_exponent: r.float_or(m, "PhongExponent", 1.0)?,
+        refraction_index,
+        absorption_coefficient,
+        absorption_index: r.float_or(m, "AbsorptionIndex", 0.0)?,
+        loc: m.loc.clone(),
+    })
+}

@@ -1,0 +1,135 @@
+//! Reads the CENG795 course scene format (either encoding, already turned into
+//! an [`Element`] tree) into a [`Description`].
+//!
+//! Top-level elements read here:
+//!
+//! | element | meaning | default |
+//! |---|---|---|
+//! | `MaxRecursionDepth` | reflection/refraction bounces | 6 |
+//! | `BackgroundColor` | RGB of rays that miss | 0 0 0 |
+//! | `ShadowRayEpsilon` | offset of secondary ray origins | 1e-3 |
+//! | `IntersectionTestEpsilon` | intersection tolerance | 1e-6 |
+//! | `Cameras/Camera` | see [`camera`] | required |
+//! | `Lights/AmbientLight`, `Lights/PointLight` | see [`lights`] | none |
+//! | `Materials/Material` | see [`material`] | |
+//! | `Transformations`, `VertexData`, `Objects` | see [`objects`] | |
+//!
+//! Anything else gets a warning naming it, so a scene that relies on a feature
+//! luster lacks says so instead of rendering silently wrong.
+
+pub mod camera;
+pub mod lights;
+pub mod material;
+pub mod objects;
+pub mod transforms;
+
+use super::description::Description;
+use super::element::{Element, Reader};
+use super::error::{SceneError, Warning};
+use crate::math::Vec3;
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Collects warnings while reading.
+#[derive(Default)]
+pub struct Warnings(pub Vec<Warning>);
+
+impl Warnings {
+    /// Records a warning at `el`.
+    pub fn at(&mut self, el: &Element, msg: impl Into<String>) {
+        self.0.push(Warning { loc: el.loc.clone(), message: msg.into() });
+    }
+
+    /// Warns about every child of `el` whose name is not in `known`.
+    pub fn unknown_children(&mut self, el: &Element, known: &[&str]) {
+        for c in &el.children {
+            if !known.contains(&c.name.as_str()) {
+                self.at(c, format!("<{}> inside <{}> is not supported yet; ignored", c.name, el.name));
+            }
+        }
+    }
+}
+
+/// Builds a description from the root element of a scene file.
+pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
+    let r = Reader { file };
+    if root.name != "Scene" {
+        return Err(r.err(root, format!("the root element must be <Scene>, found <{}>", root.name)));
+    }
+    let mut w = Warnings::default();
+    w.unknown_children(
+        root,
+        &[
+            "MaxRecursionDepth",
+            "BackgroundColor",
+            "ShadowRayEpsilon",
+            "IntersectionTestEpsilon",
+            "Cameras",
+            "Lights",
+            "Materials",
+            "Transformations",
+            "VertexData",
+            "Objects",
+        ],
+    );
+    let max_recursion_depth = match root.child("MaxRecursionDepth") {
+        Some(el) => r.uint(el)?,
+        None => 6,
+    };
+    let shadow_ray_epsilon = r.float_or(root, "ShadowRayEpsilon", 1e-3)?;
+    let intersection_test_epsilon = r.float_or(root, "IntersectionTestEpsilon", 1e-6)?;
+    for (name, v) in [("ShadowRayEpsilon", shadow_ray_epsilon), ("IntersectionTestEpsilon", intersection_test_epsilon)] {
+        if v < 0.0 {
+            return Err(r.err(root.child(name).unwrap_or(root), format!("<{name}> must not be negative")));
+        }
+    }
+
+    let cameras = match root.child("Cameras") {
+        Some(c) => camera::read_all(&r, c, &mut w)?,
+        None => Vec::new(),
+    };
+    if cameras.is_empty() {
+        return Err(r.err(root, "the scene has no <Camera>, so there is no image to render"));
+    }
+    let (ambient_light, point_lights) = match root.child("Lights") {
+        Some(l) => lights::read_all(&r, l, &mut w)?,
+        None => (Vec3::ZERO, Vec::new()),
+    };
+    let materials = match root.child("Materials") {
+        Some(m) => material::read_all(&r, m, &mut w)?,
+        None => Vec::new(),
+    };
+    let material_ids: HashMap<&str, usize> =
+        materials.iter().enumerate().rev().map(|(i, m)| (m.id.as_str(), i)).collect();
+    let transforms = match root.child("Transformations") {
+        Some(t) => transforms::read_all(&r, t, &mut w)?,
+        None => HashMap::new(),
+    };
+    let vertices = match root.child("VertexData") {
+        Some(v) => objects::read_vertices(&r, v)?,
+        None => Vec::new(),
+    };
+    let base_dir = file.parent().map(Path::to_path_buf).unwrap_or_default();
+    let objects = match root.child("Objects") {
+        Some(o) => {
+            let ctx = objects::Context { r, materials: &material_ids, transforms: &transforms, vertices: &vertices, base_dir: &base_dir };
+            objects::read_all(&ctx, o, &mut w)?
+        }
+        None => Vec::new(),
+    };
+    Ok(Description {
+        file: file.to_path_buf(),
+        base_dir,
+        max_recursion_depth,
+        background: r.vec3_or(root, "BackgroundColor", Vec3::ZERO)?,
+        shadow_ray_epsilon,
+        intersection_test_epsilon,
+        cameras,
+        ambient_light,
+        point_lights,
+        materials,
+        vertices,
+        objects,
+        warnings: w.0,
+    })
+}

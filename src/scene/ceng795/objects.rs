@@ -1,0 +1,274 @@
+//! `VertexData` and `Objects`.
+//!
+//! | object | reads |
+//! |---|---|
+//! | `Mesh` | `Material`, `Transformations`, `Faces` (inline 1-based vertex indices, or `plyFile="..."`), `shadingMode="smooth"` |
+//! | `Triangle` | `Material`, `Transformations`, `Indices` (three vertex indices) |
+//! | `Sphere` | `Material`, `Transformations`, `Center` (a vertex index), `Radius` |
+//! | `Plane` | `Material`, `Transformations`, `Point` (a vertex index), `Normal` |
+//! | `MeshInstance` | `baseMeshId`, `resetTransform`, `Material`, `Transformations` |
+//!
+//! A `MeshInstance` may instance another instance. Its transform is its own
+//! list applied after the base's full transform, or alone when
+//! `resetTransform="true"` (hw2 spec, eq. 3). Degenerate inline triangles (two
+//! equal indices) are dropped with a warning, as the course's specs advise.
+
+use super::transforms::compose;
+use super::Warnings;
+use crate::math::{Transform, Vec3};
+use crate::scene::description::{MeshSource, ObjectDesc, Shape};
+use crate::scene::element::{Element, Reader};
+use crate::scene::error::SceneError;
+use std::collections::HashMap;
+use std::path::Path;
+
+/// What object reading needs from the rest of the file.
+pub struct Context<'a> {
+    /// Typed reading with errors naming the file.
+    pub r: Reader<'a>,
+    /// Material id to index.
+    pub materials: &'a HashMap<&'a str, usize>,
+    /// Named transforms.
+    pub transforms: &'a HashMap<String, Transform>,
+    /// Shared vertices.
+    pub vertices: &'a [Vec3],
+    /// Folder of the scene file.
+    pub base_dir: &'a Path,
+}
+
+/// Reads `VertexData`: a multiple of three numbers.
+pub fn read_vertices(r: &Reader, el: &Element) -> Result<Vec<Vec3>, SceneError> {
+    let f = r.floats(el)?;
+    if f.len() % 3 != 0 {
+        return Err(r.err(el, format!("<VertexData> has {} numbers, which is not a multiple of 3", f.len())));
+    }
+    Ok(f.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect())
+}
+
+/// An instance before its base is resolved.
+struct PendingInstance {
+    index: usize,
+    base_id: String,
+    reset: bool,
+    material: Option<usize>,
+    own: Transform,
+}
+
+/// Reads every object, resolving instances.
+pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Vec<ObjectDesc>, SceneError> {
+    w.unknown_children(objs, &["Mesh", "Triangle", "Sphere", "Plane", "MeshInstance"]);
+    let r = &ctx.r;
+    let mut out: Vec<ObjectDesc> = Vec::new();
+    let mut pending = Vec::new();
+    let mut mesh_ids: HashMap<String, usize> = HashMap::new();
+    for el in &objs.children {
+        let shape = match el.name.as_str() {
+            "Mesh" => mesh(ctx, el, w)?,
+            "Triangle" => {
+                w.unknown_children(el, &["Material", "Transformations", "Indices"]);
+                let ix = r.uints(r.required(el, "Indices")?)?;
+                if ix.len() != 3 {
+                    return Err(r.err(el, format!("<Indices> needs 3 vertex indices, found {}", ix.len())));
+                }
+                let idx = r.required(el, "Indices")?;
+                Shape::Triangle {
+                    vertices: [vertex(ctx, idx, ix[0])?, vertex(ctx, idx, ix[1])?, vertex(ctx, idx, ix[2])?],
+                }
+            }
+            "Sphere" => {
+                w.unknown_children(el, &["Material", "Transformations", "Center", "Radius"]);
+                let c = r.required(el, "Center")?;
+                let center = vertex(ctx, c, r.uint(c)?)?;
+                let re = r.required(el, "Radius")?;
+                let radius = r.float(re)?;
+                if radius <= 0.0 {
+                    return Err(r.err(re, format!("<Radius> must be positive, found {radius}")));
+                }
+                Shape::Sphere { center, radius }
+            }
+            "Plane" => {
+                w.unknown_children(el, &["Material", "Transformations", "Point", "Normal"]);
+                let p = r.required(el, "Point")?;
+                let point = vertex(ctx, p, r.uint(p)?)?;
+                let ne = r.required(el, "Normal")?;
+                let normal = r.vec3(ne)?;
+                if normal.length_squared() == 0.0 {
+                    return Err(r.err(ne, "the plane's <Normal> is zero"));
+                }
+                Shape::Plane { point, normal: normal.normalize() }
+            }
+            "MeshInstance" => {
+                w.unknown_children(el, &["Material", "Transformations"]);
+                let base_id = el
+                    .attr("baseMeshId")
+                    .map(str::trim)
+                    .filter(|s| !s.is_empty())
+                    .ok_or_else(|| r.err(el, "<MeshInstance> has no baseMeshId"))?;
+                let material = el.child("Material").map(|m| material(ctx, m)).transpose()?;
+                pending.push(PendingInstance {
+                    index: out.len(),
+                    base_id: base_id.to_string(),
+                    reset: r.bool_attr(el, "resetTransform", false)?,
+                    material,
+                    own: transform(ctx, el)?,
+                });
+                let id = el.attr("id").unwrap_or("").trim().to_string();
+                register(&mut mesh_ids, &id, out.len(), el, w);
+                out.push(ObjectDesc {
+                    id,
+                    shape: Shape::Instance { mesh: usize::MAX },
+                    material: usize::MAX,
+                    transform: Transform::IDENTITY,
+                    loc: el.loc.clone(),
+                });
+                continue;
+            }
+            _ => continue,
+        };
+        let id = el.attr("id").unwrap_or("").trim().to_string();
+        if el.name == "Mesh" {
+            register(&mut mesh_ids, &id, out.len(), el, w);
+        }
+        out.push(ObjectDesc {
+            id,
+            shape,
+            material: material(ctx, r.required(el, "Material")?)?,
+            transform: transform(ctx, el)?,
+            loc: el.loc.clone(),
+        });
+    }
+    resolve_instances(ctx, &mut out, &pending, &mesh_ids, objs)?;
+    Ok(out)
+}
+
+fn register(ids: &mut HashMap<String, usize>, id: &str, index: usize, el: &Element, w: &mut Warnings) {
+    if ids.contains_key(id) {
+        w.at(el, format!("mesh id {id} is used twice; instances refer to the first"));
+    } else {
+        ids.insert(id.to_string(), index);
+    }
+}
+
+fn mesh(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, SceneError> {
+    let r = &ctx.r;
+    w.unknown_children(el, &["Material", "Transformations", "Faces"]);
+    let smooth = match el.attr("shadingMode").map(str::trim) {
+        None | Some("") | Some("flat") => false,
+        Some("smooth") => true,
+        Some(other) => return Err(r.err(el, format!("shadingMode \"{other}\" is unknown (expected smooth or flat)"))),
+    };
+    let faces = r.required(el, "Faces")?;
+    for (k, _) in &faces.attrs {
+        if !matches!(k.as_str(), "plyFile" | "type") {
+            w.at(faces, format!("<Faces> attribute {k} is not supported yet; ignored"));
+        }
+    }
+    if let Some(ply) = faces.attr("plyFile") {
+        let path = ctx.base_dir.join(ply.trim());
+        return Ok(Shape::Mesh { source: MeshSource::Ply(path), smooth });
+    }
+    let ix = r.uints(faces)?;
+    if ix.len() % 3 != 0 {
+        return Err(r.err(faces, format!("<Faces> has {} indices, which is not a multiple of 3", ix.len())));
+    }
+    let n = ctx.vertices.len();
+    let mut tris = Vec::with_capacity(ix.len() / 3);
+    let mut degenerate = 0;
+    for c in ix.chunks_exact(3) {
+        for &i in c {
+            if i == 0 || i as usize > n {
+                return Err(r.err(
+                    faces,
+                    format!("face index {i} is out of range (VertexData has {n} vertices, numbered from 1)"),
+                ));
+            }
+        }
+        if c[0] == c[1] || c[1] == c[2] || c[0] == c[2] {
+            degenerate += 1;
+            continue;
+        }
+        tris.push([c[0] - 1, c[1] - 1, c[2] - 1]);
+    }
+    if degenerate > 0 {
+        w.at(faces, format!("{degenerate} degenerate triangle(s) skipped"));
+    }
+    Ok(Shape::Mesh { source: MeshSource::Inline(tris), smooth })
+}
+
+fn vertex(ctx: &Context, el: &Element, i: u32) -> Result<Vec3, SceneError> {
+    let n = ctx.vertices.len();
+    if i == 0 || i as usize > n {
+        return Err(ctx.r.err(el, format!("vertex index {i} is out of range (VertexData has {n} vertices, numbered from 1)")));
+    }
+    Ok(ctx.vertices[i as usize - 1])
+}
+
+fn material(ctx: &Context, el: &Element) -> Result<usize, SceneError> {
+    let id = el.text.trim();
+    ctx.materials
+        .get(id)
+        .copied()
+        .ok_or_else(|| ctx.r.err(el, format!("material \"{id}\" is not defined in <Materials>")))
+}
+
+fn transform(ctx: &Context, el: &Element) -> Result<Transform, SceneError> {
+    match el.child("Transformations") {
+        Some(t) => compose(&ctx.r, t, ctx.transforms),
+        None => Ok(Transform::IDENTITY),
+    }
+}
+
+/// Resolves each instance to the mesh whose triangles it uses and its full
+/// transform, following chains of instances and refusing cycles.
+fn resolve_instances(
+    ctx: &Context,
+    out: &mut [ObjectDesc],
+    pending: &[PendingInstance],
+    mesh_ids: &HashMap<String, usize>,
+    objs: &Element,
+) -> Result<(), SceneError> {
+    let r = &ctx.r;
+    let by_index: HashMap<usize, &PendingInstance> = pending.iter().map(|p| (p.index, p)).collect();
+    let mut done: HashMap<usize, (usize, Transform, usize)> = HashMap::new();
+    for p in pending {
+        // Walk down the chain, then compose on the way back up.
+        let mut chain = vec![p.index];
+        let (mesh, mut t, mut mat) = loop {
+            let cur = *chain.last().unwrap_or(&p.index);
+            let inst = by_index[&cur];
+            let base = *mesh_ids.get(&inst.base_id).ok_or_else(|| {
+                r.err(&loc_el(objs, &out[cur]), format!("baseMeshId \"{}\" names no Mesh or MeshInstance", inst.base_id))
+            })?;
+            if let Some(&(m, t, mat)) = done.get(&base) {
+                break (m, t, mat);
+            }
+            if !by_index.contains_key(&base) {
+                break (base, out[base].transform, out[base].material);
+            }
+            if chain.contains(&base) {
+                return Err(r.err(
+                    &loc_el(objs, &out[p.index]),
+                    format!("MeshInstance {} is part of a cycle of instances", out[p.index].id),
+                ));
+            }
+            chain.push(base);
+        };
+        for &i in chain.iter().rev() {
+            let inst = by_index[&i];
+            t = if inst.reset { inst.own } else { t.then(&inst.own) };
+            mat = inst.material.unwrap_or(mat);
+            done.insert(i, (mesh, t, mat));
+        }
+    }
+    for (i, (mesh, t, mat)) in done {
+        out[i].shape = Shape::Instance { mesh };
+        out[i].transform = t;
+        out[i].material = mat;
+    }
+    Ok(())
+}
+
+/// An element standing in for an object, so errors carry its location.
+fn loc_el(objs: &Element, o: &ObjectDesc) -> Element {
+    Element { name: objs.name.clone(), loc: o.loc.clone(), ..Default::default() }
+}

@@ -1,0 +1,194 @@
+//! The scene description: plain data read from a scene file, every item with
+//! the location it came from. It knows nothing of rendering and nothing of XML
+//! or JSON; `render::Scene::build` turns it into something to trace.
+
+use super::error::{Loc, Warning};
+use crate::math::{Transform, Vec3};
+use std::path::PathBuf;
+
+/// A whole scene as the file describes it.
+#[derive(Clone, Debug)]
+pub struct Description {
+    /// The scene file.
+    pub file: PathBuf,
+    /// Folder that relative asset paths (PLY files) are resolved against.
+    pub base_dir: PathBuf,
+    /// Reflection/refraction bounces allowed after the camera ray.
+    pub max_recursion_depth: u32,
+    /// Colour of rays that hit nothing.
+    pub background: Vec3,
+    /// Offset of secondary ray origins along the normal.
+    pub shadow_ray_epsilon: f32,
+    /// Tolerance of intersection tests.
+    pub intersection_test_epsilon: f32,
+    /// One image per camera.
+    pub cameras: Vec<CameraDesc>,
+    /// Ambient radiance.
+    pub ambient_light: Vec3,
+    /// Point lights.
+    pub point_lights: Vec<PointLightDesc>,
+    /// Materials, referenced by index from objects.
+    pub materials: Vec<MaterialDesc>,
+    /// Shared vertex positions (the course's 1-based `VertexData`).
+    pub vertices: Vec<Vec3>,
+    /// Objects in file order; instances refer to earlier or later ones by index.
+    pub objects: Vec<ObjectDesc>,
+    /// What the loader accepted but did not use or had to correct.
+    pub warnings: Vec<Warning>,
+}
+
+/// How the camera's image plane is given.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// `Gaze` + `NearPlane` (left, right, bottom, top) at `NearDistance`.
+    Plane {
+        /// Viewing direction.
+        gaze: Vec3,
+        /// left, right, bottom, top.
+        near_plane: [f32; 4],
+    },
+    /// `type="lookAt"`: `GazePoint` and a vertical field of view in degrees; the
+    /// horizontal extent follows from the image's aspect ratio.
+    LookAt {
+        /// The point looked at.
+        gaze_point: Vec3,
+        /// Vertical field of view, degrees.
+        fov_y: f32,
+    },
+}
+
+/// A camera and the image it makes.
+#[derive(Clone, Debug)]
+pub struct CameraDesc {
+    /// The camera's id.
+    pub id: String,
+    /// Eye position.
+    pub position: Vec3,
+    /// Up vector (need not be perpendicular to the gaze).
+    pub up: Vec3,
+    /// Image plane.
+    pub projection: Projection,
+    /// Distance from the eye to the image plane.
+    pub near_distance: f32,
+    /// Width and height in pixels.
+    pub resolution: (u32, u32),
+    /// Output file name.
+    pub image_name: String,
+    /// Samples per pixel requested by the scene.
+    pub num_samples: u32,
+    /// Where.
+    pub loc: Loc,
+}
+
+/// A point light: intensity `I` gives irradiance `I / d²`.
+#[derive(Clone, Debug)]
+pub struct PointLightDesc {
+    /// Position.
+    pub position: Vec3,
+    /// RGB intensity.
+    pub intensity: Vec3,
+    /// Where.
+    pub loc: Loc,
+}
+
+/// What kind of surface a material is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MaterialKind {
+    /// Blinn-Phong only.
+    Plain,
+    /// Blinn-Phong plus perfect reflection weighted by `MirrorReflectance`.
+    Mirror,
+    /// Glass-like: Fresnel reflection and refraction, Beer absorption inside.
+    Dielectric,
+    /// Metal: reflection weighted by the conductor Fresnel term.
+    Conductor,
+}
+
+/// A material.
+#[derive(Clone, Debug)]
+pub struct MaterialDesc {
+    /// The material's id.
+    pub id: String,
+    /// Its kind.
+    pub kind: MaterialKind,
+    /// Ambient reflectance.
+    pub ambient: Vec3,
+    /// Diffuse reflectance.
+    pub diffuse: Vec3,
+    /// Specular reflectance.
+    pub specular: Vec3,
+    /// Mirror reflectance (mirror and conductor).
+    pub mirror: Vec3,
+    /// Blinn-Phong exponent.
+    pub phong_exponent: f32,
+    /// Index of refraction (dielectric; real part for conductors).
+    pub refraction_index: f32,
+    /// Beer's-law absorption coefficient per unit distance (dielectric).
+    pub absorption_coefficient: Vec3,
+    /// Imaginary part of the index of refraction (conductor).
+    pub absorption_index: f32,
+    /// Where.
+    pub loc: Loc,
+}
+
+/// Where a mesh's triangles come from.
+#[derive(Clone, Debug)]
+pub enum MeshSource {
+    /// Triangles given inline, as 0-based indices into [`Description::vertices`].
+    Inline(Vec<[u32; 3]>),
+    /// A PLY file with its own vertices.
+    Ply(PathBuf),
+}
+
+/// The shape of an object.
+#[derive(Clone, Debug)]
+pub enum Shape {
+    /// A sphere, before its transform.
+    Sphere {
+        /// Centre.
+        center: Vec3,
+        /// Radius.
+        radius: f32,
+    },
+    /// A single triangle.
+    Triangle {
+        /// Its corners.
+        vertices: [Vec3; 3],
+    },
+    /// An infinite plane through `point` with `normal`.
+    Plane {
+        /// A point on the plane.
+        point: Vec3,
+        /// Its normal.
+        normal: Vec3,
+    },
+    /// A triangle mesh.
+    Mesh {
+        /// Its triangles.
+        source: MeshSource,
+        /// Interpolate vertex normals (`shadingMode="smooth"`).
+        smooth: bool,
+    },
+    /// A `MeshInstance`: the geometry of another mesh (resolved through any chain
+    /// of instances), with this object's own material and full transform.
+    Instance {
+        /// Index into [`Description::objects`] of the mesh whose triangles are used.
+        mesh: usize,
+    },
+}
+
+/// An object of the scene.
+#[derive(Clone, Debug)]
+pub struct ObjectDesc {
+    /// The object's id (meshes and instances share one namespace).
+    pub id: String,
+    /// Its shape.
+    pub shape: Shape,
+    /// Index into [`Description::materials`].
+    pub material: usize,
+    /// Object to world, composed in the listed order (and, for instances, on
+    /// top of the base's transform unless `resetTransform` is true).
+    pub transform: Transform,
+    /// Where.
+    pub loc: Loc,
+}

@@ -1,0 +1,55 @@
+//! Scene loading: the two encodings of the CENG795 format, meshes, and the
+//! plain [`Description`] they produce.
+
+pub mod ceng795;
+pub mod description;
+pub mod element;
+pub mod error;
+pub mod json;
+pub mod ply;
+pub mod xml;
+
+pub use description::Description;
+pub use error::{Loc, SceneError, Warning};
+
+use std::path::Path;
+
+/// Largest scene file accepted; the biggest course scene is a few megabytes.
+const MAX_SCENE_BYTES: u64 = 1 << 30;
+
+/// Loads a scene file, choosing the encoding by its extension (`.json` or
+/// `.xml`) or, failing that, by its first character.
+pub fn load(path: &Path) -> Result<Description, SceneError> {
+    let meta = std::fs::metadata(path).map_err(|e| SceneError::file(path, format!("cannot read the scene: {}", io_reason(&e))))?;
+    if meta.is_dir() {
+        return Err(SceneError::file(path, "is a folder, not a scene file"));
+    }
+    if meta.len() > MAX_SCENE_BYTES {
+        return Err(SceneError::file(path, format!("the scene file is {} bytes, more than the {} accepted", meta.len(), MAX_SCENE_BYTES)));
+    }
+    let bytes = std::fs::read(path).map_err(|e| SceneError::file(path, format!("cannot read the scene: {}", io_reason(&e))))?;
+    let text = String::from_utf8(bytes).map_err(|e| SceneError::file(path, format!("the scene is not UTF-8 text (invalid byte at offset {})", e.utf8_error().valid_up_to())))?;
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let is_json = match ext.as_deref() {
+        Some("json") => true,
+        Some("xml") => false,
+        _ => text.trim_start().starts_with('{'),
+    };
+    let root = if is_json { json::parse(path, &text)? } else { xml::parse(path, &text)? };
+    ceng795::read(path, &root)
+}
+
+/// The reason of an I/O error without the "(os error N)" noise.
+pub fn io_reason(e: &std::io::Error) -> String {
+    match e.kind() {
+        std::io::ErrorKind::NotFound => "no such file".to_string(),
+        std::io::ErrorKind::PermissionDenied => "permission denied".to_string(),
+        _ => {
+            let s = e.to_string();
+            match s.find(" (os error") {
+                Some(i) => s[..i].to_string(),
+                None => s,
+            }
+        }
+    }
+}
