@@ -15,3 +15,4 @@
 pub mod accel;
 pub mod image;
 pub mod math;
+pub mod scene;

@@ -1,0 +1,3 @@
+//! Scene loading: formats and the scene description.
+
+pub mod ply;
