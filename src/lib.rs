@@ -13,8 +13,8 @@
 #![warn(missing_docs)]
 
 pub mod accel;
-pub mod image;
 pub mod geometry;
+pub mod image;
 pub mod math;
 pub mod render;
 pub mod scene;

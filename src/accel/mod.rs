@@ -23,7 +23,12 @@ impl Bvh {
         self.bounds
     }
     /// Closest-hit traversal.
-    pub fn closest<F: FnMut(Range<usize>, &mut f32) -> bool>(&self, _ray: &Ray, mut t_max: f32, mut leaf: F) -> bool {
+    pub fn closest<F: FnMut(Range<usize>, &mut f32) -> bool>(
+        &self,
+        _ray: &Ray,
+        mut t_max: f32,
+        mut leaf: F,
+    ) -> bool {
         leaf(0..self.order.len(), &mut t_max)
     }
     /// Any-hit traversal.
@@ -54,7 +59,8 @@ pub struct MeshAccel {
 impl MeshAccel {
     /// Builds.
     pub fn build(p: &[Vec3], t: &[[u32; 3]]) -> MeshAccel {
-        let tris: Vec<[Vec3; 3]> = t.iter().map(|i| [p[i[0] as usize], p[i[1] as usize], p[i[2] as usize]]).collect();
+        let tris: Vec<[Vec3; 3]> =
+            t.iter().map(|i| [p[i[0] as usize], p[i[1] as usize], p[i[2] as usize]]).collect();
         MeshAccel { bounds: Aabb::from_points(tris.iter().flatten().copied()), tris }
     }
     /// Bounds.

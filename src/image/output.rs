@@ -53,7 +53,8 @@ mod tests {
         write_rgb8(&p, 2, 1, &[255, 0, 0, 0, 255, 0]).unwrap();
         let img = image::open(&p).unwrap().to_rgb8();
         assert_eq!(img.get_pixel(1, 0).0, [0, 255, 0]);
-        let names: Vec<_> = std::fs::read_dir(dir.path().join("sub")).unwrap().map(|e| e.unwrap().file_name()).collect();
+        let names: Vec<_> =
+            std::fs::read_dir(dir.path().join("sub")).unwrap().map(|e| e.unwrap().file_name()).collect();
         assert_eq!(names.len(), 1);
     }
 

@@ -125,11 +125,7 @@ impl Transform {
     pub fn normal_to_world(&self, n: Vec3) -> Vec3 {
         let i = &self.inv;
         // (M^-1)^T n: dot n with the columns of M^-1 (its rows of the transpose).
-        Vec3::new(
-            i.x_axis.truncate().dot(n),
-            i.y_axis.truncate().dot(n),
-            i.z_axis.truncate().dot(n),
-        )
+        Vec3::new(i.x_axis.truncate().dot(n), i.y_axis.truncate().dot(n), i.z_axis.truncate().dot(n))
     }
 
     /// The box around this transform of `b`'s eight corners.

@@ -83,7 +83,10 @@ mod tests {
 
     #[test]
     fn centre_ray_follows_gaze_and_corners_span_near_plane() {
-        let c = Camera::from_desc(&desc(Projection::Plane { gaze: -Vec3::Z, near_plane: [-1.0, 1.0, -1.0, 1.0] }, (2, 2)));
+        let c = Camera::from_desc(&desc(
+            Projection::Plane { gaze: -Vec3::Z, near_plane: [-1.0, 1.0, -1.0, 1.0] },
+            (2, 2),
+        ));
         assert!((c.ray(1.0, 1.0).d - -Vec3::Z).length() < 1e-6);
         // The top-left corner of the image is at (-1, 1, -1): x grows right, y grows down.
         let d = c.ray(0.0, 0.0).d;
@@ -92,8 +95,14 @@ mod tests {
 
     #[test]
     fn look_at_matches_equivalent_near_plane() {
-        let a = Camera::from_desc(&desc(Projection::LookAt { gaze_point: Vec3::new(0.0, 0.0, -3.0), fov_y: 90.0 }, (200, 100)));
-        let b = Camera::from_desc(&desc(Projection::Plane { gaze: -Vec3::Z, near_plane: [-2.0, 2.0, -1.0, 1.0] }, (200, 100)));
+        let a = Camera::from_desc(&desc(
+            Projection::LookAt { gaze_point: Vec3::new(0.0, 0.0, -3.0), fov_y: 90.0 },
+            (200, 100),
+        ));
+        let b = Camera::from_desc(&desc(
+            Projection::Plane { gaze: -Vec3::Z, near_plane: [-2.0, 2.0, -1.0, 1.0] },
+            (200, 100),
+        ));
         for (x, y) in [(0.5, 0.5), (199.5, 3.5), (100.0, 50.0)] {
             assert!((a.ray(x, y).d - b.ray(x, y).d).length() < 1e-5);
         }

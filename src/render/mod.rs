@@ -32,7 +32,9 @@ impl RenderedImage {
     pub fn to_rgb8(&self) -> Vec<u8> {
         self.pixels
             .iter()
-            .flat_map(|p| p.to_array().map(|c| if c.is_nan() { 0 } else { c.clamp(0.0, 255.0).round() as u8 }))
+            .flat_map(|p| {
+                p.to_array().map(|c| if c.is_nan() { 0 } else { c.clamp(0.0, 255.0).round() as u8 })
+            })
             .collect()
     }
 }
@@ -42,8 +44,9 @@ impl RenderedImage {
 pub fn render(scene: &Scene, cam: usize, on_tile: &(dyn Fn(u64) + Sync)) -> RenderedImage {
     let camera = &scene.cameras[cam];
     let (w, h) = (camera.width, camera.height);
-    let tiles: Vec<(u32, u32)> =
-        (0..h.div_ceil(TILE)).flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE))).collect();
+    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
+        .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
+        .collect();
     let done: Vec<(u32, u32, Vec<Vec3>, RayStats)> = tiles
         .par_iter()
         .map(|&(x0, y0)| {

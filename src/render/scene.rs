@@ -107,7 +107,9 @@ impl Scene {
                 Shape::Mesh { .. } | Shape::Triangle { .. } => Geom::Mesh(mesh_of_object[&i]),
                 Shape::Instance { mesh } => match mesh_of_object.get(mesh) {
                     Some(&m) => Geom::Mesh(m),
-                    None => return Err(SceneError::at(&desc.file, &o.loc, "the instance's base is not a mesh")),
+                    None => {
+                        return Err(SceneError::at(&desc.file, &o.loc, "the instance's base is not a mesh"))
+                    }
                 },
                 Shape::Sphere { center, radius } => Geom::Sphere(Sphere { center: *center, radius: *radius }),
                 Shape::Plane { point, normal } => {
@@ -291,7 +293,11 @@ fn build_mesh(desc: &Description, i: usize) -> Result<(Mesh, Option<Warning>), S
             let ply = read_ply(path).map_err(|e| SceneError::at(&desc.file, &o.loc, e.to_string()))?;
             let warning = (ply.skipped_degenerate > 0).then(|| Warning {
                 loc: o.loc.clone(),
-                message: format!("{}: {} degenerate triangle(s) skipped", path.display(), ply.skipped_degenerate),
+                message: format!(
+                    "{}: {} degenerate triangle(s) skipped",
+                    path.display(),
+                    ply.skipped_degenerate
+                ),
             });
             Ok((Mesh::new(ply.positions, ply.triangles, *smooth), warning))
         }

@@ -21,16 +21,30 @@ pub fn parse(file: &Path, text: &str) -> Result<Element, SceneError> {
         message: format!("malformed JSON: {e}"),
     })?;
     let Value::Object(top) = &v else {
-        return Err(SceneError::file(file, "the top level of a scene must be an object with a \"Scene\" key"));
+        return Err(SceneError::file(
+            file,
+            "the top level of a scene must be an object with a \"Scene\" key",
+        ));
     };
     let (name, body) = match top.iter().next() {
         Some((k, body)) if top.len() == 1 => (k.as_str(), body),
-        _ => return Err(SceneError::file(file, "the top level of a scene must be an object with a single \"Scene\" key")),
+        _ => {
+            return Err(SceneError::file(
+                file,
+                "the top level of a scene must be an object with a single \"Scene\" key",
+            ))
+        }
     };
     convert(file, name, body, "", None)
 }
 
-fn convert(file: &Path, name: &str, v: &Value, parent: &str, index: Option<usize>) -> Result<Element, SceneError> {
+fn convert(
+    file: &Path,
+    name: &str,
+    v: &Value,
+    parent: &str,
+    index: Option<usize>,
+) -> Result<Element, SceneError> {
     let mut el = Element { name: name.to_string(), ..Default::default() };
     let mut kids: Vec<(&str, &Value)> = Vec::new();
     match v {

@@ -20,15 +20,25 @@ const MAX_SCENE_BYTES: u64 = 1 << 30;
 /// Loads a scene file, choosing the encoding by its extension (`.json` or
 /// `.xml`) or, failing that, by its first character.
 pub fn load(path: &Path) -> Result<Description, SceneError> {
-    let meta = std::fs::metadata(path).map_err(|e| SceneError::file(path, format!("cannot read the scene: {}", io_reason(&e))))?;
+    let meta = std::fs::metadata(path)
+        .map_err(|e| SceneError::file(path, format!("cannot read the scene: {}", io_reason(&e))))?;
     if meta.is_dir() {
         return Err(SceneError::file(path, "is a folder, not a scene file"));
     }
     if meta.len() > MAX_SCENE_BYTES {
-        return Err(SceneError::file(path, format!("the scene file is {} bytes, more than the {} accepted", meta.len(), MAX_SCENE_BYTES)));
+        return Err(SceneError::file(
+            path,
+            format!("the scene file is {} bytes, more than the {} accepted", meta.len(), MAX_SCENE_BYTES),
+        ));
     }
-    let bytes = std::fs::read(path).map_err(|e| SceneError::file(path, format!("cannot read the scene: {}", io_reason(&e))))?;
-    let text = String::from_utf8(bytes).map_err(|e| SceneError::file(path, format!("the scene is not UTF-8 text (invalid byte at offset {})", e.utf8_error().valid_up_to())))?;
+    let bytes = std::fs::read(path)
+        .map_err(|e| SceneError::file(path, format!("cannot read the scene: {}", io_reason(&e))))?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        SceneError::file(
+            path,
+            format!("the scene is not UTF-8 text (invalid byte at offset {})", e.utf8_error().valid_up_to()),
+        )
+    })?;
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     let is_json = match ext.as_deref() {
         Some("json") => true,

@@ -51,8 +51,7 @@ use std::path::{Path, PathBuf};
 
 use ply_rs_bw::parser::{ParseError, Parser, Reader};
 use ply_rs_bw::ply::{
-    BeginList, ElementDef, Encoding, Header, PropertyAccess, PropertyAccessResult, PropertyType,
-    ScalarType,
+    BeginList, ElementDef, Encoding, Header, PropertyAccess, PropertyAccessResult, PropertyType, ScalarType,
 };
 
 use crate::math::{Vec2, Vec3};
@@ -223,18 +222,13 @@ fn at_line(line: Option<usize>) -> String {
 /// Reads a PLY triangle mesh; see the [module documentation](self) for what
 /// is supported.
 pub fn read_ply(path: &Path) -> Result<PlyMesh, PlyError> {
-    let io_error = |source| PlyError::Io {
-        path: path.to_owned(),
-        source,
-    };
+    let io_error = |source| PlyError::Io { path: path.to_owned(), source };
     let file = File::open(path).map_err(io_error)?;
     let file_len = file.metadata().map_err(io_error)?.len();
     let mut reader = Reader::new(BufReader::with_capacity(1 << 16, file));
 
     check_magic(reader.get_mut(), path)?;
-    let header = Parser::<Ignored>::new()
-        .read_header(&mut reader)
-        .map_err(|e| header_error(path, &e))?;
+    let header = Parser::<Ignored>::new().read_header(&mut reader).map_err(|e| header_error(path, &e))?;
     let layout = Layout::of(&header, path)?;
     let header_end = reader.get_mut().stream_position().map_err(io_error)?;
     check_counts(&header, file_len.saturating_sub(header_end), path)?;
@@ -262,12 +256,7 @@ pub fn read_ply(path: &Path) -> Result<PlyMesh, PlyError> {
         match def.name.as_str() {
             "vertex" => body.read::<Vertex>(def, |index, line, v: Vertex| {
                 if let Some(&value) = v.position.iter().find(|c| !c.is_finite()) {
-                    return Err(PlyError::NonFinite {
-                        path: path.to_owned(),
-                        index,
-                        line,
-                        value,
-                    });
+                    return Err(PlyError::NonFinite { path: path.to_owned(), index, line, value });
                 }
                 mesh.positions.push(Vec3::from(v.position));
                 if let Some(normals) = &mut mesh.normals {
@@ -304,8 +293,7 @@ pub fn read_ply(path: &Path) -> Result<PlyMesh, PlyError> {
                     });
                 }
                 let first = polygon[0];
-                mesh.triangles
-                    .extend(polygon[1..].windows(2).map(|w| [first, w[0], w[1]]));
+                mesh.triangles.extend(polygon[1..].windows(2).map(|w| [first, w[0], w[1]]));
                 Ok(())
             })?,
             _ => body.read::<Ignored>(def, |_, _, _| Ok(()))?,
@@ -317,11 +305,7 @@ pub fn read_ply(path: &Path) -> Result<PlyMesh, PlyError> {
     let positions = &mesh.positions;
     let before = mesh.triangles.len();
     mesh.triangles.retain(|&[a, b, c]| {
-        let (pa, pb, pc) = (
-            positions[a as usize],
-            positions[b as usize],
-            positions[c as usize],
-        );
+        let (pa, pb, pc) = (positions[a as usize], positions[b as usize], positions[c as usize]);
         a != b && b != c && a != c && pa != pb && pb != pc && pa != pc
     });
     mesh.skipped_degenerate = before - mesh.triangles.len();
@@ -331,15 +315,10 @@ pub fn read_ply(path: &Path) -> Result<PlyMesh, PlyError> {
 /// Refuses files that do not start with `ply` before the header parser sees
 /// them, so a JPEG or an OBJ gets a plain "not a PLY file".
 fn check_magic(reader: &mut BufReader<File>, path: &Path) -> Result<(), PlyError> {
-    let start = reader.fill_buf().map_err(|source| PlyError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
+    let start = reader.fill_buf().map_err(|source| PlyError::Io { path: path.to_owned(), source })?;
     match start {
         [b'p', b'l', b'y', b'\n' | b'\r' | b' ' | b'\t', ..] => Ok(()),
-        _ => Err(PlyError::NotPly {
-            path: path.to_owned(),
-        }),
+        _ => Err(PlyError::NotPly { path: path.to_owned() }),
     }
 }
 
@@ -352,11 +331,7 @@ fn header_error(path: &Path, e: &ParseError) -> PlyError {
             message: "it contains bytes that are not text before 'end_header'".into(),
         };
     }
-    PlyError::Header {
-        path: path.to_owned(),
-        line: e.line(),
-        message: one_sentence(e),
-    }
+    PlyError::Header { path: path.to_owned(), line: e.line(), message: one_sentence(e) }
 }
 
 /// ply-rs-bw's messages span several lines and start with "Line N: "; the
@@ -364,10 +339,7 @@ fn header_error(path: &Path, e: &ParseError) -> PlyError {
 fn one_sentence(e: &ParseError) -> String {
     let text = e.to_string();
     let text = match e.line() {
-        Some(line) => text
-            .strip_prefix(&format!("Line {line}: "))
-            .unwrap_or(&text)
-            .to_owned(),
+        Some(line) => text.strip_prefix(&format!("Line {line}: ")).unwrap_or(&text).to_owned(),
         None => text,
     };
     let folded = text.split_whitespace().collect::<Vec<_>>().join(" ");
@@ -381,27 +353,14 @@ struct Layout {
     uvs: bool,
 }
 
-const UV_NAMES: [(&str, &str); 4] = [
-    ("u", "v"),
-    ("s", "t"),
-    ("texture_u", "texture_v"),
-    ("texture_s", "texture_t"),
-];
+const UV_NAMES: [(&str, &str); 4] =
+    [("u", "v"), ("s", "t"), ("texture_u", "texture_v"), ("texture_s", "texture_t")];
 
 impl Layout {
     fn of(header: &Header, path: &Path) -> Result<Self, PlyError> {
-        let missing_element = |element| PlyError::MissingElement {
-            path: path.to_owned(),
-            element,
-        };
-        let vertex = header
-            .elements
-            .get("vertex")
-            .ok_or_else(|| missing_element("vertex"))?;
-        let face = header
-            .elements
-            .get("face")
-            .ok_or_else(|| missing_element("face"))?;
+        let missing_element = |element| PlyError::MissingElement { path: path.to_owned(), element };
+        let vertex = header.elements.get("vertex").ok_or_else(|| missing_element("vertex"))?;
+        let face = header.elements.get("face").ok_or_else(|| missing_element("face"))?;
 
         // A float property: Ok(true) if present with a usable type.
         let float = |name: &str| -> Result<bool, PlyError> {
@@ -518,9 +477,8 @@ fn check_counts(header: &Header, available: u64, path: &Path) -> Result<(), PlyE
     for def in header.elements.values() {
         // No overflow: a product is below 2^128 - 2^65 and `needed` stays
         // below 2^64 until it fails the test.
-        needed = needed.saturating_add(
-            def.count as u128 * u128::from(min_element_bytes(def, header.encoding)),
-        );
+        needed =
+            needed.saturating_add(def.count as u128 * u128::from(min_element_bytes(def, header.encoding)));
         if needed > u128::from(available) + slack {
             return Err(PlyError::CountTooLarge {
                 path: path.to_owned(),
@@ -568,9 +526,7 @@ impl Body<'_> {
                         Err(e) => Err(e.into()),
                     }
                 }
-                Encoding::BinaryLittleEndian => {
-                    parser.read_little_endian_element(&mut self.reader, def)
-                }
+                Encoding::BinaryLittleEndian => parser.read_little_endian_element(&mut self.reader, def),
                 Encoding::BinaryBigEndian => parser.read_big_endian_element(&mut self.reader, def),
             };
             let element = element.map_err(|e| PlyError::Body {
@@ -625,11 +581,7 @@ impl Vertex {
 
 impl PropertyAccess for Vertex {
     fn new() -> Self {
-        Vertex {
-            position: [0.0; 3],
-            normal: [0.0; 3],
-            uv: [0.0; 2],
-        }
+        Vertex { position: [0.0; 3], normal: [0.0; 3], uv: [0.0; 2] }
     }
     fn set_float(&mut self, name: &str, value: f32) -> PropertyAccessResult {
         self.set(name, value)
@@ -653,11 +605,7 @@ fn is_index_list(name: &str) -> bool {
 }
 
 impl Face {
-    fn take_signed(
-        &mut self,
-        name: &str,
-        values: impl Iterator<Item = i32>,
-    ) -> PropertyAccessResult {
+    fn take_signed(&mut self, name: &str, values: impl Iterator<Item = i32>) -> PropertyAccessResult {
         if !is_index_list(name) {
             return PropertyAccessResult::Ignored;
         }
@@ -665,11 +613,7 @@ impl Face {
         self.signed.extend(values);
         PropertyAccessResult::Set
     }
-    fn take_unsigned(
-        &mut self,
-        name: &str,
-        values: impl Iterator<Item = u32>,
-    ) -> PropertyAccessResult {
+    fn take_unsigned(&mut self, name: &str, values: impl Iterator<Item = u32>) -> PropertyAccessResult {
         if !is_index_list(name) {
             return PropertyAccessResult::Ignored;
         }
@@ -782,24 +726,12 @@ end_header
 
     /// The quad above in a binary encoding, built by hand.
     fn quad_binary(big_endian: bool) -> Vec<u8> {
-        let format = if big_endian {
-            "binary_big_endian"
-        } else {
-            "binary_little_endian"
-        };
-        let mut out = QUAD_ASCII
-            .split("end_header\n")
-            .next()
-            .unwrap_or_default()
-            .replace("ascii", format)
-            .into_bytes();
+        let format = if big_endian { "binary_big_endian" } else { "binary_little_endian" };
+        let mut out =
+            QUAD_ASCII.split("end_header\n").next().unwrap_or_default().replace("ascii", format).into_bytes();
         out.extend_from_slice(b"end_header\n");
         let f = |out: &mut Vec<u8>, v: f32| {
-            out.extend(if big_endian {
-                v.to_be_bytes()
-            } else {
-                v.to_le_bytes()
-            })
+            out.extend(if big_endian { v.to_be_bytes() } else { v.to_le_bytes() })
         };
         for (x, y) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
             for v in [x, y, 0.0, 0.0, 0.0, 1.0, x, y] {
@@ -808,11 +740,7 @@ end_header
         }
         out.push(4);
         for i in 0i32..4 {
-            out.extend(if big_endian {
-                i.to_be_bytes()
-            } else {
-                i.to_le_bytes()
-            });
+            out.extend(if big_endian { i.to_be_bytes() } else { i.to_le_bytes() });
         }
         out
     }
@@ -842,24 +770,14 @@ end_header
         let be = ok(&write(&dir, "be.ply", &quad_binary(true)));
         assert_eq!(le, ascii);
         assert_eq!(be, ascii);
-        let crlf = ok(&write(
-            &dir,
-            "crlf.ply",
-            QUAD_ASCII.replace('\n', "\r\n").as_bytes(),
-        ));
+        let crlf = ok(&write(&dir, "crlf.ply", QUAD_ASCII.replace('\n', "\r\n").as_bytes()));
         assert_eq!(crlf, ascii);
     }
 
     #[test]
     fn vertex_index_name_double_coords_and_small_index_types() {
         let dir = tempfile::tempdir().expect("tempdir");
-        for list in [
-            "uchar uint",
-            "ushort ushort",
-            "int short",
-            "uint8 char",
-            "uchar uint8",
-        ] {
+        for list in ["uchar uint", "ushort ushort", "int short", "uint8 char", "uchar uint8"] {
             let text = header(
                 "property double x\nproperty double y\nproperty double z\n",
                 &format!("2\nproperty list {list} vertex_index\n"),
@@ -940,73 +858,41 @@ end_header
         let dir = tempfile::tempdir().expect("tempdir");
         let e = err(&dir.path().join("absent.ply"), &["cannot read"]);
         assert!(matches!(e, PlyError::Io { .. }));
-        err(
-            &write(&dir, "mesh.obj", b"v 0 0 0\nf 1 2 3\n"),
-            &["not a PLY file"],
-        );
+        err(&write(&dir, "mesh.obj", b"v 0 0 0\nf 1 2 3\n"), &["not a PLY file"]);
         err(&write(&dir, "empty.ply", b""), &["not a PLY file"]);
-        err(
-            &write(&dir, "plywood.ply", b"plywood\n"),
-            &["not a PLY file"],
-        );
+        err(&write(&dir, "plywood.ply", b"plywood\n"), &["not a PLY file"]);
     }
 
     #[test]
     fn malformed_headers_are_errors() {
         let dir = tempfile::tempdir().expect("tempdir");
-        let bad_property =
-            "ply\nformat ascii 1.0\nelement vertex 1\nproperty flaot x\nend_header\n";
-        err(
-            &write(&dir, "typo.ply", bad_property.as_bytes()),
-            &["malformed PLY header", "line 4"],
-        );
+        let bad_property = "ply\nformat ascii 1.0\nelement vertex 1\nproperty flaot x\nend_header\n";
+        err(&write(&dir, "typo.ply", bad_property.as_bytes()), &["malformed PLY header", "line 4"]);
         let no_end = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n";
-        err(
-            &write(&dir, "noend.ply", no_end.as_bytes()),
-            &["malformed PLY header", "end_header"],
-        );
+        err(&write(&dir, "noend.ply", no_end.as_bytes()), &["malformed PLY header", "end_header"]);
         let no_format = "ply\nelement vertex 0\nend_header\n";
-        err(
-            &write(&dir, "noformat.ply", no_format.as_bytes()),
-            &["malformed PLY header", "format"],
-        );
+        err(&write(&dir, "noformat.ply", no_format.as_bytes()), &["malformed PLY header", "format"]);
         let mut binary = b"ply\nformat ascii 1.0\ncomment ".to_vec();
         binary.extend([0xff, 0xfe, 0x80, b'\n']);
-        err(
-            &write(&dir, "bytes.ply", &binary),
-            &["malformed PLY header", "not text"],
-        );
+        err(&write(&dir, "bytes.ply", &binary), &["malformed PLY header", "not text"]);
     }
 
     #[test]
     fn missing_elements_and_properties_are_errors() {
         let dir = tempfile::tempdir().expect("tempdir");
         let no_face = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n";
-        err(
-            &write(&dir, "noface.ply", no_face.as_bytes()),
-            &["no 'face' element"],
-        );
-        let no_vertex = "ply\nformat ascii 1.0\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n";
-        err(
-            &write(&dir, "novertex.ply", no_vertex.as_bytes()),
-            &["no 'vertex' element"],
-        );
-        let no_z = header(
-            "property float x\nproperty float y\n",
-            "0\nproperty list uchar int vertex_indices\n",
-        );
-        err(
-            &write(&dir, "noz.ply", no_z.as_bytes()),
-            &["'vertex'", "no property z"],
-        );
+        err(&write(&dir, "noface.ply", no_face.as_bytes()), &["no 'face' element"]);
+        let no_vertex =
+            "ply\nformat ascii 1.0\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n";
+        err(&write(&dir, "novertex.ply", no_vertex.as_bytes()), &["no 'vertex' element"]);
+        let no_z =
+            header("property float x\nproperty float y\n", "0\nproperty list uchar int vertex_indices\n");
+        err(&write(&dir, "noz.ply", no_z.as_bytes()), &["'vertex'", "no property z"]);
         let no_list = header(
             "property float x\nproperty float y\nproperty float z\n",
             "0\nproperty list uchar int corners\n",
         );
-        err(
-            &write(&dir, "nolist.ply", no_list.as_bytes()),
-            &["'face'", "vertex_indices"],
-        );
+        err(&write(&dir, "nolist.ply", no_list.as_bytes()), &["'face'", "vertex_indices"]);
         let float_list = header(
             "property float x\nproperty float y\nproperty float z\n",
             "0\nproperty list uchar float vertex_indices\n",
@@ -1019,10 +905,7 @@ end_header
             "property int x\nproperty float y\nproperty float z\n",
             "0\nproperty list uchar int vertex_indices\n",
         );
-        err(
-            &write(&dir, "intx.ply", int_x.as_bytes()),
-            &["'x'", "'int'", "'float' or 'double'"],
-        );
+        err(&write(&dir, "intx.ply", int_x.as_bytes()), &["'x'", "'int'", "'float' or 'double'"]);
     }
 
     #[test]
@@ -1033,21 +916,14 @@ end_header
         let start = Instant::now();
         err(
             &write(&dir, "huge.ply", text.as_bytes()),
-            &[
-                "4000000000 'vertex' elements",
-                "48000000000 bytes",
-                "follow the header",
-            ],
+            &["4000000000 'vertex' elements", "48000000000 bytes", "follow the header"],
         );
         assert!(start.elapsed().as_millis() < 100);
         let ascii = header(
             "property float x\nproperty float y\nproperty float z\n",
             "18446744073709551615\nproperty list uchar int vertex_indices\n",
         ) + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n";
-        err(
-            &write(&dir, "hugeascii.ply", ascii.as_bytes()),
-            &["18446744073709551615 'face' elements"],
-        );
+        err(&write(&dir, "hugeascii.ply", ascii.as_bytes()), &["18446744073709551615 'face' elements"]);
         let nothing = "ply\nformat binary_big_endian 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\nelement face 0\nproperty list uchar int vertex_indices\nelement empty 999999999999\nend_header\n";
         // Elements without properties take no bytes in a binary file, so any
         // count is fine, and they are not looped over.
@@ -1066,29 +942,16 @@ end_header
             &["face 0", "ends before the 1 declared 'face' elements"],
         );
         let vertices_cut = &full[..full.len() - 60];
-        err(
-            &write(&dir, "cutvertex.ply", vertices_cut),
-            &["4 'vertex' elements", "at least 128 bytes"],
-        );
+        err(&write(&dir, "cutvertex.ply", vertices_cut), &["4 'vertex' elements", "at least 128 bytes"]);
         // Long numbers so that the bytes could hold the face: the count check
         // passes and the reader meets the end of the file.
-        let ascii = QUAD_ASCII
-            .replace("4 0 1 2 3\n", "")
-            .replace("0 0 0 0 0 1 0 0", "0.000000000000 0 0 0 0 1 0 0");
-        err(
-            &write(&dir, "cut_ascii.ply", ascii.as_bytes()),
-            &["face 0 (line 20)", "ends before"],
-        );
+        let ascii =
+            QUAD_ASCII.replace("4 0 1 2 3\n", "").replace("0 0 0 0 0 1 0 0", "0.000000000000 0 0 0 0 1 0 0");
+        err(&write(&dir, "cut_ascii.ply", ascii.as_bytes()), &["face 0 (line 20)", "ends before"]);
         let short_line = QUAD_ASCII.replace("1 1 0 0 0 1 1 1", "1 1 0 0 0 1 1");
-        err(
-            &write(&dir, "shortline.ply", short_line.as_bytes()),
-            &["vertex 2 (line 18)"],
-        );
+        err(&write(&dir, "shortline.ply", short_line.as_bytes()), &["vertex 2 (line 18)"]);
         let junk = QUAD_ASCII.replace("1 1 0 0 0 1 1 1", "1 1 zero 0 0 1 1 1");
-        err(
-            &write(&dir, "junk.ply", junk.as_bytes()),
-            &["vertex 2 (line 18)"],
-        );
+        err(&write(&dir, "junk.ply", junk.as_bytes()), &["vertex 2 (line 18)"]);
     }
 
     #[test]
@@ -1100,27 +963,15 @@ end_header
             &["face 0 (line 20)", "vertex 4", "has 4 vertices"],
         );
         let negative = QUAD_ASCII.replace("4 0 1 2 3", "3 0 -1 2");
-        err(
-            &write(&dir, "negative.ply", negative.as_bytes()),
-            &["face 0", "vertex -1"],
-        );
+        err(&write(&dir, "negative.ply", negative.as_bytes()), &["face 0", "vertex -1"]);
         let two = QUAD_ASCII.replace("4 0 1 2 3", "2 0 1");
-        err(
-            &write(&dir, "two.ply", two.as_bytes()),
-            &["face 0", "2 vertex indices", "at least 3"],
-        );
+        err(&write(&dir, "two.ply", two.as_bytes()), &["face 0", "2 vertex indices", "at least 3"]);
         let none = QUAD_ASCII.replace("4 0 1 2 3", "0");
-        err(
-            &write(&dir, "zero.ply", none.as_bytes()),
-            &["0 vertex indices"],
-        );
+        err(&write(&dir, "zero.ply", none.as_bytes()), &["0 vertex indices"]);
         let mut binary = quad_binary(false);
         let n = binary.len();
         binary[n - 4..].copy_from_slice(&100i32.to_le_bytes());
-        err(
-            &write(&dir, "range_le.ply", &binary),
-            &["face 0 in", "vertex 100"],
-        );
+        err(&write(&dir, "range_le.ply", &binary), &["face 0 in", "vertex 100"]);
     }
 
     #[test]
@@ -1129,25 +980,17 @@ end_header
         let mut binary = quad_binary(true);
         let body = binary.len() - 4 * 8 * 4 - 17;
         binary[body + 32 + 4..body + 32 + 8].copy_from_slice(&f32::NAN.to_be_bytes());
-        err(
-            &write(&dir, "nan.ply", &binary),
-            &["vertex 1 in", "non-finite", "NaN"],
-        );
+        err(&write(&dir, "nan.ply", &binary), &["vertex 1 in", "non-finite", "NaN"]);
         let huge = header(
             "property double x\nproperty double y\nproperty double z\n",
             "1\nproperty list uchar int vertex_indices\n",
         ) + "0 0 0\n1 0 0\n1 1 1e300\n0 1 0\n3 0 1 2\n";
-        err(
-            &write(&dir, "inf.ply", huge.as_bytes()),
-            &["vertex 2 (line 12)", "inf"],
-        );
+        err(&write(&dir, "inf.ply", huge.as_bytes()), &["vertex 2 (line 12)", "inf"]);
     }
 
     /// The course scenes, when the shared folder is present.
     fn shared(relative: &str) -> Option<PathBuf> {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../shared/scenes/ceng795")
-            .join(relative);
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes/ceng795").join(relative);
         if path.exists() {
             Some(path)
         } else {
@@ -1159,50 +1002,14 @@ end_header
     #[test]
     fn course_meshes_load() {
         let cases: &[(&str, usize, usize, bool, bool)] = &[
-            (
-                "hw1/json/akif_uslu/ton_Roosendaal_smooth_ply/mesh_1.ply",
-                8190,
-                16384,
-                false,
-                false,
-            ),
-            (
-                "hw1/json/akif_uslu/ton_Roosendaal_smooth_ply/mesh_2.ply",
-                31072,
-                62160,
-                false,
-                false,
-            ),
-            (
-                "hw1/json/akif_uslu/ton_Roosendaal_smooth_ply/mesh_3.ply",
-                78,
-                76,
-                false,
-                false,
-            ),
+            ("hw1/json/akif_uslu/ton_Roosendaal_smooth_ply/mesh_1.ply", 8190, 16384, false, false),
+            ("hw1/json/akif_uslu/ton_Roosendaal_smooth_ply/mesh_2.ply", 31072, 62160, false, false),
+            ("hw1/json/akif_uslu/ton_Roosendaal_smooth_ply/mesh_3.ply", 78, 76, false, false),
             ("hw3/json/ply/cube.ply", 8, 12, false, false),
-            (
-                "hw4/xml/veach_ajar/models/Mesh000.ply",
-                23938,
-                47872,
-                true,
-                true,
-            ),
+            ("hw4/xml/veach_ajar/models/Mesh000.ply", 23938, 47872, true, true),
             ("hw4/xml/veach_ajar/models/Mesh008.ply", 4, 2, false, true),
-            (
-                "hw4/xml/veach_ajar/models/Mesh009.ply",
-                39086,
-                78176,
-                true,
-                true,
-            ),
-            (
-                "hw4/xml/veach_ajar/models/Mesh015_fixed.ply",
-                8622,
-                2880,
-                true,
-                false,
-            ),
+            ("hw4/xml/veach_ajar/models/Mesh009.ply", 39086, 78176, true, true),
+            ("hw4/xml/veach_ajar/models/Mesh015_fixed.ply", 8622, 2880, true, false),
         ];
         for &(file, vertices, triangles, normals, uvs) in cases {
             let Some(path) = shared(file) else { return };
@@ -1216,11 +1023,7 @@ end_header
                 start.elapsed().as_secs_f64() * 1e3
             );
             assert_eq!(mesh.positions.len(), vertices, "{file}");
-            assert_eq!(
-                mesh.triangles.len() + mesh.skipped_degenerate,
-                triangles,
-                "{file}"
-            );
+            assert_eq!(mesh.triangles.len() + mesh.skipped_degenerate, triangles, "{file}");
             assert_eq!(mesh.normals.is_some(), normals, "{file}");
             assert_eq!(mesh.uvs.is_some(), uvs, "{file}");
         }

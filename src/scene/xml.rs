@@ -19,7 +19,12 @@ pub fn parse(file: &Path, text: &str) -> Result<Element, SceneError> {
     Ok(convert(&doc, doc.root_element(), String::new(), None))
 }
 
-fn convert(doc: &roxmltree::Document, node: roxmltree::Node, parent: String, index: Option<usize>) -> Element {
+fn convert(
+    doc: &roxmltree::Document,
+    node: roxmltree::Node,
+    parent: String,
+    index: Option<usize>,
+) -> Element {
     let name = node.tag_name().name().to_string();
     let attrs: Vec<(String, String)> =
         node.attributes().map(|a| (a.name().to_string(), a.value().to_string())).collect();
@@ -35,8 +40,9 @@ fn convert(doc: &roxmltree::Document, node: roxmltree::Node, parent: String, ind
         .iter()
         .map(|c| {
             let same = elems.iter().filter(|o| o.tag_name() == c.tag_name()).count();
-            let idx = (same > 1)
-                .then(|| elems.iter().take_while(|o| o.id() != c.id()).filter(|o| o.tag_name() == c.tag_name()).count());
+            let idx = (same > 1).then(|| {
+                elems.iter().take_while(|o| o.id() != c.id()).filter(|o| o.tag_name() == c.tag_name()).count()
+            });
             convert(doc, *c, path.clone(), idx)
         })
         .collect();

@@ -36,11 +36,21 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
     let look_at = match kind {
         "" | "simple" => false,
         "lookAt" => true,
-        other => return Err(r.err(c, format!("camera type \"{other}\" is unknown (expected lookAt or none)"))),
+        other => {
+            return Err(r.err(c, format!("camera type \"{other}\" is unknown (expected lookAt or none)")))
+        }
     };
     let known: &[&str] = &[
-        "Position", "Gaze", "Up", "NearPlane", "NearDistance", "ImageResolution", "ImageName", "NumSamples",
-        "GazePoint", "FovY",
+        "Position",
+        "Gaze",
+        "Up",
+        "NearPlane",
+        "NearDistance",
+        "ImageResolution",
+        "ImageName",
+        "NumSamples",
+        "GazePoint",
+        "FovY",
     ];
     w.unknown_children(c, known);
 
@@ -70,7 +80,9 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
         if v.len() == 5 {
             w.at(np, "<NearPlane> has 5 numbers (a known typo in course files); using the first 4");
         } else if v.len() != 4 {
-            return Err(r.err(np, format!("<NearPlane> needs 4 numbers (left right bottom top), found {}", v.len())));
+            return Err(
+                r.err(np, format!("<NearPlane> needs 4 numbers (left right bottom top), found {}", v.len()))
+            );
         }
         if v[0] == v[1] || v[2] == v[3] {
             return Err(r.err(np, "<NearPlane> has zero width or height"));
@@ -86,7 +98,9 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
     let res = r.floats_n(res_el, 2)?;
     let (wpx, hpx) = (res[0], res[1]);
     if wpx.fract() != 0.0 || hpx.fract() != 0.0 || wpx < 1.0 || hpx < 1.0 {
-        return Err(r.err(res_el, format!("<ImageResolution> must be two positive integers, found {wpx} {hpx}")));
+        return Err(
+            r.err(res_el, format!("<ImageResolution> must be two positive integers, found {wpx} {hpx}"))
+        );
     }
     if wpx > MAX_SIDE as f32 || hpx > MAX_SIDE as f32 || (wpx as u64) * (hpx as u64) > MAX_PIXELS {
         return Err(r.err(

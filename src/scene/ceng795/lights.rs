@@ -9,7 +9,11 @@ use crate::scene::element::{Element, Reader};
 use crate::scene::error::SceneError;
 
 /// Reads the ambient light (zero if absent) and the point lights.
-pub fn read_all(r: &Reader, l: &Element, w: &mut Warnings) -> Result<(Vec3, Vec<PointLightDesc>), SceneError> {
+pub fn read_all(
+    r: &Reader,
+    l: &Element,
+    w: &mut Warnings,
+) -> Result<(Vec3, Vec<PointLightDesc>), SceneError> {
     w.unknown_children(l, &["AmbientLight", "PointLight"]);
     let mut ambient = Vec3::ZERO;
     for (i, a) in l.children_named("AmbientLight").enumerate() {

@@ -78,7 +78,9 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
     };
     let shadow_ray_epsilon = r.float_or(root, "ShadowRayEpsilon", 1e-3)?;
     let intersection_test_epsilon = r.float_or(root, "IntersectionTestEpsilon", 1e-6)?;
-    for (name, v) in [("ShadowRayEpsilon", shadow_ray_epsilon), ("IntersectionTestEpsilon", intersection_test_epsilon)] {
+    for (name, v) in
+        [("ShadowRayEpsilon", shadow_ray_epsilon), ("IntersectionTestEpsilon", intersection_test_epsilon)]
+    {
         if v < 0.0 {
             return Err(r.err(root.child(name).unwrap_or(root), format!("<{name}> must not be negative")));
         }
@@ -112,7 +114,13 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
     let base_dir = file.parent().map(Path::to_path_buf).unwrap_or_default();
     let objects = match root.child("Objects") {
         Some(o) => {
-            let ctx = objects::Context { r, materials: &material_ids, transforms: &transforms, vertices: &vertices, base_dir: &base_dir };
+            let ctx = objects::Context {
+                r,
+                materials: &material_ids,
+                transforms: &transforms,
+                vertices: &vertices,
+                base_dir: &base_dir,
+            };
             objects::read_all(&ctx, o, &mut w)?
         }
         None => Vec::new(),

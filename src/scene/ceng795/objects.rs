@@ -155,7 +155,9 @@ fn mesh(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, SceneErr
     let smooth = match el.attr("shadingMode").map(str::trim) {
         None | Some("") | Some("flat") => false,
         Some("smooth") => true,
-        Some(other) => return Err(r.err(el, format!("shadingMode \"{other}\" is unknown (expected smooth or flat)"))),
+        Some(other) => {
+            return Err(r.err(el, format!("shadingMode \"{other}\" is unknown (expected smooth or flat)")))
+        }
     };
     let faces = r.required(el, "Faces")?;
     for (k, _) in &faces.attrs {
@@ -198,7 +200,10 @@ fn mesh(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, SceneErr
 fn vertex(ctx: &Context, el: &Element, i: u32) -> Result<Vec3, SceneError> {
     let n = ctx.vertices.len();
     if i == 0 || i as usize > n {
-        return Err(ctx.r.err(el, format!("vertex index {i} is out of range (VertexData has {n} vertices, numbered from 1)")));
+        return Err(ctx.r.err(
+            el,
+            format!("vertex index {i} is out of range (VertexData has {n} vertices, numbered from 1)"),
+        ));
     }
     Ok(ctx.vertices[i as usize - 1])
 }
@@ -237,7 +242,10 @@ fn resolve_instances(
             let cur = *chain.last().unwrap_or(&p.index);
             let inst = by_index[&cur];
             let base = *mesh_ids.get(&inst.base_id).ok_or_else(|| {
-                r.err(&loc_el(objs, &out[cur]), format!("baseMeshId \"{}\" names no Mesh or MeshInstance", inst.base_id))
+                r.err(
+                    &loc_el(objs, &out[cur]),
+                    format!("baseMeshId \"{}\" names no Mesh or MeshInstance", inst.base_id),
+                )
             })?;
             if let Some(&(m, t, mat)) = done.get(&base) {
                 break (m, t, mat);

@@ -17,7 +17,11 @@ use crate::scene::error::SceneError;
 use std::collections::HashMap;
 
 /// Reads the named transforms, keyed by their reference (`t1`, `s2`, ...).
-pub fn read_all(r: &Reader, ts: &Element, w: &mut Warnings) -> Result<HashMap<String, Transform>, SceneError> {
+pub fn read_all(
+    r: &Reader,
+    ts: &Element,
+    w: &mut Warnings,
+) -> Result<HashMap<String, Transform>, SceneError> {
     w.unknown_children(ts, &["Translation", "Scaling", "Rotation", "Composite"]);
     let mut map = HashMap::new();
     for el in &ts.children {
