@@ -1,70 +1,32 @@
-//! The `luster` command line: a thin layer over the library.
+//! `luster render`: load, build, render every camera, write images atomically.
 
 use anyhow::Context;
-use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use luster::render::{self, Scene};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
-/// luster — a ray tracer for CENG795 scenes and procedural shaders.
-#[derive(Parser)]
-#[command(version, about, long_about = None, propagate_version = true)]
-struct Cli {
-    #[command(subcommand)]
-    command: Command,
-}
-
-#[derive(Subcommand)]
-enum Command {
-    /// Render scenes (CENG795 XML or JSON); writes one image per camera.
-    ///
-    /// Each camera's image goes to OUTDIR/<ImageName>. Errors in one scene are
-    /// reported and the others still render; the exit code is 2 if any failed.
-    Render {
-        /// Scene files (.xml or .json).
-        #[arg(required = true)]
-        scenes: Vec<PathBuf>,
-        /// Folder for the images (created if needed).
-        #[arg(short, long, default_value = ".")]
-        outdir: PathBuf,
-        /// Worker threads (default: all cores).
-        #[arg(short, long)]
-        threads: Option<usize>,
-        /// Print no progress bar and no summary, only errors and warnings.
-        #[arg(short, long)]
-        quiet: bool,
-    },
-}
-
-fn main() -> ExitCode {
-    let cli = Cli::parse();
-    match cli.command {
-        Command::Render { scenes, outdir, threads, quiet } => {
-            let pool = match rayon::ThreadPoolBuilder::new().num_threads(threads.unwrap_or(0)).build() {
-                Ok(p) => p,
-                Err(e) => {
-                    eprintln!("error: cannot start worker threads: {e}");
-                    return ExitCode::from(2);
-                }
-            };
-            let mut failed = 0;
-            for s in &scenes {
-                if let Err(e) = pool.install(|| render_scene(s, &outdir, quiet)) {
-                    eprintln!("error: {e:#}");
-                    failed += 1;
-                }
-            }
-            if failed > 0 {
-                if scenes.len() > 1 {
-                    eprintln!("{failed} of {} scenes failed", scenes.len());
-                }
-                return ExitCode::from(2);
-            }
-            ExitCode::SUCCESS
+/// Renders every scene; errors in one scene do not stop the others.
+pub fn run(scenes: &[PathBuf], outdir: &Path, threads: Option<usize>, quiet: bool) -> ExitCode {
+    let pool = match super::pool(threads) {
+        Ok(p) => p,
+        Err(code) => return code,
+    };
+    let mut failed = 0;
+    for s in scenes {
+        if let Err(e) = pool.install(|| render_scene(s, outdir, quiet)) {
+            eprintln!("error: {e:#}");
+            failed += 1;
         }
     }
+    if failed > 0 {
+        if scenes.len() > 1 {
+            eprintln!("{failed} of {} scenes failed", scenes.len());
+        }
+        return ExitCode::from(2);
+    }
+    ExitCode::SUCCESS
 }
 
 fn render_scene(path: &Path, outdir: &Path, quiet: bool) -> anyhow::Result<()> {
