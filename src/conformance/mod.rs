@@ -1,0 +1,230 @@
+//! Conformance against the course's expected images: finding the scenes of a
+//! course folder, the expected image of each camera, the threshold each image
+//! must meet, and rendering plus comparing one scene. The golden-image tests
+//! and `luster suite` both use this module, so they judge alike.
+//!
+//! The folder layout is the course's: `hwN/{json,xml}/**/scene` with expected
+//! images in `hwN/expected/<ImageName>`. An XML scene prefers
+//! `hwN/expected/2022/<ImageName>` and then `.../2020/...` when present: those
+//! older images belong to the older XML version of a scene.
+
+pub mod thresholds;
+
+use crate::image::{compare, CompareOptions, Comparison, Rgb32Image};
+use crate::render::{self, Scene};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+pub use thresholds::{threshold, Threshold};
+
+/// Which encoding a scene uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Encoding {
+    /// The 2025 JSON.
+    Json,
+    /// The older XML.
+    Xml,
+}
+
+impl Encoding {
+    /// `json` or `xml`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Encoding::Json => "json",
+            Encoding::Xml => "xml",
+        }
+    }
+}
+
+/// A scene of a course folder.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub struct Case {
+    /// The homework folder name (`hw1`).
+    pub hw: String,
+    /// Its encoding.
+    pub encoding: Encoding,
+    /// The scene file.
+    pub scene: PathBuf,
+    /// The homework folder.
+    pub hw_dir: PathBuf,
+}
+
+impl Case {
+    /// A short, unique, human name: `hw2/xml/ellipsoids.xml`.
+    pub fn label(&self) -> String {
+        let rel = self.scene.strip_prefix(&self.hw_dir).unwrap_or(&self.scene);
+        format!("{}/{}", self.hw, rel.display()).replace('\\', "/")
+    }
+
+    /// The expected image for a camera's `ImageName`, if the folder has one.
+    pub fn expected_image(&self, image_name: &str) -> Option<PathBuf> {
+        let exp = self.hw_dir.join("expected");
+        if self.encoding == Encoding::Xml {
+            for year in ["2022", "2020"] {
+                let p = exp.join(year).join(image_name);
+                if p.is_file() {
+                    return Some(p);
+                }
+            }
+        }
+        let p = exp.join(image_name);
+        p.is_file().then_some(p)
+    }
+}
+
+/// Every scene file under `root/hw*/{json,xml}`, sorted.
+pub fn discover(root: &Path) -> Vec<Case> {
+    let mut cases = Vec::new();
+    let Ok(hws) = std::fs::read_dir(root) else { return cases };
+    for hw in hws.flatten() {
+        let hw_dir = hw.path();
+        let hw_name = hw.file_name().to_string_lossy().to_string();
+        if !hw_dir.is_dir() || !hw_name.starts_with("hw") {
+            continue;
+        }
+        for (sub, encoding) in [("json", Encoding::Json), ("xml", Encoding::Xml)] {
+            let mut files = Vec::new();
+            walk(&hw_dir.join(sub), sub, &mut files);
+            for scene in files {
+                cases.push(Case { hw: hw_name.clone(), encoding, scene, hw_dir: hw_dir.clone() });
+            }
+        }
+    }
+    cases.sort();
+    cases
+}
+
+fn walk(dir: &Path, ext: &str, out: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for e in entries.flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            walk(&p, ext, out);
+        } else if p.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case(ext)) {
+            out.push(p);
+        }
+    }
+}
+
+/// The outcome for one camera's image.
+#[derive(Clone, Debug)]
+pub struct ImageResult {
+    /// The camera's `ImageName`.
+    pub image_name: String,
+    /// Where the render was written.
+    pub render: PathBuf,
+    /// The expected image, when the folder has one.
+    pub expected: Option<PathBuf>,
+    /// The difference heatmap, when one was written.
+    pub heatmap: Option<PathBuf>,
+    /// Metrics against the expected image.
+    pub comparison: Option<Comparison>,
+    /// The threshold it was judged by.
+    pub threshold: Threshold,
+    /// Render seconds for this camera.
+    pub seconds: f64,
+    /// Whether it met the threshold (false without an expected image).
+    pub pass: bool,
+    /// Why it failed beyond the metrics (an unreadable expected image, ...).
+    pub error: Option<String>,
+}
+
+/// The outcome for one scene.
+#[derive(Clone, Debug)]
+pub struct CaseResult {
+    /// The scene.
+    pub case: Case,
+    /// Seconds to load and build.
+    pub setup_seconds: f64,
+    /// One entry per camera; empty if the scene failed to load.
+    pub images: Vec<ImageResult>,
+    /// The load or build error, if any.
+    pub error: Option<String>,
+    /// Warnings of the loader.
+    pub warnings: Vec<String>,
+}
+
+/// Loads, builds and renders `case` on the current rayon pool, writes each
+/// image and its heatmap under `outdir`, and compares with the expected images.
+pub fn run_case(case: &Case, outdir: &Path) -> CaseResult {
+    let t0 = Instant::now();
+    let mut result = CaseResult {
+        case: case.clone(),
+        setup_seconds: 0.0,
+        images: Vec::new(),
+        error: None,
+        warnings: Vec::new(),
+    };
+    let built = crate::scene::load(&case.scene).and_then(|d| {
+        result.warnings.extend(d.warnings.iter().map(|w| w.to_string()));
+        Scene::build(&d)
+    });
+    let scene = match built {
+        Ok(s) => s,
+        Err(e) => {
+            result.error = Some(e.to_string());
+            return result;
+        }
+    };
+    result.warnings.extend(scene.warnings.iter().map(|w| w.to_string()));
+    result.setup_seconds = t0.elapsed().as_secs_f64();
+    let stem = case.label().replace(['/', '.'], "_");
+    for (i, cam) in scene.cameras.iter().enumerate() {
+        let t = Instant::now();
+        let img = render::render(&scene, i, &|_| {});
+        let seconds = t.elapsed().as_secs_f64();
+        let render_path = outdir.join(format!("{stem}__{}", sanitize(&cam.image_name)));
+        let expected = case.expected_image(&cam.image_name);
+        let threshold = threshold(case, &cam.image_name);
+        let mut r = ImageResult {
+            image_name: cam.image_name.clone(),
+            render: render_path.clone(),
+            expected: expected.clone(),
+            heatmap: None,
+            comparison: None,
+            threshold,
+            seconds,
+            pass: false,
+            error: None,
+        };
+        let rgb = img.to_rgb8();
+        let png = render_path.with_extension("png");
+        r.render = png.clone();
+        if let Err(e) = crate::image::output::write_rgb8(&png, img.width, img.height, &rgb) {
+            r.error = Some(e.to_string());
+            result.images.push(r);
+            continue;
+        }
+        if let Some(exp) = expected {
+            match compare_with(&exp, img.width, img.height, &rgb) {
+                Ok(c) => {
+                    let heat = png.with_file_name(format!(
+                        "{}__heatmap.png",
+                        png.file_stem().map(|s| s.to_string_lossy()).unwrap_or_default()
+                    ));
+                    if let Ok(h) = crate::image::comparison_heatmap(&c, crate::image::HeatmapSource::Flip) {
+                        if crate::image::write_heatmap(&h, &heat).is_ok() {
+                            r.heatmap = Some(heat);
+                        }
+                    }
+                    r.pass = threshold.accepts(&c);
+                    r.comparison = Some(c);
+                }
+                Err(e) => r.error = Some(e),
+            }
+        }
+        result.images.push(r);
+    }
+    result
+}
+
+/// Compares an 8-bit render with the expected image file.
+fn compare_with(expected: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<Comparison, String> {
+    let reference = Rgb32Image::load(expected).map_err(|e| e.to_string())?;
+    let buf = image::RgbImage::from_raw(w, h, rgb.to_vec()).ok_or("render buffer has the wrong size")?;
+    let test = Rgb32Image::from_rgb8(&buf);
+    compare(&reference, &test, &CompareOptions::default()).map_err(|e| e.to_string())
+}
+
+fn sanitize(name: &str) -> String {
+    name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' || c == '-' { c } else { '_' }).collect()
+}
