@@ -13,5 +13,6 @@
 #![warn(missing_docs)]
 
 pub mod accel;
+pub mod bench;
 pub mod image;
 pub mod math;
