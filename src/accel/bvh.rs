@@ -90,21 +90,11 @@ impl Node {
     }
 
     fn leaf(b: &Bounds, first: usize, count: usize) -> Node {
-        Node {
-            min: b.min.to_array(),
-            first: first as u32,
-            max: b.max.to_array(),
-            count: count as u32,
-        }
+        Node { min: b.min.to_array(), first: first as u32, max: b.max.to_array(), count: count as u32 }
     }
 
     fn inner(b: &Bounds, first_child: usize) -> Node {
-        Node {
-            min: b.min.to_array(),
-            first: first_child as u32,
-            max: b.max.to_array(),
-            count: 0,
-        }
+        Node { min: b.min.to_array(), first: first_child as u32, max: b.max.to_array(), count: 0 }
     }
 }
 
@@ -124,25 +114,16 @@ struct Bounds {
 }
 
 impl Bounds {
-    const EMPTY: Bounds = Bounds {
-        min: Vec3A::INFINITY,
-        max: Vec3A::NEG_INFINITY,
-    };
+    const EMPTY: Bounds = Bounds { min: Vec3A::INFINITY, max: Vec3A::NEG_INFINITY };
 
     #[inline]
     fn union(self, o: Bounds) -> Bounds {
-        Bounds {
-            min: self.min.min(o.min),
-            max: self.max.max(o.max),
-        }
+        Bounds { min: self.min.min(o.min), max: self.max.max(o.max) }
     }
 
     #[inline]
     fn grow(self, p: Vec3A) -> Bounds {
-        Bounds {
-            min: self.min.min(p),
-            max: self.max.max(p),
-        }
+        Bounds { min: self.min.min(p), max: self.max.max(p) }
     }
 
     /// Half the surface area: the SAH only compares ratios.
@@ -190,10 +171,7 @@ struct Bin {
 
 type Bins = [[Bin; BINS]; 3];
 
-const EMPTY_BINS: Bins = [[Bin {
-    bounds: Bounds::EMPTY,
-    count: 0,
-}; BINS]; 3];
+const EMPTY_BINS: Bins = [[Bin { bounds: Bounds::EMPTY, count: 0 }; BINS]; 3];
 
 /// Maps a (doubled) centroid to bin indices on the three axes.
 #[derive(Clone, Copy)]
@@ -211,28 +189,16 @@ impl Binner {
         let ext = cb.max - cb.min;
         // A flat axis gets scale 0: everything lands in bin 0 and the axis
         // offers no split.
-        let scale = Vec3A::select(
-            ext.cmpgt(Vec3A::ZERO),
-            Vec3A::splat(nb as f32 * (1.0 - 1e-6)) / ext,
-            Vec3A::ZERO,
-        );
-        Binner {
-            origin: cb.min,
-            scale,
-            nb,
-        }
+        let scale =
+            Vec3A::select(ext.cmpgt(Vec3A::ZERO), Vec3A::splat(nb as f32 * (1.0 - 1e-6)) / ext, Vec3A::ZERO);
+        Binner { origin: cb.min, scale, nb }
     }
 
     #[inline]
     fn bins(&self, c2: Vec3A) -> [usize; 3] {
-        let b = ((c2 - self.origin) * self.scale)
-            .clamp(Vec3A::ZERO, Vec3A::splat((self.nb - 1) as f32));
+        let b = ((c2 - self.origin) * self.scale).clamp(Vec3A::ZERO, Vec3A::splat((self.nb - 1) as f32));
         // `min` proves the index in range to the compiler as well.
-        [
-            (b.x as usize).min(BINS - 1),
-            (b.y as usize).min(BINS - 1),
-            (b.z as usize).min(BINS - 1),
-        ]
+        [(b.x as usize).min(BINS - 1), (b.y as usize).min(BINS - 1), (b.z as usize).min(BINS - 1)]
     }
 
     #[inline]
@@ -245,10 +211,7 @@ impl Binner {
 fn bin_refs(refs: &[PrimRef], binner: &Binner) -> Bins {
     let mut bins = EMPTY_BINS;
     for r in refs {
-        let b = Bounds {
-            min: r.min(),
-            max: r.max(),
-        };
+        let b = Bounds { min: r.min(), max: r.max() };
         let idx = binner.bins(r.centroid2());
         for axis in 0..3 {
             let bin = &mut bins[axis][idx[axis]];
@@ -272,22 +235,13 @@ fn merge_bins(mut a: Bins, b: &Bins) -> Bins {
 /// Box and centroid box of a set of references.
 fn ref_bounds(refs: &[PrimRef]) -> (Bounds, Bounds) {
     let fold = |(b, c): (Bounds, Bounds), r: &PrimRef| {
-        (
-            b.union(Bounds {
-                min: r.min(),
-                max: r.max(),
-            }),
-            c.grow(r.centroid2()),
-        )
+        (b.union(Bounds { min: r.min(), max: r.max() }), c.grow(r.centroid2()))
     };
     if refs.len() >= PAR_BIN_MIN {
         use rayon::prelude::*;
         refs.par_chunks(PAR_BIN_MIN / 4)
             .map(|ch| ch.iter().fold((Bounds::EMPTY, Bounds::EMPTY), fold))
-            .reduce(
-                || (Bounds::EMPTY, Bounds::EMPTY),
-                |a, b| (a.0.union(b.0), a.1.union(b.1)),
-            )
+            .reduce(|| (Bounds::EMPTY, Bounds::EMPTY), |a, b| (a.0.union(b.0), a.1.union(b.1)))
     } else {
         refs.iter().fold((Bounds::EMPTY, Bounds::EMPTY), fold)
     }
@@ -330,13 +284,7 @@ fn best_split(bins: &Bins, nb: usize) -> Option<Split> {
             let cost = acc.half_area() * left_count as f32 + right[i].1;
             // Strict `<` keeps the first of equal candidates: determinism.
             if best.as_ref().is_none_or(|b| cost < b.cost) {
-                best = Some(Split {
-                    axis,
-                    bin: i,
-                    cost,
-                    left: acc,
-                    right: right[i].0,
-                });
+                best = Some(Split { axis, bin: i, cost, left: acc, right: right[i].0 });
             }
         }
     }
@@ -387,13 +335,7 @@ impl Builder {
     /// in `region`, which starts at global index `base`. Returns its depth
     /// and node count.
     fn build(task: Task, slot: &mut Node, region: &mut [Node], base: usize) -> (usize, usize) {
-        let Task {
-            refs,
-            offset,
-            bounds,
-            cbounds,
-            depth,
-        } = task;
+        let Task { refs, offset, bounds, cbounds, depth } = task;
         let n = refs.len();
         let Some((mid, lb, lcb, rb, rcb)) = Self::split(refs, &bounds, &cbounds, depth) else {
             *slot = Node::leaf(&bounds, offset, n);
@@ -404,20 +346,8 @@ impl Builder {
         let (lslot, rslot) = pair.split_at_mut(1);
         let (lreg, rreg) = rest.split_at_mut(2 * mid - 2);
         let (lrefs, rrefs) = refs.split_at_mut(mid);
-        let lt = Task {
-            refs: lrefs,
-            offset,
-            bounds: lb,
-            cbounds: lcb,
-            depth: depth + 1,
-        };
-        let rt = Task {
-            refs: rrefs,
-            offset: offset + mid,
-            bounds: rb,
-            cbounds: rcb,
-            depth: depth + 1,
-        };
+        let lt = Task { refs: lrefs, offset, bounds: lb, cbounds: lcb, depth: depth + 1 };
+        let rt = Task { refs: rrefs, offset: offset + mid, bounds: rb, cbounds: rcb, depth: depth + 1 };
         let (lbase, rbase) = (base + 2, base + 2 * mid);
         let ((ld, lc), (rd, rc)) = if n >= PAR_MIN {
             rayon::join(
@@ -425,10 +355,7 @@ impl Builder {
                 || Self::build(rt, &mut rslot[0], rreg, rbase),
             )
         } else {
-            (
-                Self::build(lt, &mut lslot[0], lreg, lbase),
-                Self::build(rt, &mut rslot[0], rreg, rbase),
-            )
+            (Self::build(lt, &mut lslot[0], lreg, lbase), Self::build(rt, &mut rslot[0], rreg, rbase))
         };
         (ld.max(rd), 1 + lc + rc)
     }
@@ -464,8 +391,7 @@ impl Builder {
         let Some(s) = best_split(&bins, binner.nb) else {
             return (n > MAX_LEAF).then(|| Self::median_split(refs, cbounds));
         };
-        let split_cost =
-            TRAVERSAL_COST + INTERSECT_COST * s.cost / bounds.half_area().max(f32::MIN_POSITIVE);
+        let split_cost = TRAVERSAL_COST + INTERSECT_COST * s.cost / bounds.half_area().max(f32::MIN_POSITIVE);
         if split_cost >= n as f32 * INTERSECT_COST && n <= MAX_LEAF {
             return None;
         }
@@ -475,18 +401,13 @@ impl Builder {
 
     /// Splits at the median along the widest centroid axis.
     #[allow(clippy::type_complexity)]
-    fn median_split(
-        refs: &mut [PrimRef],
-        cbounds: &Bounds,
-    ) -> (usize, Bounds, Bounds, Bounds, Bounds) {
+    fn median_split(refs: &mut [PrimRef], cbounds: &Bounds) -> (usize, Bounds, Bounds, Bounds, Bounds) {
         let axis = (cbounds.max - cbounds.min).max_position();
         let mid = refs.len() / 2;
         // Ties broken by input index, so the result does not depend on the
         // selection algorithm's internals.
         refs.select_nth_unstable_by(mid, |a, b| {
-            a.centroid2()[axis]
-                .total_cmp(&b.centroid2()[axis])
-                .then(a.index().cmp(&b.index()))
+            a.centroid2()[axis].total_cmp(&b.centroid2()[axis]).then(a.index().cmp(&b.index()))
         });
         let (l, r) = refs.split_at(mid);
         let ((lb, lcb), (rb, rcb)) = (ref_bounds(l), ref_bounds(r));
@@ -533,10 +454,7 @@ impl RayInv {
         let d = Vec3A::from(ray.d);
         let tiny = Vec3A::splat(1e-30);
         let d = Vec3A::select(d.abs().cmplt(tiny), tiny.copysign(d), d);
-        RayInv {
-            o: Vec3A::from(ray.o),
-            inv_d: d.recip(),
-        }
+        RayInv { o: Vec3A::from(ray.o), inv_d: d.recip() }
     }
 
     /// Entry distance into `n`'s box if the ray meets it within `[0, t_max]`.
@@ -556,48 +474,28 @@ impl Bvh {
     /// out (they cannot be hit). Never panics; an empty input gives a tree
     /// that nothing hits.
     pub fn build(prim_bounds: &[Aabb]) -> Bvh {
-        assert!(
-            prim_bounds.len() <= u32::MAX as usize,
-            "more than 2^32 primitives"
-        );
+        assert!(prim_bounds.len() <= u32::MAX as usize, "more than 2^32 primitives");
         let mut refs: Vec<PrimRef> = prim_bounds
             .iter()
             .enumerate()
             .filter(|(_, b)| !b.is_empty() && b.is_finite())
-            .map(|(i, b)| PrimRef {
-                lo: b.min.extend(f32::from_bits(i as u32)),
-                hi: b.max.extend(0.0),
-            })
+            .map(|(i, b)| PrimRef { lo: b.min.extend(f32::from_bits(i as u32)), hi: b.max.extend(0.0) })
             .collect();
         if refs.is_empty() {
             // No nodes at all: the traversals check for this once, so the
             // hot loop never meets a node without primitives.
-            return Bvh {
-                nodes: Vec::new(),
-                prim_order: Vec::new(),
-                depth: 0,
-            };
+            return Bvh { nodes: Vec::new(), prim_order: Vec::new(), depth: 0 };
         }
         let n = refs.len();
         let (bounds, cbounds) = ref_bounds(&refs);
         let mut region = vec![Node::inner(&Bounds::EMPTY, 0); 2 * n - 1];
         let (root, rest) = region.split_at_mut(1);
-        let task = Task {
-            refs: &mut refs,
-            offset: 0,
-            bounds,
-            cbounds,
-            depth: 0,
-        };
+        let task = Task { refs: &mut refs, offset: 0, bounds, cbounds, depth: 0 };
         let (depth, count) = Builder::build(task, &mut root[0], rest, 1);
         let nodes = Builder::compact(&region, count);
         drop(region);
         let prim_order = refs.iter().map(PrimRef::index).collect();
-        Bvh {
-            nodes,
-            prim_order,
-            depth: depth + 1,
-        }
+        Bvh { nodes, prim_order, depth: depth + 1 }
     }
 
     /// The permutation of input primitive indices that leaf ranges index
@@ -703,12 +601,7 @@ impl Bvh {
     /// some primitive at `range` blocks the ray before `t_max`; the traversal
     /// stops at the first such leaf.
     #[inline]
-    pub fn any<F: FnMut(Range<usize>, f32) -> bool>(
-        &self,
-        ray: &Ray,
-        t_max: f32,
-        mut leaf: F,
-    ) -> bool {
+    pub fn any<F: FnMut(Range<usize>, f32) -> bool>(&self, ray: &Ray, t_max: f32, mut leaf: F) -> bool {
         let r = RayInv::new(ray);
         let nodes = &self.nodes[..];
         let Some(root) = nodes.first() else {
@@ -808,10 +701,7 @@ pub(crate) mod tests {
     /// The primitive of these tests is the box itself, hit at its entry distance.
     fn brute_closest(boxes: &[Aabb], ray: &Ray, t_max: f32) -> Option<f32> {
         let inv = ray.d.recip();
-        boxes
-            .iter()
-            .filter_map(|b| b.hit(ray.o, inv, t_max))
-            .min_by(f32::total_cmp)
+        boxes.iter().filter_map(|b| b.hit(ray.o, inv, t_max)).min_by(f32::total_cmp)
     }
 
     fn bvh_closest(bvh: &Bvh, boxes: &[Aabb], ray: &Ray, t_max: f32) -> Option<f32> {
@@ -837,9 +727,7 @@ pub(crate) mod tests {
     fn bvh_any(bvh: &Bvh, boxes: &[Aabb], ray: &Ray, t_max: f32) -> bool {
         let inv = ray.d.recip();
         bvh.any(ray, t_max, |range, t| {
-            bvh.prim_order()[range]
-                .iter()
-                .any(|&p| boxes[p as usize].hit(ray.o, inv, t).is_some())
+            bvh.prim_order()[range].iter().any(|&p| boxes[p as usize].hit(ray.o, inv, t).is_some())
         })
     }
 
@@ -890,11 +778,7 @@ pub(crate) mod tests {
         let bvh = Bvh::build(&boxes);
         check_structure(&bvh, &boxes);
         assert_eq!(bvh.prim_order().len(), boxes.len() - 3);
-        let valid: Vec<Aabb> = boxes
-            .iter()
-            .copied()
-            .filter(|b| !b.is_empty() && b.is_finite())
-            .collect();
+        let valid: Vec<Aabb> = boxes.iter().copied().filter(|b| !b.is_empty() && b.is_finite()).collect();
         let mut hits = 0;
         for i in 0..5000 {
             let o = rng.vec(-15.0, 15.0);
@@ -905,38 +789,20 @@ pub(crate) mod tests {
                 rng.dir()
             };
             let ray = Ray::new(o, d);
-            let t_max = if i % 3 == 0 {
-                rng.range(0.0, 20.0)
-            } else {
-                f32::INFINITY
-            };
+            let t_max = if i % 3 == 0 { rng.range(0.0, 20.0) } else { f32::INFINITY };
             let want = brute_closest(&valid, &ray, t_max);
-            assert_eq!(
-                bvh_closest(&bvh, &boxes, &ray, t_max),
-                want,
-                "ray {i}: {ray:?}"
-            );
-            assert_eq!(
-                bvh_any(&bvh, &boxes, &ray, t_max),
-                want.is_some(),
-                "ray {i}"
-            );
+            assert_eq!(bvh_closest(&bvh, &boxes, &ray, t_max), want, "ray {i}: {ray:?}");
+            assert_eq!(bvh_any(&bvh, &boxes, &ray, t_max), want.is_some(), "ray {i}");
             hits += want.is_some() as usize;
         }
-        assert!(
-            hits > 1000 && hits < 5000,
-            "test rays should both hit and miss: {hits}"
-        );
+        assert!(hits > 1000 && hits < 5000, "test rays should both hit and miss: {hits}");
     }
 
     #[test]
     fn axis_aligned_rays_along_box_faces_hit() {
         // Zero direction components with the origin on a slab plane: the
         // naive slab test computes 0 * inf = NaN here.
-        let boxes = [
-            Aabb::new(Vec3::ZERO, Vec3::ONE),
-            Aabb::new(Vec3::splat(2.0), Vec3::splat(3.0)),
-        ];
+        let boxes = [Aabb::new(Vec3::ZERO, Vec3::ONE), Aabb::new(Vec3::splat(2.0), Vec3::splat(3.0))];
         let bvh = Bvh::build(&boxes);
         let ray = Ray::new(Vec3::new(0.0, 0.5, -1.0), Vec3::Z);
         let mut leaves = 0;
@@ -961,10 +827,7 @@ pub(crate) mod tests {
 
         let b = Aabb::new(Vec3::splat(1.0), Vec3::splat(2.0));
         let one = Bvh::build(&[b]);
-        assert_eq!(
-            (one.node_count(), one.depth(), one.prim_order()),
-            (1, 1, &[0u32][..])
-        );
+        assert_eq!((one.node_count(), one.depth(), one.prim_order()), (1, 1, &[0u32][..]));
         assert_eq!(one.bounds(), b);
         let toward = Ray::new(Vec3::ZERO, Vec3::ONE);
         assert!(one.closest(&toward, f32::INFINITY, |r, _| r == (0..1)));
@@ -987,14 +850,10 @@ pub(crate) mod tests {
             seen += r.len();
             false
         });
-        assert_eq!(
-            seen, 10_000,
-            "any() must visit every leaf when no leaf reports a hit"
-        );
+        assert_eq!(seen, 10_000, "any() must visit every leaf when no leaf reports a hit");
         // Point boxes (zero-area triangles have them) are valid primitives.
-        let pts: Vec<Aabb> = (0..100)
-            .map(|i| Aabb::new(Vec3::splat(i as f32), Vec3::splat(i as f32)))
-            .collect();
+        let pts: Vec<Aabb> =
+            (0..100).map(|i| Aabb::new(Vec3::splat(i as f32), Vec3::splat(i as f32))).collect();
         check_structure(&Bvh::build(&pts), &pts);
     }
 
@@ -1022,14 +881,8 @@ pub(crate) mod tests {
     fn build_is_deterministic_across_thread_counts() {
         let boxes = random_boxes(&mut Rng(7), 50_000);
         let a = Bvh::build(&boxes);
-        let one = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
-        let three = rayon::ThreadPoolBuilder::new()
-            .num_threads(3)
-            .build()
-            .unwrap();
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
         assert_eq!(a, one.install(|| Bvh::build(&boxes)));
         assert_eq!(a, three.install(|| Bvh::build(&boxes)));
         assert_eq!(size_of::<Node>(), 32);
