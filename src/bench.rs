@@ -56,21 +56,17 @@ pub fn run(plys: &[PathBuf], threads: &[usize], reps: usize) -> anyhow::Result<(
         let accel = accel.context("no build ran")?;
         let bvh = accel.bvh();
         println!(
-            "   BVH build {:.1} ms (median of {BUILDS}; all cores); {} nodes, depth {}, {} leaves; accel {:.1} MiB",
+            "   BVH build {:.1} ms (median of {BUILDS}; all cores); {} 4-wide nodes, depth {} (binary {}), {} leaves; accel {:.1} MiB",
             median(&mut build_times) * 1e3,
             bvh.node_count(),
             bvh.depth(),
-            bvh.nodes().iter().filter(|n| n.is_leaf()).count(),
+            bvh.binary_depth(),
+            bvh.leaf_count(),
             accel.memory_bytes() as f64 / (1 << 20) as f64
         );
 
         let (eye, target, dirs) = camera_rays(&positions);
-        println!(
-            "   camera eye {:?} target {:?}; {} rays ({WIDTH}x{HEIGHT})",
-            eye,
-            target,
-            dirs.len()
-        );
+        println!("   camera eye {:?} target {:?}; {} rays ({WIDTH}x{HEIGHT})", eye, target, dirs.len());
         let mut out = vec![u32::MAX; dirs.len()];
         trace(&accel, eye, &dirs, &mut out);
         let hits = out.iter().filter(|&&p| p != u32::MAX).count();
@@ -78,9 +74,7 @@ pub fn run(plys: &[PathBuf], threads: &[usize], reps: usize) -> anyhow::Result<(
 
         let mut base = None;
         for &n in threads {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(n.max(1))
-                .build()?;
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build()?;
             let mut times: Vec<f64> = (0..reps)
                 .map(|_| {
                     let t0 = Instant::now();
@@ -91,9 +85,7 @@ pub fn run(plys: &[PathBuf], threads: &[usize], reps: usize) -> anyhow::Result<(
             let min = times.iter().copied().fold(f64::INFINITY, f64::min);
             let med = median(&mut times);
             let mrays = dirs.len() as f64 / med / 1e6;
-            let scale = base.map_or(String::new(), |b: f64| {
-                format!("  ({:.2}x of first)", mrays / b)
-            });
+            let scale = base.map_or(String::new(), |b: f64| format!("  ({:.2}x of first)", mrays / b));
             base.get_or_insert(mrays);
             println!(
                 "   threads={n:<2} closest hit: median {:7.1} ms over {reps} -> {mrays:6.2} Mrays/s (min {:.1} ms){scale}",
@@ -110,15 +102,11 @@ pub fn run(plys: &[PathBuf], threads: &[usize], reps: usize) -> anyhow::Result<(
 
 /// Closest hit for every ray, the hit triangle (or `u32::MAX`) into `out`.
 fn trace(accel: &MeshAccel, eye: Vec3, dirs: &[Vec3], out: &mut [u32]) {
-    out.par_chunks_mut(CHUNK)
-        .zip(dirs.par_chunks(CHUNK))
-        .for_each(|(out, dirs)| {
-            for (o, &d) in out.iter_mut().zip(dirs) {
-                *o = accel
-                    .intersect(&Ray::new(eye, d), 0.0, f32::INFINITY)
-                    .map_or(u32::MAX, |h| h.prim);
-            }
-        });
+    out.par_chunks_mut(CHUNK).zip(dirs.par_chunks(CHUNK)).for_each(|(out, dirs)| {
+        for (o, &d) in out.iter_mut().zip(dirs) {
+            *o = accel.intersect(&Ray::new(eye, d), 0.0, f32::INFINITY).map_or(u32::MAX, |h| h.prim);
+        }
+    });
 }
 
 fn median(v: &mut [f64]) -> f64 {
@@ -141,10 +129,7 @@ pub fn camera_rays(positions: &[Vec3]) -> (Vec3, Vec3, Vec<Vec3>) {
     let (w_ax, u_ax, v_ax) = (ax[0], ax[2], ax[1]);
     let th = (45.0f64.to_radians() / 2.0).tan();
     let aspect = WIDTH as f64 / HEIGHT as f64;
-    let dist = f64::max(
-        (ext[u_ax] / 2.0) as f64 / (th * aspect),
-        (ext[v_ax] / 2.0) as f64 / th,
-    ) * 1.05;
+    let dist = f64::max((ext[u_ax] / 2.0) as f64 / (th * aspect), (ext[v_ax] / 2.0) as f64 / th) * 1.05;
     let mut eye = c;
     eye[w_ax] = (c[w_ax] as f64 + dist) as f32;
     let mut dirs = Vec::with_capacity(WIDTH * HEIGHT);
@@ -174,7 +159,7 @@ pub fn peak_rss_kib() -> Option<u64> {
 ///
 /// Stand-in until `crate::scene::ply::read_ply` lands: swap the body for
 /// `read_ply(path)` and keep the signature.
-fn load_mesh(path: &Path) -> anyhow::Result<(Vec<Vec3>, Vec<[u32; 3]>)> {
+pub fn load_mesh(path: &Path) -> anyhow::Result<(Vec<Vec3>, Vec<[u32; 3]>)> {
     let bytes = fs::read(path).with_context(|| format!("reading {}", path.display()))?;
     stand_in_ply::parse(&bytes).with_context(|| format!("parsing {}", path.display()))
 }
@@ -253,15 +238,10 @@ mod stand_in_ply {
         fn value(&mut self, ty: Ty) -> anyhow::Result<f64> {
             if self.fmt == Format::Ascii {
                 let tok = self.tokens.next().context("unexpected end of PLY data")?;
-                return tok
-                    .parse::<f64>()
-                    .with_context(|| format!("bad PLY number {tok:?}"));
+                return tok.parse::<f64>().with_context(|| format!("bad PLY number {tok:?}"));
             }
             let n = ty.size();
-            let b = self
-                .body
-                .get(self.pos..self.pos + n)
-                .context("unexpected end of PLY data")?;
+            let b = self.body.get(self.pos..self.pos + n).context("unexpected end of PLY data")?;
             self.pos += n;
             let mut a = [0u8; 8];
             a[..n].copy_from_slice(b);
@@ -283,10 +263,7 @@ mod stand_in_ply {
 
     pub(super) fn parse(bytes: &[u8]) -> anyhow::Result<(Vec<Vec3>, Vec<[u32; 3]>)> {
         let marker = b"end_header";
-        let end = bytes
-            .windows(marker.len())
-            .position(|w| w == marker)
-            .context("no end_header")?;
+        let end = bytes.windows(marker.len()).position(|w| w == marker).context("no end_header")?;
         let mut body_start = end + marker.len();
         // The header line ends in \n or \r\n.
         while body_start < bytes.len() && bytes[body_start] != b'\n' {
@@ -332,12 +309,7 @@ mod stand_in_ply {
         } else {
             ""
         };
-        let mut r = Reader {
-            fmt,
-            body,
-            pos: 0,
-            tokens: text.split_ascii_whitespace(),
-        };
+        let mut r = Reader { fmt, body, pos: 0, tokens: text.split_ascii_whitespace() };
         let (mut positions, mut triangles) = (Vec::new(), Vec::new());
         let mut row = Vec::new();
         for e in &elements {
@@ -372,11 +344,7 @@ mod stand_in_ply {
                             }
                             if is_face && (name == "vertex_indices" || name == "vertex_index") {
                                 for k in 1..n.saturating_sub(1) {
-                                    triangles.push([
-                                        row[0] as u32,
-                                        row[k] as u32,
-                                        row[k + 1] as u32,
-                                    ]);
+                                    triangles.push([row[0] as u32, row[k] as u32, row[k + 1] as u32]);
                                 }
                             }
                         }
@@ -407,24 +375,15 @@ element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0
         let mut bin = b"ply\r\nformat binary_little_endian 1.0\r\nelement vertex 3\r\nproperty float x\r\nproperty float y\r\n\
 property float z\r\nproperty float u\r\nelement face 1\r\nproperty list uchar int vertex_indices\r\nend_header\r\n"
             .to_vec();
-        for v in [
-            [0.0f32, 0.0, 0.0, 9.0],
-            [2.0, 0.0, 0.0, 9.0],
-            [0.0, 2.0, 5.0, 9.0],
-        ] {
+        for v in [[0.0f32, 0.0, 0.0, 9.0], [2.0, 0.0, 0.0, 9.0], [0.0, 2.0, 5.0, 9.0]] {
             v.iter().for_each(|x| bin.extend(x.to_le_bytes()));
         }
         bin.push(3);
-        [0i32, 1, 2]
-            .iter()
-            .for_each(|i| bin.extend(i.to_le_bytes()));
+        [0i32, 1, 2].iter().for_each(|i| bin.extend(i.to_le_bytes()));
         let (p, t) = stand_in_ply::parse(&bin).unwrap();
         assert_eq!(p[2], Vec3::new(0.0, 2.0, 5.0));
         assert_eq!(t, vec![[0, 1, 2]]);
-        assert!(
-            stand_in_ply::parse(&bin[..bin.len() - 2]).is_err(),
-            "truncated data is an error"
-        );
+        assert!(stand_in_ply::parse(&bin[..bin.len() - 2]).is_err(), "truncated data is an error");
     }
 
     #[test]
@@ -436,10 +395,7 @@ property float z\r\nproperty float u\r\nelement face 1\r\nproperty list uchar in
         assert!(eye.x == 0.0 && eye.y == 0.0 && eye.z > 0.0);
         assert_eq!(dirs.len(), WIDTH * HEIGHT);
         let first = dirs[0];
-        assert!(
-            first.x < 0.0 && first.y > 0.0 && first.z < 0.0,
-            "top-left pixel first: {first}"
-        );
+        assert!(first.x < 0.0 && first.y > 0.0 && first.z < 0.0, "top-left pixel first: {first}");
         assert!(dirs.iter().all(|d| (d.length() - 1.0).abs() < 1e-6));
         // The frame's half-width at the box centre is 1.05 times the box's.
         let right = dirs[WIDTH - 1];

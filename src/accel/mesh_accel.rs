@@ -13,6 +13,7 @@
 //! out means the intersection code never has to think about them.
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use super::bvh::Bvh;
 use super::triangle::{Triangle, WatertightRay};
@@ -48,26 +49,20 @@ impl MeshAccel {
             let tri = Triangle::new(vertex(t[0])?, vertex(t[1])?, vertex(t[2])?, k as u32);
             (!tri.is_degenerate()).then_some(tri)
         };
-        let bounds: Vec<Aabb> = {
-            use rayon::prelude::*;
-            triangles
-                .par_iter()
-                .enumerate()
-                .map(|kt| {
-                    tri_of(kt).map_or(Aabb::EMPTY, |t| Aabb::from_points(t.v.map(Vec3::from)))
-                })
-                .collect()
-        };
+        let bounds: Vec<Aabb> = triangles
+            .par_iter()
+            .enumerate()
+            .map(|kt| tri_of(kt).map_or(Aabb::EMPTY, |t| Aabb::from_points(t.v.map(Vec3::from))))
+            .collect();
         let bvh = Bvh::build(&bounds);
         drop(bounds);
         let tris = bvh
             .prim_order()
-            .iter()
+            .par_iter()
             .map(|&k| {
                 // Every index in prim_order had a non-empty box, so came from
                 // a valid triangle.
-                tri_of((k as usize, &triangles[k as usize]))
-                    .expect("BVH holds only valid triangles")
+                tri_of((k as usize, &triangles[k as usize])).expect("BVH holds only valid triangles")
             })
             .collect();
         MeshAccel { bvh, tris }
@@ -84,12 +79,7 @@ impl MeshAccel {
             for tri in &tris[range] {
                 if let Some(h) = wr.intersect(tri, t_min, *t_max) {
                     *t_max = h.t;
-                    best = Some(TriHit {
-                        t: h.t,
-                        prim: tri.prim,
-                        u: h.u,
-                        v: h.v,
-                    });
+                    best = Some(TriHit { t: h.t, prim: tri.prim, u: h.u, v: h.v });
                     found = true;
                 }
             }
@@ -104,9 +94,7 @@ impl MeshAccel {
         let wr = WatertightRay::new(ray);
         let tris = &self.tris[..];
         self.bvh.any(ray, t_max, |range, t_max| {
-            tris[range]
-                .iter()
-                .any(|tri| wr.intersect(tri, t_min, t_max).is_some())
+            tris[range].iter().any(|tri| wr.intersect(tri, t_min, t_max).is_some())
         })
     }
 
@@ -146,11 +134,7 @@ mod tests {
         let mut p = Vec::new();
         for j in 0..=n {
             for i in 0..=n {
-                p.push(Vec3::new(
-                    i as f32 * 0.37,
-                    j as f32 * 0.29,
-                    rng.range(-0.05, 0.05),
-                ));
+                p.push(Vec3::new(i as f32 * 0.37, j as f32 * 0.29, rng.range(-0.05, 0.05)));
             }
         }
         let mut t = Vec::new();
@@ -174,12 +158,7 @@ mod tests {
         let wr = WatertightRay::new(ray);
         let mut best: Option<(f32, u32)> = None;
         for (k, t) in tris.iter().enumerate() {
-            let tri = Triangle::new(
-                pos[t[0] as usize],
-                pos[t[1] as usize],
-                pos[t[2] as usize],
-                k as u32,
-            );
+            let tri = Triangle::new(pos[t[0] as usize], pos[t[1] as usize], pos[t[2] as usize], k as u32);
             if let Some(h) = wr.intersect(&tri, 0.0, best.map_or(t_max, |b| b.0)) {
                 best = Some((h.t, k as u32));
             }
@@ -218,25 +197,13 @@ mod tests {
         assert!(targets.len() > 10_000);
         for (k, &p) in targets.iter().enumerate() {
             // Origins above and below, directions deliberately not unit length.
-            let o = p + Vec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(2.0, 4.0),
-            ) * if k % 2 == 0 { 1.0 } else { -1.0 };
+            let o = p + Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(2.0, 4.0))
+                * if k % 2 == 0 { 1.0 } else { -1.0 };
             let ray = Ray::new(o, (p - o) * rng.range(0.1, 10.0));
-            assert!(
-                brute(&pos, &tris, &ray, f32::INFINITY).is_some(),
-                "ray {k} through {p} leaked"
-            );
+            assert!(brute(&pos, &tris, &ray, f32::INFINITY).is_some(), "ray {k} through {p} leaked");
             let hit = mesh.intersect(&ray, 0.0, f32::INFINITY);
-            assert!(
-                hit.is_some(),
-                "ray {k} through shared point {p} lost in the BVH"
-            );
-            assert!(
-                mesh.occluded(&ray, 0.0, f32::INFINITY),
-                "shadow ray {k} leaked"
-            );
+            assert!(hit.is_some(), "ray {k} through shared point {p} lost in the BVH");
+            assert!(mesh.occluded(&ray, 0.0, f32::INFINITY), "shadow ray {k} leaked");
         }
     }
 
@@ -252,9 +219,7 @@ mod tests {
                 c.map(|v| m + (v - m) * 0.3)
             })
             .collect();
-        let tris: Vec<[u32; 3]> = (0..1000u32)
-            .map(|k| [3 * k, 3 * k + 1, 3 * k + 2])
-            .collect();
+        let tris: Vec<[u32; 3]> = (0..1000u32).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect();
         let mesh = MeshAccel::build(&pos, &tris);
         let mut hits = 0;
         for _ in 0..5000 {
@@ -267,16 +232,11 @@ mod tests {
                 hits += 1;
                 let t = tris[h.prim as usize].map(|i| pos[i as usize]);
                 let p = t[0] * (1.0 - h.u - h.v) + t[1] * h.u + t[2] * h.v;
-                assert!(
-                    (p - ray.at(h.t)).length() < 1e-3,
-                    "barycentrics disagree with t"
-                );
+                assert!((p - ray.at(h.t)).length() < 1e-3, "barycentrics disagree with t");
                 assert!(h.u >= 0.0 && h.v >= 0.0 && h.u + h.v <= 1.0 + 1e-6);
                 // t_max and t_min are exclusive bounds.
                 assert!(mesh.intersect(&ray, 0.0, h.t).is_none_or(|h2| h2.t < h.t));
-                assert!(mesh
-                    .intersect(&ray, h.t, f32::INFINITY)
-                    .is_none_or(|h2| h2.t > h.t));
+                assert!(mesh.intersect(&ray, h.t, f32::INFINITY).is_none_or(|h2| h2.t > h.t));
             }
         }
         assert!(hits > 200, "{hits}");
@@ -284,22 +244,12 @@ mod tests {
 
     #[test]
     fn scaled_directions_scale_t_and_back_faces_hit() {
-        let pos = [
-            Vec3::new(-1.0, -1.0, 0.0),
-            Vec3::new(1.0, -1.0, 0.0),
-            Vec3::new(0.0, 1.0, 0.0),
-        ];
+        let pos = [Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
         let mesh = MeshAccel::build(&pos, &[[0, 1, 2]]);
         let front = Ray::new(Vec3::new(0.0, 0.0, 4.0), Vec3::new(0.0, 0.0, -2.0));
-        assert_eq!(
-            mesh.intersect(&front, 0.0, f32::INFINITY).map(|h| h.t),
-            Some(2.0)
-        );
+        assert_eq!(mesh.intersect(&front, 0.0, f32::INFINITY).map(|h| h.t), Some(2.0));
         let back = Ray::new(Vec3::new(0.0, 0.0, -4.0), Vec3::new(0.0, 0.0, 0.5));
-        assert_eq!(
-            mesh.intersect(&back, 0.0, f32::INFINITY).map(|h| h.t),
-            Some(8.0)
-        );
+        assert_eq!(mesh.intersect(&back, 0.0, f32::INFINITY).map(|h| h.t), Some(8.0));
         assert!(!mesh.occluded(&back, 0.0, 7.9));
         assert!(mesh.occluded(&back, 0.0, 8.1));
     }
@@ -314,15 +264,7 @@ mod tests {
             Vec3::new(0.0, f32::INFINITY, 0.0),
             Vec3::new(0.0, 1.0, 0.0),
         ];
-        let tris = [
-            [0, 1, 2],
-            [0, 0, 1],
-            [1, 1, 1],
-            [0, 3, 5],
-            [0, 4, 5],
-            [0, 1, 99],
-            [u32::MAX, 0, 1],
-        ];
+        let tris = [[0, 1, 2], [0, 0, 1], [1, 1, 1], [0, 3, 5], [0, 4, 5], [0, 1, 99], [u32::MAX, 0, 1]];
         let mesh = MeshAccel::build(&pos, &tris);
         assert_eq!(mesh.triangle_count(), 0);
         assert!(mesh.bounds().is_empty());
@@ -330,42 +272,28 @@ mod tests {
         for k in 0..2000 {
             // Aim at the degenerate segment, including exactly edge-on.
             let target = Vec3::new(rng.range(-0.5, 2.5), 0.0, 0.0);
-            let o = if k % 4 == 0 {
-                Vec3::new(-1.0, 0.0, 0.0)
-            } else {
-                rng.vec(-3.0, 3.0)
-            };
+            let o = if k % 4 == 0 { Vec3::new(-1.0, 0.0, 0.0) } else { rng.vec(-3.0, 3.0) };
             let ray = Ray::new(o, target - o);
             assert!(mesh.intersect(&ray, 0.0, f32::INFINITY).is_none());
             assert!(!mesh.occluded(&ray, 0.0, f32::INFINITY));
         }
         // The direct test also rejects a degenerate triangle without NaN.
         let wr = WatertightRay::new(&Ray::new(Vec3::new(0.5, 0.0, 1.0), -Vec3::Z));
-        assert!(wr
-            .intersect(
-                &Triangle::new(pos[0], pos[1], pos[2], 0),
-                0.0,
-                f32::INFINITY
-            )
-            .is_none());
+        assert!(wr.intersect(&Triangle::new(pos[0], pos[1], pos[2], 0), 0.0, f32::INFINITY).is_none());
         // A valid triangle among invalid ones is still found, with its input index.
         let mesh = MeshAccel::build(&pos, &[[0, 1, 2], [0, 1, 5], [0, 3, 5]]);
         assert_eq!(mesh.triangle_count(), 1);
         let hit = mesh.intersect(&Ray::new(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z), 0.0, 10.0);
         assert_eq!(hit.map(|h| h.prim), Some(1));
         // Zero direction: no hit, no panic.
-        assert!(mesh
-            .intersect(&Ray::new(Vec3::new(0.2, 0.2, 0.0), Vec3::ZERO), 0.0, 10.0)
-            .is_none());
+        assert!(mesh.intersect(&Ray::new(Vec3::new(0.2, 0.2, 0.0), Vec3::ZERO), 0.0, 10.0).is_none());
     }
 
     #[test]
     fn empty_mesh_and_thread_safety() {
         let mesh = MeshAccel::build(&[], &[]);
         assert_eq!(mesh.triangle_count(), 0);
-        assert!(mesh
-            .intersect(&Ray::new(Vec3::ZERO, Vec3::X), 0.0, f32::INFINITY)
-            .is_none());
+        assert!(mesh.intersect(&Ray::new(Vec3::ZERO, Vec3::X), 0.0, f32::INFINITY).is_none());
         fn send_sync<T: Send + Sync>() {}
         send_sync::<MeshAccel>();
     }

@@ -18,6 +18,7 @@
 //! ```
 
 pub mod bvh;
+mod bvh_build;
 pub mod mesh_accel;
 pub mod triangle;
 

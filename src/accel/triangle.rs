@@ -117,21 +117,14 @@ impl WatertightRay {
         if !(t > t_min && t < t_max) {
             return None;
         }
-        Some(Hit {
-            t,
-            u: e1 * inv,
-            v: e2 * inv,
-        })
+        Some(Hit { t, u: e1 * inv, v: e2 * inv })
     }
 }
 
 impl Triangle {
     /// Builds a triangle from three vertices.
     pub fn new(p0: Vec3, p1: Vec3, p2: Vec3, prim: u32) -> Triangle {
-        Triangle {
-            v: [p0.to_array(), p1.to_array(), p2.to_array()],
-            prim,
-        }
+        Triangle { v: [p0.to_array(), p1.to_array(), p2.to_array()], prim }
     }
 
     /// True if the triangle has zero area (in `f64`) or a non-finite vertex:
@@ -143,11 +136,7 @@ impl Triangle {
         }
         let e1 = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
         let e2 = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
-        let n = [
-            e1[1] * e2[2] - e1[2] * e2[1],
-            e1[2] * e2[0] - e1[0] * e2[2],
-            e1[0] * e2[1] - e1[1] * e2[0],
-        ];
+        let n = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]];
         n == [0.0; 3]
     }
 }
