@@ -157,8 +157,9 @@ pub fn peak_rss_kib() -> Option<u64> {
 
 /// Reads a mesh's positions and triangles.
 ///
-/// Stand-in until `crate::scene::ply::read_ply` lands: swap the body for
-/// `read_ply(path)` and keep the signature.
+/// Stand-in for `crate::scene::ply::read_ply` (not on this branch yet): swap
+/// the body for `let m = read_ply(path)?; Ok((m.positions, m.triangles))`
+/// and delete `stand_in_ply`.
 pub fn load_mesh(path: &Path) -> anyhow::Result<(Vec<Vec3>, Vec<[u32; 3]>)> {
     let bytes = fs::read(path).with_context(|| format!("reading {}", path.display()))?;
     stand_in_ply::parse(&bytes).with_context(|| format!("parsing {}", path.display()))
@@ -324,7 +325,9 @@ mod stand_in_ply {
                 })
                 .collect();
             if is_vertex {
-                positions.reserve(e.count);
+                // The header's count is untrusted: never reserve more than
+                // the file could hold.
+                positions.reserve(e.count.min(bytes.len() / 3));
             }
             for _ in 0..e.count {
                 let mut p = [0.0f32; 3];
