@@ -1,5 +1,5 @@
 //! A bounding-volume hierarchy over primitive boxes: built as a binary
-//! binned-SAH tree ([`super::bvh_build`]), collapsed into a 4-wide tree for
+//! binned-SAH tree (`bvh_build`), collapsed into a 4-wide tree for
 //! traversal, traversed front to back.
 //!
 //! The same [`Bvh`] serves both levels of the renderer: triangles inside a
