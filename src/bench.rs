@@ -56,11 +56,12 @@ pub fn run(plys: &[PathBuf], threads: &[usize], reps: usize) -> anyhow::Result<(
         let accel = accel.context("no build ran")?;
         let bvh = accel.bvh();
         println!(
-            "   BVH build {:.1} ms (median of {BUILDS}; all cores); {} nodes, depth {}, {} leaves; accel {:.1} MiB",
+            "   BVH build {:.1} ms (median of {BUILDS}; all cores); {} 4-wide nodes, depth {} (binary {}), {} leaves; accel {:.1} MiB",
             median(&mut build_times) * 1e3,
             bvh.node_count(),
             bvh.depth(),
-            bvh.nodes().iter().filter(|n| n.is_leaf()).count(),
+            bvh.binary_depth(),
+            bvh.leaf_count(),
             accel.memory_bytes() as f64 / (1 << 20) as f64
         );
 
@@ -156,9 +157,10 @@ pub fn peak_rss_kib() -> Option<u64> {
 
 /// Reads a mesh's positions and triangles.
 ///
-/// Stand-in until `crate::scene::ply::read_ply` lands: swap the body for
-/// `read_ply(path)` and keep the signature.
-fn load_mesh(path: &Path) -> anyhow::Result<(Vec<Vec3>, Vec<[u32; 3]>)> {
+/// Stand-in for `crate::scene::ply::read_ply` (not on this branch yet): swap
+/// the body for `let m = read_ply(path)?; Ok((m.positions, m.triangles))`
+/// and delete `stand_in_ply`.
+pub fn load_mesh(path: &Path) -> anyhow::Result<(Vec<Vec3>, Vec<[u32; 3]>)> {
     let bytes = fs::read(path).with_context(|| format!("reading {}", path.display()))?;
     stand_in_ply::parse(&bytes).with_context(|| format!("parsing {}", path.display()))
 }
@@ -323,7 +325,9 @@ mod stand_in_ply {
                 })
                 .collect();
             if is_vertex {
-                positions.reserve(e.count);
+                // The header's count is untrusted: never reserve more than
+                // the file could hold.
+                positions.reserve(e.count.min(bytes.len() / 3));
             }
             for _ in 0..e.count {
                 let mut p = [0.0f32; 3];

@@ -13,6 +13,7 @@
 //! out means the intersection code never has to think about them.
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use super::bvh::Bvh;
 use super::triangle::{Triangle, WatertightRay};
@@ -48,19 +49,16 @@ impl MeshAccel {
             let tri = Triangle::new(vertex(t[0])?, vertex(t[1])?, vertex(t[2])?, k as u32);
             (!tri.is_degenerate()).then_some(tri)
         };
-        let bounds: Vec<Aabb> = {
-            use rayon::prelude::*;
-            triangles
-                .par_iter()
-                .enumerate()
-                .map(|kt| tri_of(kt).map_or(Aabb::EMPTY, |t| Aabb::from_points(t.v.map(Vec3::from))))
-                .collect()
-        };
+        let bounds: Vec<Aabb> = triangles
+            .par_iter()
+            .enumerate()
+            .map(|kt| tri_of(kt).map_or(Aabb::EMPTY, |t| Aabb::from_points(t.v.map(Vec3::from))))
+            .collect();
         let bvh = Bvh::build(&bounds);
         drop(bounds);
         let tris = bvh
             .prim_order()
-            .iter()
+            .par_iter()
             .map(|&k| {
                 // Every index in prim_order had a non-empty box, so came from
                 // a valid triangle.

@@ -3,7 +3,9 @@
 //! - [`Bvh`] knows only primitive boxes. It is generic over what a leaf holds:
 //!   traversal hands the caller leaf ranges in a closure, so the same tree type
 //!   serves triangles inside a mesh and instances or spheres at the top level,
-//!   with the leaf test inlined either way.
+//!   with the leaf test inlined either way. It is built as a binary binned-SAH
+//!   tree (`bvh_build`, private) and collapsed into 4-wide nodes for
+//!   traversal.
 //! - [`MeshAccel`] is a `Bvh` over a triangle mesh plus the triangles copied in
 //!   leaf order, intersected with the watertight test of [`triangle`].
 //!
@@ -18,6 +20,7 @@
 //! ```
 
 pub mod bvh;
+mod bvh_build;
 pub mod mesh_accel;
 pub mod triangle;
 
