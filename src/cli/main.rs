@@ -34,12 +34,34 @@ enum Command {
         #[arg(short, long)]
         quiet: bool,
     },
+    /// Benchmark the BVH on PLY meshes: build time, memory and closest-hit
+    /// primary-ray throughput (Mrays/s) with the camera of
+    /// shared/bench/embree_rays.py (1920x1080, 45° vertical field of view,
+    /// looking along the bounding box's thinnest axis), for each thread count.
+    Bench {
+        /// PLY meshes.
+        #[arg(required = true)]
+        plys: Vec<PathBuf>,
+        /// Thread counts to measure, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "1,2")]
+        threads: Vec<usize>,
+        /// Timed repetitions per thread count (the median is reported).
+        #[arg(long, default_value_t = 5)]
+        reps: usize,
+    },
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Render { scenes, outdir, threads, quiet } => render::run(&scenes, &outdir, threads, quiet),
+        Command::Bench { plys, threads, reps } => match luster::bench::run(&plys, &threads, reps) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                ExitCode::from(2)
+            }
+        },
     }
 }
 
