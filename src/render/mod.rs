@@ -8,7 +8,7 @@ pub mod scene;
 pub use scene::Scene;
 
 use crate::math::Vec3;
-use integrator::{radiance, RayStats};
+use integrator::{radiance, PathState, RayStats};
 use rayon::prelude::*;
 
 /// Tile edge in pixels: small enough to balance two to sixty-four threads on
@@ -56,8 +56,10 @@ pub fn render(scene: &Scene, cam: usize, on_tile: &(dyn Fn(u64) + Sync)) -> Rend
             for y in y0..y1 {
                 for x in x0..x1 {
                     let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5);
-                    stats.primary += 1;
-                    px.push(radiance(scene, &ray, 0, &mut stats));
+                    let mut st = PathState::new(stats);
+                    st.stats.primary += 1;
+                    px.push(radiance(scene, &ray, 0, 1.0, &mut st));
+                    stats = st.stats;
                 }
             }
             on_tile(px.len() as u64);
