@@ -61,8 +61,8 @@ fn instance_transforms_follow_reset_rules_through_chains() {
     assert!(close(&o[2].transform, &r1));
     // An instance of an instance composes all the way down (S1 R1 T1).
     assert!(close(&o[3].transform, &t1.then(&r1).then(&s1)));
-    for i in 1..4 {
-        assert!(matches!(o[i].shape, Shape::Instance { mesh: 0 }), "object {i}: {:?}", o[i].shape);
+    for (i, obj) in o.iter().enumerate().skip(1) {
+        assert!(matches!(obj.shape, Shape::Instance { mesh: 0 }), "object {i}: {:?}", obj.shape);
     }
     // Material: its own when given, else inherited along the chain.
     assert_eq!(desc.materials[o[1].material].id, "2");
