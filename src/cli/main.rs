@@ -34,10 +34,13 @@ enum Command {
         #[arg(short, long)]
         quiet: bool,
     },
-    /// Benchmark the BVH on PLY meshes: build time, memory and closest-hit
-    /// primary-ray throughput (Mrays/s) with the camera of
+    /// Benchmark the BVH on PLY meshes (build time, memory, Mrays/s).
+    ///
+    /// Prints BVH build time, memory and closest-hit primary-ray throughput
+    /// (Mrays/s) for each thread count, with the camera of
     /// shared/bench/embree_rays.py (1920x1080, 45° vertical field of view,
-    /// looking along the bounding box's thinnest axis), for each thread count.
+    /// looking along the bounding box's thinnest axis), so the figures line up
+    /// with Intel Embree's on the same mesh and rays.
     Bench {
         /// PLY meshes.
         #[arg(required = true)]

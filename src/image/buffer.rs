@@ -6,7 +6,7 @@
 //!
 //! | file format        | stored values                         | [`Encoding`]        |
 //! |--------------------|---------------------------------------|---------------------|
-//! | PNG, JPEG          | display-referred, `code / max` ∈ [0,1] | [`Encoding::Srgb`]  |
+//! | PNG, JPEG          | display-referred, `code / max` ∈ \[0,1\] | [`Encoding::Srgb`]  |
 //! | OpenEXR, Radiance HDR | scene-referred linear, unbounded   | [`Encoding::Linear`]|
 //!
 //! Gray images are replicated to three channels; alpha is dropped (the course's
