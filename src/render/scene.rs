@@ -7,7 +7,7 @@
 //! without renormalizing, so `t` means the same in both spaces. Infinite planes
 //! have no box and are tested beside the BVH.
 
-use crate::accel::Bvh;
+use crate::accel::{Bvh, TriHit};
 use crate::geometry::mesh::vertex_normals;
 use crate::geometry::{Mesh, Plane, Sphere};
 use crate::math::{Aabb, Ray, Transform, Vec3};
@@ -33,6 +33,25 @@ struct Prim {
     /// `None` when the object's transform is the identity, which skips two
     /// matrix-vector products per ray.
     xf: Option<Box<Transform>>,
+}
+
+impl Prim {
+    /// The ray in the primitive's object space (same `t` as in world space).
+    #[inline]
+    fn to_local(&self, ray: &Ray) -> Ray {
+        match &self.xf {
+            Some(xf) => Ray::new(xf.inv_point(ray.o), xf.inv_vector(ray.d)),
+            None => *ray,
+        }
+    }
+}
+
+/// Which surface is nearest so far during traversal.
+#[derive(Clone, Copy)]
+enum Closest {
+    Plane(usize),
+    Triangle(usize, TriHit),
+    Sphere(usize),
 }
 
 /// Everything about the closest hit that shading needs, in world space.
@@ -165,33 +184,30 @@ impl Scene {
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
         let t_min = self.intersection_epsilon;
         let mut best_t = f32::INFINITY;
-        let mut best: Option<(usize, Option<crate::accel::TriHit>)> = None;
+        let mut best = None;
         for (i, (pl, _)) in self.planes.iter().enumerate() {
             if let Some(t) = pl.intersect(ray, t_min, best_t) {
                 best_t = t;
-                best = Some((usize::MAX - i, None));
+                best = Some(Closest::Plane(i));
             }
         }
         self.tlas.closest(ray, best_t, |range, t_max| {
             let mut hit = false;
             for pi in range {
                 let p = &self.prims[pi];
-                let local = match &p.xf {
-                    Some(xf) => Ray::new(xf.inv_point(ray.o), xf.inv_vector(ray.d)),
-                    None => *ray,
-                };
+                let local = p.to_local(ray);
                 match p.geom {
                     Geom::Mesh(m) => {
                         if let Some(h) = self.meshes[m as usize].intersect(&local, t_min, *t_max) {
                             *t_max = h.t;
-                            best = Some((pi, Some(h)));
+                            best = Some(Closest::Triangle(pi, h));
                             hit = true;
                         }
                     }
                     Geom::Sphere(s) => {
                         if let Some(t) = s.intersect(&local, t_min, *t_max) {
                             *t_max = t;
-                            best = Some((pi, None));
+                            best = Some(Closest::Sphere(pi));
                             hit = true;
                         }
                     }
@@ -202,27 +218,24 @@ impl Scene {
             }
             hit
         });
-        let (pi, tri) = best?;
-        if pi > self.prims.len() {
-            let (pl, material) = self.planes[usize::MAX - pi];
-            return Some(Hit { t: best_t, p: ray.at(best_t), ng: pl.normal, ns: pl.normal, material });
-        }
-        let p = &self.prims[pi];
-        let (ng, ns, t) = match (p.geom, tri) {
-            (Geom::Mesh(m), Some(h)) => {
+        let (pi, ng, ns) = match best? {
+            Closest::Plane(i) => {
+                let (pl, material) = self.planes[i];
+                return Some(Hit { t: best_t, p: ray.at(best_t), ng: pl.normal, ns: pl.normal, material });
+            }
+            Closest::Triangle(pi, h) => {
+                let Geom::Mesh(m) = self.prims[pi].geom else { return None };
                 let (ng, ns) = self.meshes[m as usize].normals_at(&h);
-                (ng, ns, h.t)
+                (pi, ng, ns)
             }
-            (Geom::Sphere(s), _) => {
-                let local_p = match &p.xf {
-                    Some(xf) => xf.inv_point(ray.at(best_t)),
-                    None => ray.at(best_t),
-                };
-                let n = s.normal(local_p);
-                (n, n, best_t)
+            Closest::Sphere(pi) => {
+                let p = &self.prims[pi];
+                let Geom::Sphere(s) = p.geom else { return None };
+                let n = s.normal(p.to_local(ray).at(best_t));
+                (pi, n, n)
             }
-            (Geom::Mesh(_), None) => return None,
         };
+        let p = &self.prims[pi];
         let (ng, ns) = match &p.xf {
             Some(xf) => (xf.normal_to_world(ng), xf.normal_to_world(ns)),
             None => (ng, ns),
@@ -232,7 +245,7 @@ impl Scene {
         if ns.dot(ng) < 0.0 {
             ns = -ns;
         }
-        Some(Hit { t, p: ray.at(t), ng, ns, material: p.material })
+        Some(Hit { t: best_t, p: ray.at(best_t), ng, ns, material: p.material })
     }
 
     /// Whether anything lies on `ray` between the intersection epsilon and `t_max`.
@@ -244,10 +257,7 @@ impl Scene {
         self.tlas.any(ray, t_max, |range, t_max| {
             range.into_iter().any(|pi| {
                 let p = &self.prims[pi];
-                let local = match &p.xf {
-                    Some(xf) => Ray::new(xf.inv_point(ray.o), xf.inv_vector(ray.d)),
-                    None => *ray,
-                };
+                let local = p.to_local(ray);
                 match p.geom {
                     Geom::Mesh(m) => self.meshes[m as usize].occluded(&local, t_min, t_max),
                     Geom::Sphere(s) => s.intersect(&local, t_min, t_max).is_some(),
