@@ -13,6 +13,7 @@
 #![warn(missing_docs)]
 
 pub mod accel;
+pub mod bench;
 pub mod conformance;
 pub mod geometry;
 pub mod image;

@@ -14,24 +14,8 @@ pub struct Mesh {
 }
 
 impl Mesh {
-    /// Builds a mesh. With `smooth`, vertex normals are the area-weighted sum of
-    /// the normals of the faces around each vertex (the unnormalized cross
-    /// products), which keeps slivers from tilting the shading.
-    pub fn new(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>, smooth: bool) -> Mesh {
-        let normals = smooth.then(|| {
-            let mut n = vec![Vec3::ZERO; positions.len()];
-            for t in &triangles {
-                let [a, b, c] = t.map(|i| positions[i as usize]);
-                let fnorm = (b - a).cross(c - a);
-                for &i in t {
-                    n[i as usize] += fnorm;
-                }
-            }
-            for v in &mut n {
-                *v = v.normalize_or_zero();
-            }
-            n
-        });
+    /// Builds a mesh; `normals`, when given, are per-vertex shading normals.
+    pub fn new(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>, normals: Option<Vec<Vec3>>) -> Mesh {
         let accel = MeshAccel::build(&positions, &triangles);
         Mesh { accel, positions, triangles, normals }
     }
@@ -79,4 +63,22 @@ impl Mesh {
         };
         (ng, ns)
     }
+}
+
+/// Smooth vertex normals: at each vertex, the area-weighted sum of the normals
+/// of the faces around it (the unnormalized cross products), so slivers do not
+/// tilt the shading.
+pub fn vertex_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
+    let mut n = vec![Vec3::ZERO; positions.len()];
+    for t in triangles {
+        let [a, b, c] = t.map(|i| positions[i as usize]);
+        let fnorm = (b - a).cross(c - a);
+        for &i in t {
+            n[i as usize] += fnorm;
+        }
+    }
+    for v in &mut n {
+        *v = v.normalize_or_zero();
+    }
+    n
 }

@@ -8,6 +8,7 @@
 //! have no box and are tested beside the BVH.
 
 use crate::accel::Bvh;
+use crate::geometry::mesh::vertex_normals;
 use crate::geometry::{Mesh, Plane, Sphere};
 use crate::math::{Aabb, Ray, Transform, Vec3};
 use crate::render::camera::Camera;
@@ -271,7 +272,7 @@ fn prim_bounds(p: &Prim, meshes: &[Mesh]) -> Aabb {
 fn build_mesh(desc: &Description, i: usize) -> Result<(Mesh, Option<Warning>), SceneError> {
     let o = &desc.objects[i];
     match &o.shape {
-        Shape::Triangle { vertices } => Ok((Mesh::new(vertices.to_vec(), vec![[0, 1, 2]], false), None)),
+        Shape::Triangle { vertices } => Ok((Mesh::new(vertices.to_vec(), vec![[0, 1, 2]], None), None)),
         Shape::Mesh { source: MeshSource::Inline(tris), smooth } => {
             // Keep only the vertices this mesh uses, renumbered.
             let mut remap: HashMap<u32, u32> = HashMap::new();
@@ -287,7 +288,8 @@ fn build_mesh(desc: &Description, i: usize) -> Result<(Mesh, Option<Warning>), S
                     })
                 })
                 .collect();
-            Ok((Mesh::new(positions, local, *smooth), None))
+            let normals = smooth.then(|| vertex_normals(&positions, &local));
+            Ok((Mesh::new(positions, local, normals), None))
         }
         Shape::Mesh { source: MeshSource::Ply(path), smooth } => {
             let ply = read_ply(path).map_err(|e| SceneError::at(&desc.file, &o.loc, e.to_string()))?;
@@ -299,7 +301,8 @@ fn build_mesh(desc: &Description, i: usize) -> Result<(Mesh, Option<Warning>), S
                     ply.skipped_degenerate
                 ),
             });
-            Ok((Mesh::new(ply.positions, ply.triangles, *smooth), warning))
+            let normals = smooth.then(|| vertex_normals(&ply.positions, &ply.triangles));
+            Ok((Mesh::new(ply.positions, ply.triangles, normals), warning))
         }
         _ => Err(SceneError::at(&desc.file, &o.loc, "internal error: not a mesh")),
     }

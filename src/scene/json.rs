@@ -15,10 +15,15 @@ use std::path::Path;
 
 /// Parses JSON text into an element tree rooted at the `Scene` element.
 pub fn parse(file: &Path, text: &str) -> Result<Element, SceneError> {
-    let v: Value = serde_json::from_str(text).map_err(|e| SceneError {
-        file: file.to_path_buf(),
-        loc: Some(Loc { line: Some(e.line() as u32), path: format!("column {}", e.column()) }),
-        message: format!("malformed JSON: {e}"),
+    let v: Value = serde_json::from_str(text).map_err(|e| {
+        // serde_json ends its message with the position, which `loc` already gives.
+        let msg = e.to_string();
+        let msg = msg.strip_suffix(&format!(" at line {} column {}", e.line(), e.column())).unwrap_or(&msg);
+        SceneError {
+            file: file.to_path_buf(),
+            loc: Some(Loc { line: Some(e.line() as u32), path: format!("column {}", e.column()) }),
+            message: format!("malformed JSON: {msg}"),
+        }
     })?;
     let Value::Object(top) = &v else {
         return Err(SceneError::file(

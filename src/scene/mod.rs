@@ -34,11 +34,16 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
     let bytes = std::fs::read(path)
         .map_err(|e| SceneError::file(path, format!("cannot read the scene: {}", io_reason(&e))))?;
     let text = String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
         SceneError::file(
             path,
-            format!("the scene is not UTF-8 text (invalid byte at offset {})", e.utf8_error().valid_up_to()),
+            format!("the scene is not UTF-8 text (invalid byte on line {line}, at offset {at})"),
         )
     })?;
+    if text.trim().is_empty() {
+        return Err(SceneError::file(path, "the scene file is empty"));
+    }
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     let is_json = match ext.as_deref() {
         Some("json") => true,

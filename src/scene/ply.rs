@@ -77,7 +77,7 @@ pub struct PlyMesh {
 #[derive(thiserror::Error, Debug)]
 pub enum PlyError {
     /// The file could not be opened or read.
-    #[error("cannot read PLY file {}: {source}", path.display())]
+    #[error("cannot read PLY file {}: {}", path.display(), crate::scene::io_reason(source))]
     Io {
         /// The file.
         path: PathBuf,

@@ -10,10 +10,13 @@ use std::path::Path;
 pub fn parse(file: &Path, text: &str) -> Result<Element, SceneError> {
     let doc = roxmltree::Document::parse(text).map_err(|e| {
         let pos = e.pos();
+        // roxmltree ends its message with the position, which `loc` already gives.
+        let msg = e.to_string();
+        let msg = msg.strip_suffix(&format!(" at {}:{}", pos.row, pos.col)).unwrap_or(&msg);
         SceneError {
             file: file.to_path_buf(),
             loc: Some(Loc { line: Some(pos.row), path: format!("column {}", pos.col) }),
-            message: format!("malformed XML: {e}"),
+            message: format!("malformed XML: {msg}"),
         }
     })?;
     Ok(convert(&doc, doc.root_element(), String::new(), None))

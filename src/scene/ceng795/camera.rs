@@ -7,7 +7,7 @@
 //! | `type="lookAt"`: `GazePoint` + `FovY` (degrees) | the look-at form; the horizontal extent follows the aspect ratio |
 //! | `NearDistance` | distance to the image plane |
 //! | `ImageResolution` | width height |
-//! | `ImageName` | output file name (a relative path without `..`) |
+//! | `ImageName` | output file name: a relative path without `..`, ending in one of [`OUTPUT_EXTENSIONS`] |
 //! | `NumSamples` | samples per pixel (default 1) |
 //!
 //! The course's `hw1/xml/spheres*.xml` give five numbers to `NearPlane`; the
@@ -24,6 +24,10 @@ use std::path::{Component, Path};
 pub const MAX_SIDE: u32 = 32768;
 /// See [`MAX_SIDE`].
 pub const MAX_PIXELS: u64 = 1 << 27;
+
+/// Image formats `image::output` can write, by extension. Keep in step with
+/// the writer (hw5's `.exr` belongs here once HDR output exists).
+pub const OUTPUT_EXTENSIONS: &[&str] = &["png", "jpg", "jpeg"];
 
 /// Reads every camera.
 pub fn read_all(r: &Reader, cams: &Element, w: &mut Warnings) -> Result<Vec<CameraDesc>, SceneError> {
@@ -135,14 +139,37 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
 }
 
 /// Scene files come from strangers: the image name must stay inside the output
-/// folder.
+/// folder. Its format is checked here too, before anything is rendered, so a
+/// scene whose second camera names a `.bmp` does not fail after the first
+/// camera's image is written.
 fn check_image_name(r: &Reader, el: &Element, name: &str) -> Result<(), SceneError> {
     if name.is_empty() {
         return Err(r.err(el, "<ImageName> is empty"));
     }
     let p = Path::new(name);
+    if p.is_absolute() || p.has_root() {
+        return Err(r.err(
+            el,
+            format!("<ImageName> \"{name}\" is an absolute path; it must be relative to the output folder"),
+        ));
+    }
     if p.components().any(|c| !matches!(c, Component::Normal(_))) {
-        return Err(r.err(el, format!("<ImageName> \"{name}\" must be a relative path without \"..\"")));
+        return Err(r.err(
+            el,
+            format!(
+                "<ImageName> \"{name}\" must stay inside the output folder (a relative path without \"..\")"
+            ),
+        ));
+    }
+    let ext = p.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    if !ext.is_some_and(|e| OUTPUT_EXTENSIONS.contains(&e.as_str())) || name.ends_with('/') {
+        return Err(r.err(
+            el,
+            format!(
+                "<ImageName> \"{name}\" must end in .{}, the formats luster writes",
+                OUTPUT_EXTENSIONS.join(", .")
+            ),
+        ));
     }
     Ok(())
 }

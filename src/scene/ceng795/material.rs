@@ -10,8 +10,9 @@
 //! | `AbsorptionCoefficient` | dielectric Beer's-law RGB coefficient | 0 |
 //! | `AbsorptionIndex` | a conductor's imaginary part | 0 |
 //!
-//! A material with no type and a non-zero `MirrorReflectance` is a mirror, as
-//! in the course's older scenes.
+//! Only `type="mirror"` (or conductor) makes `MirrorReflectance` reflect: the
+//! course's scenes give plain materials a mirror reflectance that their
+//! reference images ignore (hw1 `car_smooth_fixed`, `rt_raven`).
 
 use super::Warnings;
 use crate::math::Vec3;
@@ -53,7 +54,6 @@ fn read(r: &Reader, m: &Element, w: &mut Warnings) -> Result<MaterialDesc, Scene
     };
     let mirror = r.vec3_or(m, "MirrorReflectance", Vec3::ZERO)?;
     let kind = match m.attr("type").map(str::trim).unwrap_or("") {
-        "" if mirror != Vec3::ZERO => MaterialKind::Mirror,
         "" => MaterialKind::Plain,
         "mirror" => MaterialKind::Mirror,
         "dielectric" => MaterialKind::Dielectric,

@@ -5,7 +5,7 @@
 //!
 //! | element | meaning | default |
 //! |---|---|---|
-//! | `MaxRecursionDepth` | reflection/refraction bounces | 6 |
+//! | `MaxRecursionDepth` | reflection/refraction bounces, at most [`MAX_RECURSION_DEPTH`] | 6 |
 //! | `BackgroundColor` | RGB of rays that miss | 0 0 0 |
 //! | `ShadowRayEpsilon` | offset of secondary ray origins | 1e-3 |
 //! | `IntersectionTestEpsilon` | intersection tolerance | 1e-6 |
@@ -29,6 +29,11 @@ use super::error::{SceneError, Warning};
 use crate::math::Vec3;
 use std::collections::HashMap;
 use std::path::Path;
+
+/// Deepest recursion accepted. The integrator recurses once per bounce, so a
+/// depth in the thousands overflows a worker's stack between two mirrors; the
+/// course's scenes use at most 6.
+pub const MAX_RECURSION_DEPTH: u32 = 100;
 
 /// Collects warnings while reading.
 #[derive(Default)]
@@ -73,7 +78,16 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
         ],
     );
     let max_recursion_depth = match root.child("MaxRecursionDepth") {
-        Some(el) => r.uint(el)?,
+        Some(el) => {
+            let d = r.uint(el)?;
+            if d > MAX_RECURSION_DEPTH {
+                return Err(r.err(
+                    el,
+                    format!("<MaxRecursionDepth> {d} is more than the {MAX_RECURSION_DEPTH} supported"),
+                ));
+            }
+            d
+        }
         None => 6,
     };
     let shadow_ray_epsilon = r.float_or(root, "ShadowRayEpsilon", 1e-3)?;

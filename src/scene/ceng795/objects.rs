@@ -166,6 +166,9 @@ fn mesh(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, SceneErr
         }
     }
     if let Some(ply) = faces.attr("plyFile") {
+        if ply.trim().is_empty() {
+            return Err(r.err(faces, "<Faces> has an empty plyFile attribute"));
+        }
         let path = ctx.base_dir.join(ply.trim());
         return Ok(Shape::Mesh { source: MeshSource::Ply(path), smooth });
     }

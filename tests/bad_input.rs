@@ -1,0 +1,263 @@
+//! The bad-input corpus: every scene in `tests/bad_input/` holds one realistic
+//! mistake, and `luster render` must refuse it with exit code 2, a one-line
+//! error that names the file and the problem, no panic, and nothing written to
+//! the output folder (no image, no temporary file).
+//!
+//! To add a case, drop the scene in `tests/bad_input/` (PLY files it needs go
+//! in `tests/bad_input/ply/`) and add one line to [`CASES`]. A file in the
+//! folder without a line in the table fails the test, so a scene that loads
+//! fine cannot pass unnoticed.
+
+use std::collections::BTreeSet;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// Scene (relative to the corpus folder) → substrings the error must contain,
+/// besides the scene's file name.
+const CASES: &[(&str, &[&str])] = &[
+    // Malformed files.
+    ("unclosed_tag.xml", &["malformed XML", "line 13", "Camera"]),
+    ("trailing_comma.json", &["malformed JSON", "line 31", "trailing comma"]),
+    ("missing_brace.json", &["malformed JSON", "EOF"]),
+    ("empty.xml", &["the scene file is empty"]),
+    ("empty.json", &["the scene file is empty"]),
+    ("top_level_array.json", &["top level", "object", "Scene"]),
+    ("not_utf8.xml", &["not UTF-8", "line 12"]),
+    ("folder_scene.xml", &["is a folder"]),
+    (MISSING_SCENE, &["cannot read the scene", "no such file"]),
+    // Wrong value counts and tokens.
+    ("position_two_numbers.xml", &["<Position>", "3 numbers", "found 2"]),
+    ("vertexdata_not_multiple_of_3.xml", &["<VertexData>", "11 numbers", "not a multiple of 3"]),
+    ("faces_not_multiple_of_3.json", &["<Faces>", "5 indices", "not a multiple of 3"]),
+    ("rotation_three_numbers.xml", &["<Rotation>", "4 numbers", "found 3"]),
+    ("composite_fifteen_numbers.xml", &["<Composite>", "16 numbers", "found 15"]),
+    ("not_a_number.xml", &["<Radius>", "\"0,3\"", "not a number"]),
+    ("vertexdata_nan.json", &["<VertexData>", "non-finite", "NaN"]),
+    ("nearplane_three_numbers.json", &["<NearPlane>", "4 numbers", "found 3"]),
+    // References.
+    ("unknown_material.xml", &["material \"7\"", "not defined"]),
+    ("material_without_id.xml", &["<Material>", "no id"]),
+    ("unknown_transformation.xml", &["\"t9\"", "not defined", "Transformations"]),
+    ("unknown_base_mesh.xml", &["baseMeshId \"42\"", "MeshInstance[id=2]"]),
+    ("instance_cycle.xml", &["MeshInstance 2", "part of a cycle"]),
+    ("instance_self.json", &["MeshInstance 2", "part of a cycle"]),
+    // Indices and sizes.
+    ("face_index_zero.xml", &["face index 0", "out of range", "5 vertices"]),
+    ("face_index_beyond_vertexdata.xml", &["face index 9", "out of range", "5 vertices"]),
+    ("sphere_center_out_of_range.json", &["Center", "vertex index 12", "out of range"]),
+    ("radius_negative.xml", &["<Radius>", "positive", "-0.3"]),
+    ("radius_zero.json", &["<Radius>", "positive", "found 0"]),
+    ("max_recursion_depth_huge.xml", &["<MaxRecursionDepth>", "1000000", "supported"]),
+    // PLY files.
+    ("ply_missing.xml", &["PLY", "no_such_mesh.ply", "no such file"]),
+    ("ply_empty_file_name.json", &["<Faces>", "empty plyFile"]),
+    ("ply_is_a_folder.xml", &["cannot read PLY file", "directory"]),
+    ("ply_garbage.xml", &["garbage.ply", "not a PLY file"]),
+    ("ply_truncated_binary.json", &["truncated_binary.ply", "face 1", "file ends before"]),
+    ("ply_absurd_counts.xml", &["absurd_counts.ply", "4000000000 'vertex'", "only 74 bytes"]),
+    ("ply_face_index_out_of_range.xml", &["face_index_out_of_range.ply", "vertex 7", "3 vertices"]),
+    ("ply_huge_face_list.xml", &["huge_face_list.ply", "face 0"]),
+    // Cameras and images.
+    ("resolution_zero.xml", &["<ImageResolution>", "positive", "0 0"]),
+    ("resolution_negative.json", &["<ImageResolution>", "positive", "-5 100"]),
+    ("resolution_huge.xml", &["<ImageResolution>", "100000x100000", "supported"]),
+    ("near_distance_zero.xml", &["<NearDistance>", "positive", "found 0"]),
+    ("fovy_180.json", &["<FovY>", "180"]),
+    ("no_camera.xml", &["no <Camera>"]),
+    ("missing_image_name.json", &["missing its <ImageName>"]),
+    ("image_name_parent.xml", &["<ImageName>", "\"../x.png\"", "output folder"]),
+    ("image_name_absolute.json", &["<ImageName>", "\"/tmp/x.png\"", "absolute"]),
+    ("image_name_bad_extension.xml", &["<ImageName>", "\"second.bmp\"", ".png"]),
+];
+
+/// A scene path that must not exist.
+const MISSING_SCENE: &str = "no_such_scene.xml";
+
+/// Scenes that are accepted: (file, image it writes, words the warning must contain).
+const ACCEPTED: &[(&str, &str, &[&str])] =
+    &[("ok_nearplane_five_numbers.xml", "out.png", &["NearPlane", "5 numbers"])];
+
+/// Text that means a crash rather than an error message.
+const CRASH_TEXT: &[&str] =
+    &["panicked", "RUST_BACKTRACE", "stack overflow", "fatal runtime error", "memory allocation"];
+
+/// Longest a case may take; anything slower is a hang.
+const TIMEOUT: Duration = Duration::from_secs(60);
+
+fn corpus() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests").join("bad_input")
+}
+
+struct Run {
+    code: Option<i32>,
+    stderr: String,
+}
+
+/// Runs `luster render -q -o OUT scene` from inside a fresh temporary folder,
+/// so a write that escapes OUT still lands where it can be seen.
+fn render(scene: &Path, root: &Path, out: &Path) -> Run {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_luster"))
+        .arg("render")
+        .arg("-q")
+        .arg("--threads")
+        .arg("2")
+        .arg("-o")
+        .arg(out)
+        .arg(scene)
+        .current_dir(root)
+        .env_remove("RUST_BACKTRACE")
+        .env_remove("RUST_LIB_BACKTRACE")
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the luster binary starts");
+    let mut pipe = child.stderr.take().expect("stderr is piped");
+    let reader = std::thread::spawn(move || {
+        let mut bytes = Vec::new();
+        let _ = pipe.read_to_end(&mut bytes);
+        String::from_utf8_lossy(&bytes).into_owned()
+    });
+    let start = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("waiting for luster") {
+            break Some(status);
+        }
+        if start.elapsed() > TIMEOUT {
+            let _ = child.kill();
+            let _ = child.wait();
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    let stderr = reader.join().unwrap_or_default();
+    Run { code: status.and_then(|s| s.code()), stderr }
+}
+
+/// Every file and folder under `dir`, relative to it.
+fn entries(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        let Ok(rd) = std::fs::read_dir(&d) else {
+            continue;
+        };
+        for e in rd.flatten() {
+            let p = e.path();
+            out.push(p.strip_prefix(dir).unwrap_or(&p).to_path_buf());
+            if p.is_dir() {
+                stack.push(p);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// What is wrong with one bad case, or `None` when it behaved.
+fn check_bad(name: &str, expected: &[&str]) -> Option<String> {
+    let root = tempfile::tempdir().expect("a temporary folder");
+    let out = root.path().join("out");
+    std::fs::create_dir(&out).expect("the output folder");
+    let run = render(&corpus().join(name), root.path(), &out);
+    let err = run.stderr.trim_end();
+    let mut problems = Vec::new();
+    match run.code {
+        Some(2) => {}
+        None => problems.push(format!("did not finish within {TIMEOUT:?} (or was killed by a signal)")),
+        Some(c) => problems.push(format!("exit code {c}, expected 2")),
+    }
+    if err.lines().count() != 1 {
+        problems.push(format!("stderr has {} lines, expected one error line", err.lines().count()));
+    }
+    if !err.starts_with("error: ") {
+        problems.push("stderr does not start with \"error: \"".to_string());
+    }
+    let file_name = Path::new(name).file_name().and_then(|n| n.to_str()).unwrap_or(name);
+    if !err.contains(file_name) {
+        problems.push(format!("stderr lacks the file name {file_name:?}"));
+    }
+    // The key words must be in the message itself, not only in the file name.
+    let message = err.replace(file_name, "");
+    for word in expected {
+        if !message.contains(word) {
+            problems.push(format!("stderr lacks {word:?}"));
+        }
+    }
+    for crash in CRASH_TEXT {
+        if err.contains(crash) {
+            problems.push(format!("stderr contains {crash:?}"));
+        }
+    }
+    let left = entries(root.path());
+    if left != [PathBuf::from("out")] {
+        problems.push(format!("files left behind: {left:?}"));
+    }
+    (!problems.is_empty()).then(|| format!("{name}: {}\n    stderr: {err}", problems.join("; ")))
+}
+
+#[test]
+fn bad_scenes_are_refused_cleanly() {
+    let failures: Vec<String> =
+        CASES.iter().filter_map(|(name, expected)| check_bad(name, expected)).collect();
+    assert!(
+        failures.is_empty(),
+        "{} of {} bad scenes misbehaved:\n{}",
+        failures.len(),
+        CASES.len(),
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn accepted_quirks_render_with_a_warning() {
+    for (name, image, words) in ACCEPTED {
+        let root = tempfile::tempdir().expect("a temporary folder");
+        let out = root.path().join("out");
+        let run = render(&corpus().join(name), root.path(), &out);
+        assert_eq!(run.code, Some(0), "{name} should render; stderr: {}", run.stderr);
+        assert!(run.stderr.contains("warning"), "{name}: no warning in {:?}", run.stderr);
+        for w in *words {
+            assert!(run.stderr.contains(w), "{name}: the warning lacks {w:?}: {:?}", run.stderr);
+        }
+        let left = entries(&out);
+        assert_eq!(left, [PathBuf::from(image)], "{name}: the output folder should hold only its image");
+    }
+}
+
+/// Every scene in the corpus has a line in the table (and every line a scene),
+/// and every PLY file is used by some scene.
+#[test]
+fn table_covers_the_corpus() {
+    let dir = corpus();
+    let on_disk: BTreeSet<String> = std::fs::read_dir(&dir)
+        .expect("the corpus folder")
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n != "ply" && !n.starts_with('.'))
+        .collect();
+    let in_table: BTreeSet<String> = CASES
+        .iter()
+        .map(|(n, _)| n.to_string())
+        .chain(ACCEPTED.iter().map(|(n, _, _)| n.to_string()))
+        .filter(|n| n != MISSING_SCENE)
+        .collect();
+    assert_eq!(CASES.len() + ACCEPTED.len(), in_table.len() + 1, "a scene is listed twice");
+    let untested: Vec<_> = on_disk.difference(&in_table).collect();
+    assert!(untested.is_empty(), "scenes in tests/bad_input without a line in CASES: {untested:?}");
+    let absent: Vec<_> = in_table.difference(&on_disk).collect();
+    assert!(absent.is_empty(), "CASES lines without a scene in tests/bad_input: {absent:?}");
+    assert!(!dir.join(MISSING_SCENE).exists(), "{MISSING_SCENE} must not exist");
+
+    let texts: Vec<String> = on_disk
+        .iter()
+        .filter_map(|n| std::fs::read(dir.join(n)).ok())
+        .map(|b| String::from_utf8_lossy(&b).into_owned())
+        .collect();
+    for ply in std::fs::read_dir(dir.join("ply")).expect("the PLY folder").flatten() {
+        let name = format!("ply/{}", ply.file_name().to_string_lossy());
+        assert!(texts.iter().any(|t| t.contains(&name)), "{name} is used by no scene");
+    }
+}
