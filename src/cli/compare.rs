@@ -60,7 +60,7 @@ pub fn run(args: &Args) -> ExitCode {
     print_comparison(args, &reference, &test, &c);
     if let Some(path) = &args.heatmap {
         match comparison_heatmap(&c, HeatmapSource::Flip).and_then(|h| write_heatmap(&h, path)) {
-            Ok(()) => println!("{:<10} {} (LDR-FLIP per pixel, magma colour map)", "heatmap", path.display()),
+            Ok(()) => say!("{:<10} {} (LDR-FLIP per pixel, magma colour map)", "heatmap", path.display()),
             Err(e) => return fail(e.to_string()),
         }
     }
@@ -77,12 +77,12 @@ pub fn run(args: &Args) -> ExitCode {
     }
     if unmet.is_empty() {
         if args.max_error.is_some() || args.min_psnr.is_some() {
-            println!("{:<10} met", "bounds");
+            say!("{:<10} met", "bounds");
         }
         ExitCode::SUCCESS
     } else {
         for u in &unmet {
-            println!("{:<10} NOT MET: {u}", "bounds");
+            say!("{:<10} NOT MET: {u}", "bounds");
         }
         ExitCode::from(1)
     }
@@ -100,24 +100,24 @@ fn describe(path: &Path, img: &Rgb32Image) -> String {
 }
 
 fn print_comparison(args: &Args, reference: &Rgb32Image, test: &Rgb32Image, c: &Comparison) {
-    println!("{:<10} {}", "reference", describe(&args.reference, reference));
-    println!("{:<10} {}", "test", describe(&args.test, test));
+    say!("{:<10} {}", "reference", describe(&args.reference, reference));
+    say!("{:<10} {}", "test", describe(&args.test, test));
     let space = match c.space {
         MetricSpace::Display => "display values (sRGB-encoded, 0 to 1)".to_string(),
         MetricSpace::Linear => {
             format!("linear light (both EXR/HDR; FLIP and SSIM after {:+} stops and clamping)", args.exposure)
         }
     };
-    println!("{:<10} {space}", "space");
+    say!("{:<10} {space}", "space");
     if c.psnr.is_infinite() {
-        println!("{:<10} inf dB (identical)", "PSNR");
+        say!("{:<10} inf dB (identical)", "PSNR");
     } else {
-        println!("{:<10} {:.2} dB", "PSNR", c.psnr);
+        say!("{:<10} {:.2} dB", "PSNR", c.psnr);
     }
-    println!("{:<10} {:.4}", "SSIM", c.ssim);
-    println!("{:<10} {:.4} (mean LDR-FLIP, 0 = no visible difference)", "FLIP", c.flip);
+    say!("{:<10} {:.4}", "SSIM", c.ssim);
+    say!("{:<10} {:.4} (mean LDR-FLIP, 0 = no visible difference)", "FLIP", c.flip);
     let total = u64::from(c.width) * u64::from(c.height);
-    println!(
+    say!(
         "{:<10} {} of {} pixels ({:.3}%) with an 8-bit channel differing by more than {}",
         "differing",
         c.differing_pixels,
@@ -127,9 +127,9 @@ fn print_comparison(args: &Args, reference: &Rgb32Image, test: &Rgb32Image, c: &
     );
     match c.diff_bbox {
         Some((x0, y0, x1, y1)) => {
-            println!("{:<10} x {x0}..={x1}, y {y0}..={y1} ({}×{} pixels)", "bbox", x1 - x0 + 1, y1 - y0 + 1)
+            say!("{:<10} x {x0}..={x1}, y {y0}..={y1} ({}×{} pixels)", "bbox", x1 - x0 + 1, y1 - y0 + 1)
         }
-        None => println!("{:<10} none", "bbox"),
+        None => say!("{:<10} none", "bbox"),
     }
-    println!("{:<10} {:.4} (largest absolute channel difference)", "max |Δ|", c.max_abs_diff);
+    say!("{:<10} {:.4} (largest absolute channel difference)", "max |Δ|", c.max_abs_diff);
 }

@@ -1,5 +1,15 @@
 //! The `luster` command line: a thin layer over the library.
 
+/// `println!` that ignores a closed stdout (`luster suite ... | head`), so a
+/// reader that stops early cannot turn into a panic; what matters (files,
+/// the exit code) still happens.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
+    }};
+}
+
 mod compare;
 mod render;
 mod suite;

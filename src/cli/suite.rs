@@ -62,7 +62,7 @@ pub fn run(args: &Args) -> ExitCode {
         return fail(format!("could not create the report folder `{}`: {e}", renders.display()));
     }
     let opts = RunOptions::new(args.jobs, args.threads);
-    println!(
+    say!(
         "luster suite: {} scene{} from {}{} ({} job{} × {} thread{})",
         cases.len(),
         if cases.len() == 1 { "" } else { "s" },
@@ -86,7 +86,9 @@ pub fn run(args: &Args) -> ExitCode {
         threads: opts.threads,
         total_seconds: t0.elapsed().as_secs_f64(),
     };
-    let report = Report::build(&results, &args.dir, &args.outdir, info);
+    let mut report = Report::build(&results, &args.dir, &args.outdir, info);
+    // The total includes copying the expected images and making thumbnails.
+    report.total_seconds = t0.elapsed().as_secs_f64();
     if let Err(e) = report::write(&report, &args.outdir) {
         return fail(format!("could not write the report into `{}`: {e}", args.outdir.display()));
     }
@@ -127,7 +129,7 @@ fn progress(r: &CaseResult, n: usize, total: usize, width: usize) {
     } else {
         format!("  [{} warning{}]", r.warnings.len(), if r.warnings.len() == 1 { "" } else { "s" })
     };
-    println!("[{n:>width$}/{total}] {:<44} {:>7.2} s  {what}{warn}", r.case.label(), r.seconds);
+    say!("[{n:>width$}/{total}] {:<44} {:>7.2} s  {what}{warn}", r.case.label(), r.seconds);
 }
 
 fn first_line(s: &str) -> &str {
@@ -136,12 +138,18 @@ fn first_line(s: &str) -> &str {
 
 fn summary(report: &Report, outdir: &Path) {
     let s = &report.summary;
-    println!();
+    say!();
     for hw in &report.homeworks {
         let c = &hw.counts;
-        println!(
+        say!(
             "{:<6} {:>3} scenes {:>4} images: {:>4} passed {:>4} failed {:>4} errored   {:.1} s",
-            hw.hw, c.scenes, c.rows, c.passed, c.failed, c.errored, hw.seconds
+            hw.hw,
+            c.scenes,
+            c.rows,
+            c.passed,
+            c.failed,
+            c.errored,
+            hw.seconds
         );
     }
     let noref = if s.no_reference > 0 {
@@ -149,9 +157,14 @@ fn summary(report: &Report, outdir: &Path) {
     } else {
         String::new()
     };
-    println!(
+    say!(
         "total: {} scenes, {} images: {} passed, {} failed, {} errored{noref} in {:.1} s",
-        s.scenes, s.rows, s.passed, s.failed, s.errored, report.total_seconds
+        s.scenes,
+        s.rows,
+        s.passed,
+        s.failed,
+        s.errored,
+        report.total_seconds
     );
-    println!("report: {}", outdir.join("index.html").display());
+    say!("report: {}", outdir.join("index.html").display());
 }

@@ -63,7 +63,10 @@ pub fn run_cases(
                 let mut result = pool.install(|| run_case_guarded(case, outdir));
                 result.drop_pixel_maps();
                 let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
-                on_done(&result, n, cases.len());
+                // A failing progress callback must not lose the result.
+                let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    on_done(&result, n, cases.len())
+                }));
                 // A poisoned lock only means another job panicked after
                 // catching; the slots themselves are still sound.
                 let mut slots = slots.lock().unwrap_or_else(|e| e.into_inner());

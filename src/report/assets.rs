@@ -14,7 +14,7 @@ use std::path::{Component, Path, PathBuf};
 
 /// Largest thumbnail width in pixels (shown at half that on the page, so they
 /// stay sharp on high-density screens).
-pub const THUMB_WIDTH: u32 = 256;
+pub const THUMB_WIDTH: u32 = 224;
 
 /// `path` relative to `base`, with `/` separators (the path itself, made
 /// `/`-separated, if it is not under `base`).

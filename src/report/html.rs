@@ -81,8 +81,8 @@ table.hw tfoot td { font-weight: 600; border-bottom: none; }
                  width: 300px; margin-left: 8px; }
 table.results { width: 100%; }
 table.results th { position: sticky; top: 0; background: #f6f8fa; z-index: 1; text-align: left;
-                   font-weight: 600; padding: 6px 8px; border-bottom: 2px solid var(--line); white-space: nowrap; }
-table.results td { padding: 6px 8px; border-bottom: 1px solid var(--line); vertical-align: top; }
+                   font-weight: 600; padding: 6px 6px; border-bottom: 2px solid var(--line); white-space: nowrap; }
+table.results td { padding: 6px 6px; border-bottom: 1px solid var(--line); vertical-align: top; }
 table.results td.num { text-align: right; white-space: nowrap; font-variant-numeric: tabular-nums; }
 tr.row { border-left: 6px solid transparent; }
 tr.row.fail { background: var(--fail-bg); border-left-color: var(--fail); }
@@ -90,7 +90,7 @@ tr.row.error { background: var(--err-bg); border-left-color: var(--err); }
 tr.row.pass { border-left-color: var(--pass); }
 tr.row.no-reference { border-left-color: var(--noref); }
 tr.first td { border-top: 1px solid #afb8c1; }
-td.scene { min-width: 190px; max-width: 250px; overflow-wrap: anywhere; }
+td.scene { min-width: 210px; max-width: 260px; overflow-wrap: break-word; }
 td.scene .dir { display: block; color: var(--muted); font-size: 12px; }
 td.scene .label { font-weight: 600; }
 td.scene .image { display: block; margin-top: 2px; font-size: 12px; }
@@ -100,14 +100,14 @@ td.scene .image { display: block; margin-top: 2px; font-size: 12px; }
 details { margin-top: 4px; color: var(--muted); font-size: 12px; }
 details summary { cursor: pointer; }
 details ul { margin: 4px 0 0; padding-left: 18px; max-height: 220px; overflow: auto; }
-td.img { width: 140px; }
-td.img img { width: 128px; display: block; border: 1px solid var(--line); background: #f6f8fa;
+td.img { width: 124px; }
+td.img img { width: 112px; display: block; border: 1px solid var(--line); background: #f6f8fa;
              image-rendering: auto; }
-td.img .none { display: block; width: 128px; color: #adb5bd; font-size: 12px; text-align: center;
+td.img .none { display: block; width: 112px; color: #adb5bd; font-size: 12px; text-align: center;
                padding: 30px 0; border: 1px dashed var(--line); }
 .bad { color: var(--fail); font-weight: 700; }
 .sub { display: block; color: var(--muted); font-size: 11px; }
-.thr { text-decoration: underline dotted; cursor: help; white-space: nowrap; font-size: 12px; }
+.thr { text-decoration: underline dotted; cursor: help; white-space: nowrap; font-size: 11px; }
 .verdict { display: inline-block; font-weight: 700; font-size: 12px; padding: 2px 8px; border-radius: 10px;
            color: #fff; white-space: nowrap; }
 .verdict.pass { background: var(--pass); } .verdict.fail { background: var(--fail); }
