@@ -19,5 +19,6 @@ pub mod geometry;
 pub mod image;
 pub mod math;
 pub mod render;
+pub mod report;
 pub mod scene;
 pub mod shading;

@@ -1,6 +1,18 @@
 //! The `luster` command line: a thin layer over the library.
 
+/// `println!` that ignores a closed stdout (`luster suite ... | head`), so a
+/// reader that stops early cannot turn into a panic; what matters (files,
+/// the exit code) still happens.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
+    }};
+}
+
+mod compare;
 mod render;
+mod suite;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -52,6 +64,66 @@ enum Command {
         #[arg(long, default_value_t = 5)]
         reps: usize,
     },
+    /// Compare a test image with a reference: PSNR, SSIM, LDR-FLIP, differing pixels.
+    ///
+    /// Reads PNG, JPEG, OpenEXR and Radiance HDR. FLIP is the mean LDR-FLIP
+    /// error (Andersson et al., "FLIP: A Difference Evaluator for Alternating
+    /// Images", HPG 2020) in [0, 1]; 0 means no visible difference. PSNR is on
+    /// display values with peak 1 (8-bit PSNR), or on linear light when both
+    /// images are EXR/HDR. Exit code: 0 compared (and bounds met), 1 a bound
+    /// given by --max-error or --min-psnr was not met, 2 an image could not be
+    /// read, the sizes differ, or the heatmap could not be written.
+    Compare {
+        /// The reference (expected) image.
+        reference: PathBuf,
+        /// The image to test against it.
+        test: PathBuf,
+        /// Write the per-pixel LDR-FLIP error as a magma-coloured PNG here.
+        #[arg(long, value_name = "OUT.png")]
+        heatmap: Option<PathBuf>,
+        /// Exit 1 if the mean LDR-FLIP error is above this (0 to 1).
+        #[arg(long, value_name = "F")]
+        max_error: Option<f64>,
+        /// Exit 1 if the PSNR is below this many dB.
+        #[arg(long, value_name = "DB")]
+        min_psnr: Option<f64>,
+        /// Count a pixel as differing only if an 8-bit channel differs by more than N.
+        #[arg(long, value_name = "N", default_value_t = 0)]
+        tolerance: u8,
+        /// Exposure in stops applied to EXR/HDR images before display-referred metrics.
+        #[arg(long, value_name = "STOPS", default_value_t = 0.0, allow_negative_numbers = true)]
+        exposure: f32,
+    },
+    /// Render a course folder, compare with its expected images, write an HTML report.
+    ///
+    /// Finds every scene under DIR/hwN/{json,xml}/ that names one of the
+    /// homework's expected images (DIR/hwN/expected/...), renders it, compares
+    /// every camera's image with its expected image by the conformance
+    /// thresholds, and writes OUTDIR/index.html and OUTDIR/results.json with
+    /// the renders, copies of the expected images and LDR-FLIP heatmaps
+    /// beside them. A scene that fails to load, render or even panics becomes
+    /// an error row; the others still run. Exit code: 0 when the suite ran,
+    /// whatever the verdicts (1 with --strict if any image failed); 2 when DIR
+    /// is missing or the report cannot be written.
+    Suite {
+        /// The course folder (with hw1/, hw2/, ...).
+        dir: PathBuf,
+        /// Folder for the report (created if needed).
+        #[arg(short, long, default_value = "report")]
+        outdir: PathBuf,
+        /// Scenes rendered at the same time.
+        #[arg(short, long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
+        jobs: u16,
+        /// Only scenes whose label (e.g. hw2/xml/ellipsoids.xml) contains this text.
+        #[arg(long, value_name = "PATTERN")]
+        only: Option<String>,
+        /// Worker threads per scene (default: all cores, shared among the jobs).
+        #[arg(short, long, value_parser = clap::value_parser!(u16).range(1..))]
+        threads: Option<u16>,
+        /// Exit 1 if any image failed or errored.
+        #[arg(long)]
+        strict: bool,
+    },
 }
 
 fn main() -> ExitCode {
@@ -65,6 +137,25 @@ fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
+        Command::Compare { reference, test, heatmap, max_error, min_psnr, tolerance, exposure } => {
+            compare::run(&compare::Args {
+                reference,
+                test,
+                heatmap,
+                max_error,
+                min_psnr,
+                tolerance,
+                exposure,
+            })
+        }
+        Command::Suite { dir, outdir, jobs, only, threads, strict } => suite::run(&suite::Args {
+            dir,
+            outdir,
+            jobs: usize::from(jobs),
+            only,
+            threads: threads.map(usize::from),
+            strict,
+        }),
     }
 }
 

@@ -8,6 +8,7 @@
 //! `hwN/expected/2022/<ImageName>` and then `.../2020/...` when present: those
 //! older images belong to the older XML version of a scene.
 
+pub mod runner;
 pub mod thresholds;
 
 use crate::image::{compare, CompareOptions, Comparison, Rgb32Image};
@@ -68,6 +69,28 @@ impl Case {
         }
         let p = exp.join(image_name);
         p.is_file().then_some(p)
+    }
+
+    /// Whether the scene file names one of its homework's expected images.
+    ///
+    /// A cheap textual test, made without loading the scene (and its meshes):
+    /// true when the file's text contains the file name of an image in
+    /// `hwN/expected/` (or, for XML, `expected/2022/` and `expected/2020/`).
+    /// It errs on the side of true: a scene that fails to load is still kept
+    /// if it mentions an expected image, so its failure gets reported.
+    pub fn mentions_expected_image(&self) -> bool {
+        let Ok(bytes) = std::fs::read(&self.scene) else { return true };
+        let text = String::from_utf8_lossy(&bytes);
+        let exp = self.hw_dir.join("expected");
+        let mut dirs = vec![exp.clone()];
+        if self.encoding == Encoding::Xml {
+            dirs.extend(["2022", "2020"].map(|y| exp.join(y)));
+        }
+        dirs.iter().filter_map(|d| std::fs::read_dir(d).ok()).flat_map(|rd| rd.flatten()).any(|e| {
+            let name = e.file_name();
+            let name = name.to_string_lossy();
+            e.path().is_file() && text.contains(name.as_ref())
+        })
     }
 }
 
@@ -135,6 +158,8 @@ pub struct CaseResult {
     pub case: Case,
     /// Seconds to load and build.
     pub setup_seconds: f64,
+    /// Wall-clock seconds for the whole case: load, build, render, compare.
+    pub seconds: f64,
     /// One entry per camera; empty if the scene failed to load.
     pub images: Vec<ImageResult>,
     /// The load or build error, if any.
@@ -147,13 +172,58 @@ pub struct CaseResult {
 /// image and its heatmap under `outdir`, and compares with the expected images.
 pub fn run_case(case: &Case, outdir: &Path) -> CaseResult {
     let t0 = Instant::now();
-    let mut result = CaseResult {
-        case: case.clone(),
-        setup_seconds: 0.0,
-        images: Vec::new(),
-        error: None,
-        warnings: Vec::new(),
-    };
+    let mut result = CaseResult::failed(case, None);
+    run_case_into(case, outdir, &mut result);
+    result.seconds = t0.elapsed().as_secs_f64();
+    result
+}
+
+/// [`run_case`], with a panic anywhere in loading, building, rendering or
+/// comparing caught and turned into the case's error, so that one bad scene
+/// cannot stop a suite. The panic message is kept; images finished before the
+/// panic are lost.
+pub fn run_case_guarded(case: &Case, outdir: &Path) -> CaseResult {
+    let t0 = Instant::now();
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run_case(case, outdir))) {
+        Ok(r) => r,
+        Err(payload) => {
+            let msg = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "a panic without a message".to_string());
+            let mut r = CaseResult::failed(case, Some(format!("luster crashed on this scene: {msg}")));
+            r.seconds = t0.elapsed().as_secs_f64();
+            r
+        }
+    }
+}
+
+impl CaseResult {
+    /// A result without images, failed with `error` (or still empty when `None`).
+    pub fn failed(case: &Case, error: Option<String>) -> Self {
+        CaseResult {
+            case: case.clone(),
+            setup_seconds: 0.0,
+            seconds: 0.0,
+            images: Vec::new(),
+            error,
+            warnings: Vec::new(),
+        }
+    }
+
+    /// Frees the per-pixel FLIP and difference maps of every comparison,
+    /// keeping the summary numbers (the heatmap is already written).
+    pub fn drop_pixel_maps(&mut self) {
+        for c in self.images.iter_mut().filter_map(|i| i.comparison.as_mut()) {
+            c.flip_map = Vec::new();
+            c.diff_map = Vec::new();
+        }
+    }
+}
+
+fn run_case_into(case: &Case, outdir: &Path, result: &mut CaseResult) {
+    let t0 = Instant::now();
     let built = crate::scene::load(&case.scene).and_then(|d| {
         result.warnings.extend(d.warnings.iter().map(|w| w.to_string()));
         Scene::build(&d)
@@ -162,7 +232,7 @@ pub fn run_case(case: &Case, outdir: &Path) -> CaseResult {
         Ok(s) => s,
         Err(e) => {
             result.error = Some(e.to_string());
-            return result;
+            return;
         }
     };
     result.warnings.extend(scene.warnings.iter().map(|w| w.to_string()));
@@ -214,7 +284,6 @@ pub fn run_case(case: &Case, outdir: &Path) -> CaseResult {
         }
         result.images.push(r);
     }
-    result
 }
 
 /// Compares an 8-bit render with the expected image file.

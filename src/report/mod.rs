@@ -1,0 +1,407 @@
+//! The conformance report: what `luster suite` writes after rendering a course
+//! folder and comparing every image with the course's expected image.
+//!
+//! [`Report::build`] turns the [`CaseResult`]s of
+//! [`conformance`](crate::conformance) into a plain, serialisable summary and
+//! makes the output folder self-contained (expected images copied, browser
+//! previews of EXR/HDR images, thumbnails); [`write`] then writes
+//!
+//! | file | contents |
+//! |---|---|
+//! | `index.html` | summary, per-homework table, one row per image ([`html`]) |
+//! | `results.json` | the same [`Report`] as JSON ([`json`]) |
+//! | `renders/` | our renders and their LDR-FLIP heatmaps |
+//! | `expected/` | copies of the expected images, by path under the course folder |
+//! | `thumbs/` | small PNG thumbnails shown in the table |
+//!
+//! Every path inside the report is relative to the output folder, with `/`
+//! separators, so the folder can be moved or archived as a whole.
+//!
+//! # Rows and verdicts
+//! A row is one camera's image, or a whole scene when it failed before any
+//! image was rendered. Its [`Verdict`] is `pass` (the threshold was met),
+//! `fail` (compared, below the threshold), `error` (the scene did not load,
+//! build or render, or the comparison itself failed, e.g. different sizes) or
+//! `no-reference` (the course has no expected image for that camera).
+
+mod assets;
+pub mod html;
+pub mod json;
+
+use crate::conformance::{CaseResult, ImageResult};
+use crate::image::{Comparison, MetricSpace};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// The whole report.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    /// `luster <version>`.
+    pub generator: String,
+    /// The course folder that was run.
+    pub root: String,
+    /// The `--only` pattern, if any.
+    pub only: Option<String>,
+    /// Scenes rendered at the same time.
+    pub jobs: usize,
+    /// Worker threads per scene.
+    pub threads: usize,
+    /// Wall-clock seconds of the whole run.
+    pub total_seconds: f64,
+    /// Counts over all rows.
+    pub summary: Counts,
+    /// Counts per homework, in order.
+    pub homeworks: Vec<HomeworkSummary>,
+    /// One entry per scene, in course order.
+    pub scenes: Vec<SceneEntry>,
+}
+
+/// Numbers of scenes and rows by verdict.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct Counts {
+    /// Scenes run.
+    pub scenes: usize,
+    /// Rows: images, plus scenes that failed before rendering any.
+    pub rows: usize,
+    /// Rows that met their threshold.
+    pub passed: usize,
+    /// Rows compared and below their threshold.
+    pub failed: usize,
+    /// Rows that could not be rendered or compared.
+    pub errored: usize,
+    /// Rows without an expected image.
+    pub no_reference: usize,
+}
+
+impl Counts {
+    fn add(&mut self, v: Verdict) {
+        self.rows += 1;
+        match v {
+            Verdict::Pass => self.passed += 1,
+            Verdict::Fail => self.failed += 1,
+            Verdict::Error => self.errored += 1,
+            Verdict::NoReference => self.no_reference += 1,
+        }
+    }
+}
+
+/// One homework's counts.
+#[derive(Clone, Debug, Serialize)]
+pub struct HomeworkSummary {
+    /// `hw1`, ...
+    pub hw: String,
+    /// Its counts.
+    #[serde(flatten)]
+    pub counts: Counts,
+    /// Seconds spent on its scenes (summed over scenes; with several jobs
+    /// this exceeds the wall-clock time).
+    pub seconds: f64,
+}
+
+/// The verdict of a row.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Verdict {
+    /// Met the threshold.
+    Pass,
+    /// Compared and missed the threshold.
+    Fail,
+    /// Not rendered or not comparable.
+    Error,
+    /// No expected image to compare with.
+    NoReference,
+}
+
+impl Verdict {
+    /// `pass`, `fail`, `error` or `no-reference`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Verdict::Pass => "pass",
+            Verdict::Fail => "fail",
+            Verdict::Error => "error",
+            Verdict::NoReference => "no-reference",
+        }
+    }
+}
+
+/// One scene.
+#[derive(Clone, Debug, Serialize)]
+pub struct SceneEntry {
+    /// `hw2/xml/ellipsoids.xml`.
+    pub label: String,
+    /// `hw2`.
+    pub hw: String,
+    /// `json` or `xml`.
+    pub encoding: String,
+    /// The scene file.
+    pub scene: String,
+    /// Why the scene failed before rendering (load, build, crash).
+    pub error: Option<String>,
+    /// The loader's and builder's warnings.
+    pub warnings: Vec<String>,
+    /// Seconds to load and build.
+    pub setup_seconds: f64,
+    /// Seconds for the whole scene.
+    pub seconds: f64,
+    /// One entry per camera.
+    pub images: Vec<ImageEntry>,
+}
+
+impl SceneEntry {
+    /// The scene's own verdict when it has no images (it failed early).
+    pub fn verdict(&self) -> Option<Verdict> {
+        self.images.is_empty().then_some(Verdict::Error)
+    }
+}
+
+/// One camera's image.
+#[derive(Clone, Debug, Serialize)]
+pub struct ImageEntry {
+    /// The camera's `ImageName`.
+    pub image_name: String,
+    /// The row's verdict.
+    pub verdict: Verdict,
+    /// Our render, relative to the report folder.
+    pub render: Option<String>,
+    /// The expected image as the browser shows it (a PNG preview for EXR/HDR).
+    pub expected: Option<String>,
+    /// The copy of the original expected file, when it differs from `expected`.
+    pub expected_original: Option<String>,
+    /// The expected image in the course folder.
+    pub expected_source: Option<String>,
+    /// The LDR-FLIP heatmap.
+    pub heatmap: Option<String>,
+    /// Thumbnails of render, expected and heatmap.
+    pub thumbs: Thumbs,
+    /// The comparison's numbers.
+    pub metrics: Option<Metrics>,
+    /// The bar it was judged by.
+    pub threshold: ThresholdEntry,
+    /// Render seconds.
+    pub seconds: f64,
+    /// Why it could not be written or compared.
+    pub error: Option<String>,
+}
+
+/// Thumbnail paths, relative to the report folder.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Thumbs {
+    /// Of our render.
+    pub render: Option<String>,
+    /// Of the expected image.
+    pub expected: Option<String>,
+    /// Of the heatmap.
+    pub heatmap: Option<String>,
+}
+
+/// A comparison's numbers (the per-pixel maps are in the heatmap).
+#[derive(Clone, Debug, Serialize)]
+pub struct Metrics {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `display` (sRGB values) or `linear` (both images EXR/HDR).
+    pub space: &'static str,
+    /// PSNR in dB; `null` when infinite (identical images).
+    pub psnr: Option<f64>,
+    /// Mean SSIM on luma.
+    pub ssim: f64,
+    /// Mean LDR-FLIP error (Andersson et al. 2020).
+    pub flip: f64,
+    /// Pixels whose 8-bit codes differ.
+    pub differing_pixels: usize,
+    /// The same as a percentage of all pixels.
+    pub differing_percent: f64,
+    /// Inclusive bounding box `[x0, y0, x1, y1]` of the differing pixels.
+    pub diff_bbox: Option<[u32; 4]>,
+    /// Largest absolute channel difference.
+    pub max_abs_diff: f32,
+    /// Whether the PSNR part of the threshold was met.
+    pub psnr_ok: bool,
+    /// Whether the FLIP part of the threshold was met.
+    pub flip_ok: bool,
+}
+
+/// The bar an image was judged by.
+#[derive(Clone, Debug, Serialize)]
+pub struct ThresholdEntry {
+    /// Minimum PSNR in dB.
+    pub min_psnr: f64,
+    /// Maximum mean LDR-FLIP.
+    pub max_flip: f64,
+    /// Why this bar.
+    pub reason: String,
+}
+
+/// How the run was made, for the report's header.
+#[derive(Clone, Debug, Default)]
+pub struct RunInfo {
+    /// The course folder.
+    pub root: String,
+    /// The `--only` pattern.
+    pub only: Option<String>,
+    /// Scenes at a time.
+    pub jobs: usize,
+    /// Threads per scene.
+    pub threads: usize,
+    /// Wall-clock seconds.
+    pub total_seconds: f64,
+}
+
+impl Report {
+    /// Summarises `results` (renders and heatmaps already under
+    /// `outdir/renders`) and puts the expected images and thumbnails into
+    /// `outdir`. Problems copying or thumbnailing an image are noted on its
+    /// row and never stop the report.
+    pub fn build(results: &[CaseResult], root: &Path, outdir: &Path, info: RunInfo) -> Report {
+        let scenes: Vec<SceneEntry> = results.iter().map(|r| scene_entry(r, root, outdir)).collect();
+        let mut summary = Counts::default();
+        let mut per_hw: BTreeMap<String, HomeworkSummary> = BTreeMap::new();
+        for s in &scenes {
+            let hw = per_hw.entry(s.hw.clone()).or_insert_with(|| HomeworkSummary {
+                hw: s.hw.clone(),
+                counts: Counts::default(),
+                seconds: 0.0,
+            });
+            hw.counts.scenes += 1;
+            summary.scenes += 1;
+            hw.seconds += s.seconds;
+            let verdicts: Vec<Verdict> = match s.verdict() {
+                Some(v) => vec![v],
+                None => s.images.iter().map(|i| i.verdict).collect(),
+            };
+            for v in verdicts {
+                hw.counts.add(v);
+                summary.add(v);
+            }
+        }
+        let mut homeworks: Vec<HomeworkSummary> = per_hw.into_values().collect();
+        homeworks.sort_by_key(|h| hw_number(&h.hw));
+        Report {
+            generator: format!("luster {}", env!("CARGO_PKG_VERSION")),
+            root: info.root,
+            only: info.only,
+            jobs: info.jobs,
+            threads: info.threads,
+            total_seconds: info.total_seconds,
+            summary,
+            homeworks,
+            scenes,
+        }
+    }
+
+    /// Whether every row passed or had no reference.
+    pub fn all_passed(&self) -> bool {
+        self.summary.failed == 0 && self.summary.errored == 0
+    }
+}
+
+/// `hw10` sorts after `hw9`.
+fn hw_number(hw: &str) -> (u32, String) {
+    (hw.trim_start_matches("hw").parse().unwrap_or(u32::MAX), hw.to_string())
+}
+
+/// Writes `outdir/index.html` and `outdir/results.json`.
+pub fn write(report: &Report, outdir: &Path) -> std::io::Result<()> {
+    std::fs::write(outdir.join("results.json"), json::to_json(report))?;
+    std::fs::write(outdir.join("index.html"), html::to_html(report))?;
+    Ok(())
+}
+
+fn scene_entry(r: &CaseResult, root: &Path, outdir: &Path) -> SceneEntry {
+    SceneEntry {
+        label: r.case.label(),
+        hw: r.case.hw.clone(),
+        encoding: r.case.encoding.name().to_string(),
+        scene: r.case.scene.display().to_string(),
+        error: r.error.clone(),
+        warnings: r.warnings.clone(),
+        setup_seconds: r.setup_seconds,
+        seconds: r.seconds,
+        images: r.images.iter().map(|i| image_entry(i, root, outdir)).collect(),
+    }
+}
+
+fn image_entry(i: &ImageResult, root: &Path, outdir: &Path) -> ImageEntry {
+    let verdict = if i.error.is_some() {
+        Verdict::Error
+    } else if i.expected.is_none() {
+        Verdict::NoReference
+    } else if i.pass {
+        Verdict::Pass
+    } else if i.comparison.is_some() {
+        Verdict::Fail
+    } else {
+        Verdict::Error
+    };
+    let mut error = i.error.clone();
+    let mut note = |e: String| {
+        error = Some(match error.take() {
+            Some(prev) => format!("{prev}; {e}"),
+            None => e,
+        })
+    };
+    let render = i.render.is_file().then(|| assets::relative(&i.render, outdir));
+    let heatmap = i.heatmap.as_ref().filter(|p| p.is_file()).map(|p| assets::relative(p, outdir));
+    let mut thumbs = Thumbs::default();
+    if render.is_some() {
+        thumbs.render = assets::thumbnail(&i.render, outdir).map_err(&mut note).ok();
+    }
+    if let Some(h) = &i.heatmap {
+        if heatmap.is_some() {
+            thumbs.heatmap = assets::thumbnail(h, outdir).map_err(&mut note).ok();
+        }
+    }
+    let (mut expected, mut expected_original) = (None, None);
+    if let Some(src) = &i.expected {
+        match assets::copy_expected(src, root, outdir) {
+            Ok(copy) => {
+                thumbs.expected = assets::thumbnail(&copy.shown, outdir).map_err(&mut note).ok();
+                expected = Some(assets::relative(&copy.shown, outdir));
+                expected_original = copy.original.map(|p| assets::relative(&p, outdir));
+            }
+            Err(e) => note(e),
+        }
+    }
+    let t = &i.threshold;
+    ImageEntry {
+        image_name: i.image_name.clone(),
+        verdict,
+        render,
+        expected,
+        expected_original,
+        expected_source: i.expected.as_ref().map(|p| p.display().to_string()),
+        heatmap,
+        thumbs,
+        metrics: i.comparison.as_ref().map(|c| metrics(c, t.min_psnr, t.max_flip)),
+        threshold: ThresholdEntry {
+            min_psnr: t.min_psnr,
+            max_flip: t.max_flip,
+            reason: t.reason.to_string(),
+        },
+        seconds: i.seconds,
+        error,
+    }
+}
+
+fn metrics(c: &Comparison, min_psnr: f64, max_flip: f64) -> Metrics {
+    Metrics {
+        width: c.width,
+        height: c.height,
+        space: match c.space {
+            MetricSpace::Display => "display",
+            MetricSpace::Linear => "linear",
+        },
+        psnr: c.psnr.is_finite().then_some(c.psnr),
+        ssim: c.ssim,
+        flip: c.flip,
+        differing_pixels: c.differing_pixels,
+        differing_percent: 100.0 * c.differing_fraction(),
+        diff_bbox: c.diff_bbox.map(|(a, b, x, y)| [a, b, x, y]),
+        max_abs_diff: c.max_abs_diff,
+        psnr_ok: c.psnr >= min_psnr,
+        flip_ok: c.flip <= max_flip,
+    }
+}
