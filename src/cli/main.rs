@@ -45,6 +45,15 @@ enum Command {
         /// Print no progress bar and no summary, only errors and warnings.
         #[arg(short, long)]
         quiet: bool,
+        /// Samples per pixel, overriding each camera's NumSamples (for previews).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_048_576))]
+        spp: Option<u32>,
+        /// Seed of every random choice: another seed gives other noise, not another image.
+        #[arg(long, default_value_t = 0)]
+        seed: u32,
+        /// Reconstruction filter: box (plain average) or gaussian (σ = 1/3 pixel).
+        #[arg(long, value_enum, default_value_t = FilterArg::Box)]
+        filter: FilterArg,
     },
     /// Benchmark the BVH on PLY meshes (build time, memory, Mrays/s).
     ///
@@ -129,7 +138,14 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Render { scenes, outdir, threads, quiet } => render::run(&scenes, &outdir, threads, quiet),
+        Command::Render { scenes, outdir, threads, quiet, spp, seed, filter } => {
+            let filter = match filter {
+                FilterArg::Box => luster::render::Filter::Box,
+                FilterArg::Gaussian => luster::render::Filter::Gaussian,
+            };
+            let opts = luster::render::RenderOptions { spp, seed, filter };
+            render::run(&scenes, &outdir, threads, quiet, &opts)
+        }
         Command::Bench { plys, threads, reps } => match luster::bench::run(&plys, &threads, reps) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
@@ -157,6 +173,13 @@ fn main() -> ExitCode {
             strict,
         }),
     }
+}
+
+/// The `--filter` choices.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum FilterArg {
+    Box,
+    Gaussian,
 }
 
 /// A rayon pool of `threads` workers (all cores when `None`).

@@ -2,20 +2,26 @@
 
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
-use luster::render::{self, Scene};
+use luster::render::{self, RenderOptions, Scene};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
 /// Renders every scene; errors in one scene do not stop the others.
-pub fn run(scenes: &[PathBuf], outdir: &Path, threads: Option<usize>, quiet: bool) -> ExitCode {
+pub fn run(
+    scenes: &[PathBuf],
+    outdir: &Path,
+    threads: Option<usize>,
+    quiet: bool,
+    opts: &RenderOptions,
+) -> ExitCode {
     let pool = match super::pool(threads) {
         Ok(p) => p,
         Err(code) => return code,
     };
     let mut failed = 0;
     for s in scenes {
-        if let Err(e) = pool.install(|| render_scene(s, outdir, quiet)) {
+        if let Err(e) = pool.install(|| render_scene(s, outdir, quiet, opts)) {
             eprintln!("error: {e:#}");
             failed += 1;
         }
@@ -29,7 +35,7 @@ pub fn run(scenes: &[PathBuf], outdir: &Path, threads: Option<usize>, quiet: boo
     ExitCode::SUCCESS
 }
 
-fn render_scene(path: &Path, outdir: &Path, quiet: bool) -> anyhow::Result<()> {
+fn render_scene(path: &Path, outdir: &Path, quiet: bool, opts: &RenderOptions) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let desc = luster::scene::load(path)?;
     for w in &desc.warnings {
@@ -41,14 +47,6 @@ fn render_scene(path: &Path, outdir: &Path, quiet: bool) -> anyhow::Result<()> {
     }
     let setup = t0.elapsed().as_secs_f64();
     for (i, cam) in scene.cameras.iter().enumerate() {
-        if cam.num_samples > 1 && !quiet {
-            eprintln!(
-                "warning: {}: {} asks for {} samples per pixel; multisampling is not supported yet, rendering 1",
-                path.display(),
-                cam.image_name,
-                cam.num_samples
-            );
-        }
         let pixels = u64::from(cam.width) * u64::from(cam.height);
         let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(pixels) };
         bar.set_style(
@@ -58,7 +56,7 @@ fn render_scene(path: &Path, outdir: &Path, quiet: bool) -> anyhow::Result<()> {
         );
         bar.set_message(cam.image_name.clone());
         let t = Instant::now();
-        let img = render::render(&scene, i, &|n| bar.inc(n));
+        let img = render::render_with(&scene, i, opts, &|n| bar.inc(n));
         let secs = t.elapsed().as_secs_f64();
         bar.finish_and_clear();
         let out = outdir.join(&cam.image_name);

@@ -1,5 +1,8 @@
-//! The pinhole camera of the course: an eye, an image plane at `NearDistance`
-//! spanning `NearPlane` (or a vertical field of view), and the pixel grid on it.
+//! The camera of the course: an eye, an image plane at `NearDistance` spanning
+//! `NearPlane` (or a vertical field of view), and the pixel grid on it. With an
+//! `ApertureSize`, a thin lens: rays start on a square lens of that edge
+//! around the eye and pass through the point where the pinhole ray meets the
+//! plane `FocusDistance` ahead (measured along the gaze), so that plane is sharp.
 
 use crate::math::{Ray, Vec3};
 use crate::scene::description::{CameraDesc, Projection};
@@ -22,6 +25,11 @@ pub struct Camera {
     pub image_name: String,
     /// Samples per pixel the scene asks for.
     pub num_samples: u32,
+    /// Unit gaze, and the lens's right and up axes scaled by the aperture edge.
+    gaze: Vec3,
+    lens_u: Vec3,
+    lens_v: Vec3,
+    focus_distance: f32,
 }
 
 impl Camera {
@@ -50,6 +58,10 @@ impl Camera {
             height,
             image_name: d.image_name.clone(),
             num_samples: d.num_samples,
+            gaze,
+            lens_u: u * d.aperture_size,
+            lens_v: v * d.aperture_size,
+            focus_distance: d.focus_distance,
         }
     }
 
@@ -59,6 +71,24 @@ impl Camera {
     pub fn ray(&self, x: f32, y: f32) -> Ray {
         let p = self.corner + self.du * x + self.dv * y;
         Ray::new(self.eye, (p - self.eye).normalize())
+    }
+
+    /// Whether the camera has a lens (depth of field).
+    pub fn has_lens(&self) -> bool {
+        self.lens_u != Vec3::ZERO
+    }
+
+    /// The ray through image position `(x, y)` from lens position `lens` in
+    /// `[0, 1)²` (ignored for a pinhole).
+    #[inline]
+    pub fn lens_ray(&self, x: f32, y: f32, lens: (f32, f32)) -> Ray {
+        let pinhole = self.ray(x, y);
+        if !self.has_lens() {
+            return pinhole;
+        }
+        let focus = self.eye + pinhole.d * (self.focus_distance / pinhole.d.dot(self.gaze));
+        let o = self.eye + self.lens_u * (lens.0 - 0.5) + self.lens_v * (lens.1 - 0.5);
+        Ray::new(o, (focus - o).normalize())
     }
 }
 
@@ -77,6 +107,8 @@ mod tests {
             resolution: res,
             image_name: "x.png".into(),
             num_samples: 1,
+            aperture_size: 0.0,
+            focus_distance: 1.0,
             loc: Loc::default(),
         }
     }
@@ -105,6 +137,23 @@ mod tests {
         ));
         for (x, y) in [(0.5, 0.5), (199.5, 3.5), (100.0, 50.0)] {
             assert!((a.ray(x, y).d - b.ray(x, y).d).length() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn lens_rays_meet_on_the_focal_plane() {
+        let mut d = desc(Projection::Plane { gaze: -Vec3::Z, near_plane: [-1.0, 1.0, -1.0, 1.0] }, (10, 10));
+        d.aperture_size = 0.5;
+        d.focus_distance = 4.0;
+        let c = Camera::from_desc(&d);
+        let pin = c.ray(2.5, 7.5);
+        let target = pin.at(4.0 / pin.d.dot(-Vec3::Z));
+        for lens in [(0.0, 0.0), (0.9, 0.1), (0.5, 0.5), (0.3, 0.99)] {
+            let r = c.lens_ray(2.5, 7.5, lens);
+            // Origins spread over the lens, all rays pass through the same focal point.
+            assert!(r.o.z.abs() < 1e-6 && r.o.x.abs() <= 0.25 + 1e-6 && r.o.y.abs() <= 0.25 + 1e-6);
+            let t = (target - r.o).dot(r.d);
+            assert!((r.at(t) - target).length() < 1e-4);
         }
     }
 }

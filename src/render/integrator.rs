@@ -15,6 +15,15 @@
 //! 40 dB against the reference this way, 28 dB with normals flipped to face the
 //! viewer.
 //!
+//! Distribution effects (hw3): each camera sample carries a shutter time and
+//! a [`PixelSampler`] that supplies one decorrelated 2D dimension per area
+//! light sample and per glossy bounce. An area light contributes, per sample,
+//! `L · A · |n_l · ω| / d²` as the irradiance of one point drawn uniformly on
+//! its square (hw3 spec eq. 1), shadowed by one ray to that point. Roughness
+//! `r` turns a mirror or conductor glossy: the reflected direction `R` is
+//! moved to `R + r (ξ₁ - ½) u + r (ξ₂ - ½) v` in a frame `(u, v)` around it
+//! (the course's model), and renormalized.
+//!
 //! Two guards keep a hostile scene (glass inside glass, a large
 //! `MaxRecursionDepth`) from spawning `2^depth` rays per pixel: a branch whose
 //! accumulated weight falls below [`MIN_WEIGHT`] is not traced (its
@@ -29,18 +38,23 @@ pub const MIN_WEIGHT: f32 = 1e-5;
 /// Most reflection and refraction rays one camera ray may spawn.
 pub const SECONDARY_BUDGET: u32 = 4096;
 
-/// Per-camera-ray state: the counts for the summary and what is left of the budget.
+/// Per-camera-ray state: the counts for the summary, what is left of the
+/// budget, the shutter time and the sampler for the rest of the path.
 #[derive(Clone, Copy, Debug)]
 pub struct PathState {
     /// Rays traced so far.
     pub stats: RayStats,
     budget: u32,
+    /// Shutter time of this camera sample, in [0, 1).
+    pub time: f32,
+    /// Random dimensions for light and glossy samples.
+    pub sampler: PixelSampler,
 }
 
 impl PathState {
     /// A fresh state for a new camera ray, keeping the running counts.
-    pub fn new(stats: RayStats) -> Self {
-        PathState { stats, budget: SECONDARY_BUDGET }
+    pub fn new(stats: RayStats, time: f32, sampler: PixelSampler) -> Self {
+        PathState { stats, budget: SECONDARY_BUDGET, time, sampler }
     }
 
     /// Whether a secondary ray of `weight` may be traced; counts it if so.
@@ -54,10 +68,12 @@ impl PathState {
     }
 }
 
-use crate::math::{Ray, Vec3};
+use crate::math::{orthonormal_basis, Ray, Vec3};
+use crate::render::sampler::PixelSampler;
 use crate::render::scene::{Hit, Scene};
 use crate::shading::fresnel;
 use crate::shading::material::Specular;
+use crate::shading::Material;
 
 /// Ray counts, for the Mrays/s summary.
 #[derive(Clone, Copy, Debug, Default)]
@@ -87,7 +103,7 @@ impl RayStats {
 /// Radiance arriving along `ray`, which is at recursion `depth` (0 for camera rays).
 /// `weight` is the path's accumulated weight so far (1 for camera rays).
 pub fn radiance(scene: &Scene, ray: &Ray, depth: u32, weight: f32, st: &mut PathState) -> Vec3 {
-    match scene.intersect(ray) {
+    match scene.intersect(ray, st.time) {
         Some(hit) => shade(scene, ray, &hit, depth, weight, st),
         None => scene.background,
     }
@@ -119,39 +135,71 @@ fn shade(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, weight: f32, st: &mut 
             // The shadow ray reaches a little past the light, so a light lying exactly
             // on a surface (hw2 mirror_room puts one in the ceiling plane) is blocked
             // by it consistently, as in the references, not by per-pixel rounding.
-            if scene.occluded(&Ray::new(origin, l), dist + eps) {
+            if scene.occluded(&Ray::new(origin, l), dist + eps, st.time) {
                 continue;
             }
             let e = light.intensity / (light.position - hit.p).length_squared();
-            let h = (l - ray.d).normalize();
-            let spec = n.dot(h).max(0.0).powf(m.phong);
-            color += (m.diffuse * cos + m.specular * spec) * e;
+            color += blinn_phong(m, n, l, ray.d, cos) * e;
+        }
+        for light in &scene.area_lights {
+            let q = light.point(st.sampler.next_2d());
+            let to_light = q - origin;
+            let d2 = to_light.length_squared();
+            let dist = d2.sqrt();
+            let l = to_light / dist;
+            let cos = n.dot(l);
+            let cos_light = light.normal.dot(l).abs();
+            if cos <= 0.0 || cos_light == 0.0 {
+                continue;
+            }
+            st.stats.shadow += 1;
+            // Stopping short of the light's own plane: it is an imaginary square,
+            // not geometry, and a surface it lies on must not shadow it.
+            if scene.occluded(&Ray::new(origin, l), dist - eps, st.time) {
+                continue;
+            }
+            let e = light.radiance * (light.area * cos_light / (q - hit.p).length_squared());
+            color += blinn_phong(m, n, l, ray.d, cos) * e;
         }
     }
 
     if depth < scene.max_depth {
         let cos_i = -ray.d.dot(n);
-        let reflected = || Ray::new(hit.p + ng * eps, reflect(ray.d, n));
+        let roughness = m.roughness;
+        let reflected = |st: &mut PathState| {
+            let r = reflect(ray.d, n);
+            let r = if roughness > 0.0 {
+                let (u, v) = orthonormal_basis(r);
+                let (a, b) = st.sampler.next_2d();
+                (r + (u * (a - 0.5) + v * (b - 0.5)) * roughness).normalize()
+            } else {
+                r
+            };
+            Ray::new(hit.p + ng * eps, r)
+        };
         match m.kind {
             Specular::None => {}
             Specular::Mirror => {
                 let w = weight * m.mirror.max_element();
                 if st.spawn(w) {
-                    color += m.mirror * radiance(scene, &reflected(), depth + 1, w, st);
+                    let r = reflected(st);
+                    color += m.mirror * radiance(scene, &r, depth + 1, w, st);
                 }
             }
             Specular::Conductor { n: eta, k } => {
                 let f = fresnel::conductor(cos_i, eta, k);
                 let w = weight * f * m.mirror.max_element();
                 if st.spawn(w) {
-                    color += m.mirror * f * radiance(scene, &reflected(), depth + 1, w, st);
+                    let r = reflected(st);
+                    color += m.mirror * f * radiance(scene, &r, depth + 1, w, st);
                 }
             }
             Specular::Dielectric { ior, .. } => {
                 let (n1, n2) = if entering { (1.0, ior) } else { (ior, 1.0) };
                 let (f, cos_t) = fresnel::dielectric(cos_i, n1, n2);
                 if st.spawn(weight * f) {
-                    color += f * radiance(scene, &reflected(), depth + 1, weight * f, st);
+                    let r = Ray::new(hit.p + ng * eps, reflect(ray.d, n));
+                    color += f * radiance(scene, &r, depth + 1, weight * f, st);
                 }
                 if let Some(cos_t) = cos_t {
                     let eta = n1 / n2;
@@ -172,6 +220,14 @@ fn shade(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, weight: f32, st: &mut 
         color *= (-absorption * hit.t).exp();
     }
     color
+}
+
+/// Diffuse plus Blinn-Phong specular reflectance towards `l` for a viewer
+/// along `-d`, with `cos = n · l` already known to be positive.
+#[inline]
+fn blinn_phong(m: &Material, n: Vec3, l: Vec3, d: Vec3, cos: f32) -> Vec3 {
+    let h = (l - d).normalize();
+    m.diffuse * cos + m.specular * n.dot(h).max(0.0).powf(m.phong)
 }
 
 /// Mirror reflection of `d` about the unit normal `n`.

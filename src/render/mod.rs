@@ -3,6 +3,7 @@
 
 pub mod camera;
 pub mod integrator;
+pub mod sampler;
 pub mod scene;
 
 pub use scene::Scene;
@@ -10,6 +11,7 @@ pub use scene::Scene;
 use crate::math::Vec3;
 use integrator::{radiance, PathState, RayStats};
 use rayon::prelude::*;
+use sampler::PixelSampler;
 
 /// Tile edge in pixels: small enough to balance two to sixty-four threads on
 /// an 800×800 image, large enough that per-tile overhead vanishes.
@@ -41,10 +43,63 @@ impl RenderedImage {
     }
 }
 
-/// Renders camera `cam` of `scene` on the current rayon pool. `on_tile` is
-/// called with the number of pixels of every finished tile (for progress bars).
+/// How a pixel's samples are combined.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Filter {
+    /// The plain average.
+    #[default]
+    Box,
+    /// A Gaussian of σ = 1/3 pixel around the pixel centre weighting the
+    /// pixel's own samples (a pixel-sized support: no sample reaches a
+    /// neighbour, so tiles stay independent).
+    Gaussian,
+}
+
+impl Filter {
+    /// The weight of a sample at `(dx, dy)` from the pixel centre, in pixels.
+    #[inline]
+    fn weight(self, dx: f32, dy: f32) -> f32 {
+        match self {
+            Filter::Box => 1.0,
+            Filter::Gaussian => (-(dx * dx + dy * dy) * 4.5).exp(),
+        }
+    }
+}
+
+/// Settings of a render beyond the scene's own.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RenderOptions {
+    /// Samples per pixel instead of the camera's `NumSamples`.
+    pub spp: Option<u32>,
+    /// Changes every random choice (and so the noise) without changing the
+    /// expected image.
+    pub seed: u32,
+    /// Reconstruction filter.
+    pub filter: Filter,
+}
+
+/// Renders camera `cam` of `scene` with default options on the current rayon
+/// pool. `on_tile` is called with the number of pixels of every finished tile
+/// (for progress bars).
 pub fn render(scene: &Scene, cam: usize, on_tile: &(dyn Fn(u64) + Sync)) -> RenderedImage {
+    render_with(scene, cam, &RenderOptions::default(), on_tile)
+}
+
+/// Renders camera `cam` of `scene` on the current rayon pool.
+///
+/// One sample per pixel goes through the pixel centre (as the course's
+/// single-sample images do); more are spread by the [`PixelSampler`]'s
+/// stratified pattern. Every sample has its own lens position and shutter
+/// time. The image depends only on the scene, the options and the sample
+/// count, not on the number of threads.
+pub fn render_with(
+    scene: &Scene,
+    cam: usize,
+    opts: &RenderOptions,
+    on_tile: &(dyn Fn(u64) + Sync),
+) -> RenderedImage {
     let camera = &scene.cameras[cam];
+    let spp = opts.spp.unwrap_or(camera.num_samples).max(1);
     let (w, h) = (camera.width, camera.height);
     let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
         .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
@@ -57,11 +112,22 @@ pub fn render(scene: &Scene, cam: usize, on_tile: &(dyn Fn(u64) + Sync)) -> Rend
             let mut px = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
             for y in y0..y1 {
                 for x in x0..x1 {
-                    let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5);
-                    let mut st = PathState::new(stats);
-                    st.stats.primary += 1;
-                    px.push(radiance(scene, &ray, 0, 1.0, &mut st));
-                    stats = st.stats;
+                    let mut sum = Vec3::ZERO;
+                    let mut wsum = 0.0;
+                    for s in 0..spp {
+                        let mut sampler = PixelSampler::new(opts.seed, x, y, s, spp);
+                        let (jx, jy) = if spp == 1 { (0.5, 0.5) } else { sampler.next_2d() };
+                        let lens = sampler.next_2d();
+                        let time = sampler.next_1d();
+                        let ray = camera.lens_ray(x as f32 + jx, y as f32 + jy, lens);
+                        let mut st = PathState::new(stats, time, sampler);
+                        st.stats.primary += 1;
+                        let w = opts.filter.weight(jx - 0.5, jy - 0.5);
+                        sum += radiance(scene, &ray, 0, 1.0, &mut st) * w;
+                        wsum += w;
+                        stats = st.stats;
+                    }
+                    px.push(sum / wsum);
                 }
             }
             on_tile(px.len() as u64);

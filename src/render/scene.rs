@@ -5,7 +5,9 @@
 //! instances of meshes, spheres — are primitives of a top-level BVH, each with
 //! an optional object-to-world transform. Rays are moved into object space
 //! without renormalizing, so `t` means the same in both spaces. Infinite planes
-//! have no box and are tested beside the BVH.
+//! have no box and are tested beside the BVH. Moving objects (`MotionBlur`)
+//! sit in the top level with boxes swept over the shutter interval, so one
+//! BVH serves every ray time.
 
 use crate::accel::{Bvh, TriHit};
 use crate::geometry::mesh::vertex_normals;
@@ -15,7 +17,7 @@ use crate::render::camera::Camera;
 use crate::scene::description::{Description, MeshSource, Shape};
 use crate::scene::ply::read_ply;
 use crate::scene::{SceneError, Warning};
-use crate::shading::{Material, PointLight};
+use crate::shading::{AreaLight, Material, PointLight};
 use rayon::prelude::*;
 use std::collections::HashMap;
 
@@ -30,18 +32,23 @@ enum Geom {
 struct Prim {
     geom: Geom,
     material: u32,
+    /// Translation over the shutter interval (zero for static objects).
+    motion: Vec3,
     /// `None` when the object's transform is the identity, which skips two
     /// matrix-vector products per ray.
     xf: Option<Box<Transform>>,
 }
 
 impl Prim {
-    /// The ray in the primitive's object space (same `t` as in world space).
+    /// The ray at `time` in the primitive's object space (same `t` as in
+    /// world space): motion blur undoes the object's translation at that time,
+    /// then the inverse transform.
     #[inline]
-    fn to_local(&self, ray: &Ray) -> Ray {
+    fn to_local(&self, ray: &Ray, time: f32) -> Ray {
+        let o = ray.o - self.motion * time;
         match &self.xf {
-            Some(xf) => Ray::new(xf.inv_point(ray.o), xf.inv_vector(ray.d)),
-            None => *ray,
+            Some(xf) => Ray::new(xf.inv_point(o), xf.inv_vector(ray.d)),
+            None => Ray::new(o, ray.d),
         }
     }
 }
@@ -79,6 +86,8 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Point lights.
     pub lights: Vec<PointLight>,
+    /// Area lights.
+    pub area_lights: Vec<AreaLight>,
     /// Ambient light.
     pub ambient: Vec3,
     /// Colour of rays that miss.
@@ -146,7 +155,7 @@ impl Scene {
                     continue;
                 }
             }
-            prims.push(Prim { geom, material, xf });
+            prims.push(Prim { geom, material, motion: o.motion, xf });
         }
         let bounds: Vec<Aabb> = prims.iter().map(|p| prim_bounds(p, &meshes)).collect();
         let tlas = Bvh::build(&bounds);
@@ -165,6 +174,7 @@ impl Scene {
                 .iter()
                 .map(|l| PointLight { position: l.position, intensity: l.intensity })
                 .collect(),
+            area_lights: desc.area_lights.iter().map(AreaLight::from_desc).collect(),
             ambient: desc.ambient_light,
             background: desc.background,
             shadow_epsilon: desc.shadow_ray_epsilon,
@@ -180,8 +190,9 @@ impl Scene {
         self.meshes.iter().map(Mesh::triangle_count).sum()
     }
 
-    /// The closest hit along `ray` beyond the intersection epsilon.
-    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+    /// The closest hit along `ray` at shutter `time` in [0, 1), beyond the
+    /// intersection epsilon.
+    pub fn intersect(&self, ray: &Ray, time: f32) -> Option<Hit> {
         let t_min = self.intersection_epsilon;
         let mut best_t = f32::INFINITY;
         let mut best = None;
@@ -195,7 +206,7 @@ impl Scene {
             let mut hit = false;
             for pi in range {
                 let p = &self.prims[pi];
-                let local = p.to_local(ray);
+                let local = p.to_local(ray, time);
                 match p.geom {
                     Geom::Mesh(m) => {
                         if let Some(h) = self.meshes[m as usize].intersect(&local, t_min, *t_max) {
@@ -231,7 +242,7 @@ impl Scene {
             Closest::Sphere(pi) => {
                 let p = &self.prims[pi];
                 let Geom::Sphere(s) = p.geom else { return None };
-                let n = s.normal(p.to_local(ray).at(best_t));
+                let n = s.normal(p.to_local(ray, time).at(best_t));
                 (pi, n, n)
             }
         };
@@ -248,8 +259,9 @@ impl Scene {
         Some(Hit { t: best_t, p: ray.at(best_t), ng, ns, material: p.material })
     }
 
-    /// Whether anything lies on `ray` between the intersection epsilon and `t_max`.
-    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+    /// Whether anything lies on `ray` at `time` between the intersection
+    /// epsilon and `t_max`.
+    pub fn occluded(&self, ray: &Ray, t_max: f32, time: f32) -> bool {
         let t_min = self.intersection_epsilon;
         if self.planes.iter().any(|(pl, _)| pl.intersect(ray, t_min, t_max).is_some()) {
             return true;
@@ -257,7 +269,7 @@ impl Scene {
         self.tlas.any(ray, t_max, |range, t_max| {
             range.into_iter().any(|pi| {
                 let p = &self.prims[pi];
-                let local = p.to_local(ray);
+                let local = p.to_local(ray, time);
                 match p.geom {
                     Geom::Mesh(m) => self.meshes[m as usize].occluded(&local, t_min, t_max),
                     Geom::Sphere(s) => s.intersect(&local, t_min, t_max).is_some(),
@@ -267,15 +279,18 @@ impl Scene {
     }
 }
 
+/// World bounds over the whole shutter interval: a translation sweeps the box
+/// from its place at time 0 to its place at time 1.
 fn prim_bounds(p: &Prim, meshes: &[Mesh]) -> Aabb {
     let b = match p.geom {
         Geom::Mesh(m) => meshes[m as usize].bounds(),
         Geom::Sphere(s) => s.bounds(),
     };
-    match &p.xf {
+    let b = match &p.xf {
         Some(xf) => xf.aabb(&b),
         None => b,
-    }
+    };
+    b.union(Aabb::new(b.min + p.motion, b.max + p.motion))
 }
 
 /// Builds the mesh of object `i` (a Mesh or a Triangle), in object space.

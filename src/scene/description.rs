@@ -27,6 +27,8 @@ pub struct Description {
     pub ambient_light: Vec3,
     /// Point lights.
     pub point_lights: Vec<PointLightDesc>,
+    /// Square area lights.
+    pub area_lights: Vec<AreaLightDesc>,
     /// Materials, referenced by index from objects.
     pub materials: Vec<MaterialDesc>,
     /// Shared vertex positions (the course's 1-based `VertexData`).
@@ -76,6 +78,10 @@ pub struct CameraDesc {
     pub image_name: String,
     /// Samples per pixel requested by the scene.
     pub num_samples: u32,
+    /// Edge of the square lens (0: a pinhole).
+    pub aperture_size: f32,
+    /// Distance along the gaze of the plane in focus.
+    pub focus_distance: f32,
     /// Where.
     pub loc: Loc,
 }
@@ -87,6 +93,21 @@ pub struct PointLightDesc {
     pub position: Vec3,
     /// RGB intensity.
     pub intensity: Vec3,
+    /// Where.
+    pub loc: Loc,
+}
+
+/// A square area light of uniform radiance.
+#[derive(Clone, Debug)]
+pub struct AreaLightDesc {
+    /// Centre.
+    pub position: Vec3,
+    /// Unit normal.
+    pub normal: Vec3,
+    /// Edge length.
+    pub size: f32,
+    /// RGB radiance.
+    pub radiance: Vec3,
     /// Where.
     pub loc: Loc,
 }
@@ -127,6 +148,8 @@ pub struct MaterialDesc {
     pub absorption_coefficient: Vec3,
     /// Imaginary part of the index of refraction (conductor).
     pub absorption_index: f32,
+    /// Glossiness of mirrors and conductors: how far reflected rays stray (0: perfect).
+    pub roughness: f32,
     /// Where.
     pub loc: Loc,
 }
@@ -189,6 +212,9 @@ pub struct ObjectDesc {
     /// Object to world, composed in the listed order (and, for instances, on
     /// top of the base's transform unless `resetTransform` is true).
     pub transform: Transform,
+    /// Translation over the shutter interval (`MotionBlur`): at time `τ` the
+    /// object is moved by `τ · motion` after its transform.
+    pub motion: Vec3,
     /// Where.
     pub loc: Loc,
 }

@@ -42,6 +42,8 @@ pub struct Material {
     pub mirror: Vec3,
     /// The perfect-specular part.
     pub kind: Specular,
+    /// Glossy spread of mirror and conductor reflections (0: perfect).
+    pub roughness: f32,
 }
 
 impl Material {
@@ -62,6 +64,7 @@ impl Material {
             phong: d.phong_exponent,
             mirror: d.mirror,
             kind,
+            roughness: d.roughness,
         }
     }
 }

@@ -9,6 +9,8 @@
 //! | `ImageResolution` | width height |
 //! | `ImageName` | output file name: a relative path without `..`, ending in one of [`OUTPUT_EXTENSIONS`] |
 //! | `NumSamples` | samples per pixel (default 1) |
+//! | `ApertureSize` | edge of the square lens (default 0: a pinhole) |
+//! | `FocusDistance` | distance along the gaze that is in focus (needed with an aperture) |
 //!
 //! The course's `hw1/xml/spheres*.xml` give five numbers to `NearPlane`; the
 //! first four are used and a warning says so.
@@ -55,6 +57,8 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
         "NumSamples",
         "GazePoint",
         "FovY",
+        "ApertureSize",
+        "FocusDistance",
     ];
     w.unknown_children(c, known);
 
@@ -125,6 +129,21 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
         }
         None => 1,
     };
+    let aperture_size = r.float_or(c, "ApertureSize", 0.0)?;
+    if aperture_size < 0.0 {
+        return Err(r.err(c, format!("<ApertureSize> must not be negative, found {aperture_size}")));
+    }
+    let focus_distance = match c.child("FocusDistance") {
+        Some(f) => {
+            let d = r.float(f)?;
+            if d <= 0.0 {
+                return Err(r.err(f, format!("<FocusDistance> must be positive, found {d}")));
+            }
+            d
+        }
+        None if aperture_size > 0.0 => return Err(r.err(c, "<ApertureSize> needs a <FocusDistance>")),
+        None => near_distance,
+    };
     Ok(CameraDesc {
         id: c.attr("id").unwrap_or("").to_string(),
         position,
@@ -134,6 +153,8 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
         resolution: (wpx as u32, hpx as u32),
         image_name,
         num_samples,
+        aperture_size,
+        focus_distance,
         loc: c.loc.clone(),
     })
 }

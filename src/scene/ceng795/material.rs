@@ -9,6 +9,7 @@
 //! | `RefractionIndex` | dielectric index, or a conductor's real part | 1 |
 //! | `AbsorptionCoefficient` | dielectric Beer's-law RGB coefficient | 0 |
 //! | `AbsorptionIndex` | a conductor's imaginary part | 0 |
+//! | `Roughness` | glossy spread of mirror and conductor reflections | 0 |
 //!
 //! Only `type="mirror"` (or conductor) makes `MirrorReflectance` reflect: the
 //! course's scenes give plain materials a mirror reflectance that their
@@ -46,6 +47,7 @@ fn read(r: &Reader, m: &Element, w: &mut Warnings) -> Result<MaterialDesc, Scene
             "RefractionIndex",
             "AbsorptionCoefficient",
             "AbsorptionIndex",
+            "Roughness",
         ],
     );
     let id = m.attr("id").map(str::trim).filter(|s| !s.is_empty());
@@ -82,6 +84,15 @@ fn read(r: &Reader, m: &Element, w: &mut Warnings) -> Result<MaterialDesc, Scene
         refraction_index,
         absorption_coefficient,
         absorption_index: r.float_or(m, "AbsorptionIndex", 0.0)?,
+        roughness: non_negative_roughness(r, m)?,
         loc: m.loc.clone(),
     })
+}
+
+fn non_negative_roughness(r: &Reader, m: &Element) -> Result<f32, SceneError> {
+    let v = r.float_or(m, "Roughness", 0.0)?;
+    if v < 0.0 {
+        return Err(r.err(m, format!("<Roughness> must not be negative, found {v}")));
+    }
+    Ok(v)
 }

@@ -107,9 +107,9 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
     if cameras.is_empty() {
         return Err(r.err(root, "the scene has no <Camera>, so there is no image to render"));
     }
-    let (ambient_light, point_lights) = match root.child("Lights") {
+    let (ambient_light, point_lights, area_lights) = match root.child("Lights") {
         Some(l) => lights::read_all(&r, l, &mut w)?,
-        None => (Vec3::ZERO, Vec::new()),
+        None => (Vec3::ZERO, Vec::new(), Vec::new()),
     };
     let materials = match root.child("Materials") {
         Some(m) => material::read_all(&r, m, &mut w)?,
@@ -149,6 +149,7 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
         cameras,
         ambient_light,
         point_lights,
+        area_lights,
         materials,
         vertices,
         objects,

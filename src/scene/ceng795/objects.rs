@@ -8,6 +8,9 @@
 //! | `Plane` | `Material`, `Transformations`, `Point` (a vertex index), `Normal` |
 //! | `MeshInstance` | `baseMeshId`, `resetTransform`, `Material`, `Transformations` |
 //!
+//! Every object but a plane may have a `MotionBlur` translation (x y z): it
+//! moves by that much, after its transform, over the shutter interval.
+//!
 //! A `MeshInstance` may instance another instance. Its transform is its own
 //! list applied after the base's full transform, or alone when
 //! `resetTransform="true"` (hw2 spec, eq. 3). Degenerate inline triangles (two
@@ -65,7 +68,7 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Vec<O
         let shape = match el.name.as_str() {
             "Mesh" => mesh(ctx, el, w)?,
             "Triangle" => {
-                w.unknown_children(el, &["Material", "Transformations", "Indices"]);
+                w.unknown_children(el, &["Material", "Transformations", "Indices", "MotionBlur"]);
                 let ix = r.uints(r.required(el, "Indices")?)?;
                 if ix.len() != 3 {
                     return Err(r.err(el, format!("<Indices> needs 3 vertex indices, found {}", ix.len())));
@@ -76,7 +79,7 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Vec<O
                 }
             }
             "Sphere" => {
-                w.unknown_children(el, &["Material", "Transformations", "Center", "Radius"]);
+                w.unknown_children(el, &["Material", "Transformations", "Center", "Radius", "MotionBlur"]);
                 let c = r.required(el, "Center")?;
                 let center = vertex(ctx, c, r.uint(c)?)?;
                 let re = r.required(el, "Radius")?;
@@ -98,7 +101,7 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Vec<O
                 Shape::Plane { point, normal: normal.normalize() }
             }
             "MeshInstance" => {
-                w.unknown_children(el, &["Material", "Transformations"]);
+                w.unknown_children(el, &["Material", "Transformations", "MotionBlur"]);
                 let base_id = el
                     .attr("baseMeshId")
                     .map(str::trim)
@@ -119,6 +122,7 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Vec<O
                     shape: Shape::Instance { mesh: usize::MAX },
                     material: usize::MAX,
                     transform: Transform::IDENTITY,
+                    motion: ctx.r.vec3_or(el, "MotionBlur", Vec3::ZERO)?,
                     loc: el.loc.clone(),
                 });
                 continue;
@@ -134,6 +138,7 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Vec<O
             shape,
             material: material(ctx, r.required(el, "Material")?)?,
             transform: transform(ctx, el)?,
+            motion: if el.name == "Plane" { Vec3::ZERO } else { r.vec3_or(el, "MotionBlur", Vec3::ZERO)? },
             loc: el.loc.clone(),
         });
     }
@@ -151,7 +156,7 @@ fn register(ids: &mut HashMap<String, usize>, id: &str, index: usize, el: &Eleme
 
 fn mesh(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, SceneError> {
     let r = &ctx.r;
-    w.unknown_children(el, &["Material", "Transformations", "Faces"]);
+    w.unknown_children(el, &["Material", "Transformations", "Faces", "MotionBlur"]);
     let smooth = match el.attr("shadingMode").map(str::trim) {
         None | Some("") | Some("flat") => false,
         Some("smooth") => true,

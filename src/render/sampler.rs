@@ -1,0 +1,194 @@
+//! Deterministic, well-stratified sample patterns for distribution ray tracing.
+//!
+//! Every camera sample needs several independent random dimensions: the
+//! position in the pixel, on the lens, in time, on each area light, and for
+//! each glossy bounce. Each 2D dimension uses Kensler's correlated
+//! multi-jittered pattern ("Correlated Multi-Jittered Sampling", Pixar
+//! Technical Memo 13-01, 2013): for `n` samples the points are stratified in
+//! both the `n` horizontal and `n` vertical strips and in an `m × ⌈n/m⌉` grid
+//! (m = ⌊√n⌋), for any `n`, not only squares. The pattern is chosen by a hash
+//! of (seed, pixel, dimension), so dimensions are decorrelated from each other
+//! and from neighbouring pixels, and sample `i` of a pixel is the same whatever
+//! thread renders it — the image depends only on the scene, the sample count
+//! and the seed.
+
+/// The samples of one pixel: pattern seeds come from the pixel, sample
+/// `index` of `count` is drawn, and each call moves to the next dimension.
+#[derive(Clone, Copy, Debug)]
+pub struct PixelSampler {
+    pixel_hash: u32,
+    index: u32,
+    count: u32,
+    dim: u32,
+}
+
+impl PixelSampler {
+    /// Sample `index` of `count` for the pixel `(x, y)` under `seed`.
+    #[inline]
+    pub fn new(seed: u32, x: u32, y: u32, index: u32, count: u32) -> Self {
+        let pixel_hash = hash3(seed, x, y);
+        PixelSampler { pixel_hash, index, count: count.max(1), dim: 0 }
+    }
+
+    /// The next 2D dimension: a point of `[0, 1)²`.
+    #[inline]
+    pub fn next_2d(&mut self) -> (f32, f32) {
+        let p = hash2(self.pixel_hash, self.dim);
+        self.dim += 1;
+        cmj(self.index % self.count, self.count, p)
+    }
+
+    /// The next 1D dimension: a value in `[0, 1)` stratified over the samples.
+    #[inline]
+    pub fn next_1d(&mut self) -> f32 {
+        let p = hash2(self.pixel_hash, self.dim);
+        self.dim += 1;
+        let s = permute(self.index % self.count, self.count, p);
+        ((s as f32 + rand_float(self.index, p ^ 0x9e37_79b9)) / self.count as f32).min(ONE_MINUS_EPS)
+    }
+}
+
+const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
+
+/// Point `s` of an `n`-point correlated multi-jittered pattern `p`.
+fn cmj(s: u32, n: u32, p: u32) -> (f32, f32) {
+    let m = (n as f32).sqrt() as u32;
+    let m = m.max(1);
+    let k = n.div_ceil(m);
+    let s = permute(s, n, p.wrapping_mul(0x5163_3e2d));
+    let sx = permute(s % m, m, p.wrapping_mul(0x68bc_21eb));
+    let sy = permute(s / m, k, p.wrapping_mul(0x02e5_be93));
+    let jx = rand_float(s, p.wrapping_mul(0x967a_889b));
+    let jy = rand_float(s, p.wrapping_mul(0x368c_c8b7));
+    let x = (sx as f32 + (sy as f32 + jx) / k as f32) / m as f32;
+    let y = (s as f32 + jy) / n as f32;
+    (x.min(ONE_MINUS_EPS), y.min(ONE_MINUS_EPS))
+}
+
+/// A pseudo-random permutation of `0..l` selected by `p` (Kensler 2013): a
+/// hash that is a bijection on the next power of two, cycle-walked into range.
+fn permute(mut i: u32, l: u32, p: u32) -> u32 {
+    if l <= 1 {
+        return 0;
+    }
+    let mut w = l - 1;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    loop {
+        i ^= p;
+        i = i.wrapping_mul(0xe170_893d);
+        i ^= p >> 16;
+        i ^= (i & w) >> 4;
+        i ^= p >> 8;
+        i = i.wrapping_mul(0x0929_eb3f);
+        i ^= p >> 23;
+        i ^= (i & w) >> 1;
+        i = i.wrapping_mul(1 | (p >> 27));
+        i = i.wrapping_mul(0x6935_fa69);
+        i ^= (i & w) >> 11;
+        i = i.wrapping_mul(0x74dc_b303);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0x9e50_1cc3);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0xc860_a3df);
+        i &= w;
+        i ^= i >> 5;
+        if i < l {
+            break;
+        }
+    }
+    (i.wrapping_add(p)) % l
+}
+
+/// A hashed float in `[0, 1)` for index `i` under pattern `p`.
+fn rand_float(mut i: u32, p: u32) -> f32 {
+    i ^= p;
+    i ^= i >> 17;
+    i ^= i >> 10;
+    i = i.wrapping_mul(0xb365_34e5);
+    i ^= i >> 12;
+    i ^= i >> 21;
+    i = i.wrapping_mul(0x93fc_4795);
+    i ^= 0xdf6e_307f;
+    i ^= i >> 17;
+    i = i.wrapping_mul(1 | (p >> 18));
+    (i >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+}
+
+/// A 32-bit mix of two words (the finalizer of MurmurHash3 over a combination).
+#[inline]
+fn hash2(a: u32, b: u32) -> u32 {
+    let mut h = a ^ b.wrapping_mul(0x9e37_79b9).rotate_left(15);
+    h ^= h >> 16;
+    h = h.wrapping_mul(0x85eb_ca6b);
+    h ^= h >> 13;
+    h = h.wrapping_mul(0xc2b2_ae35);
+    h ^ (h >> 16)
+}
+
+#[inline]
+fn hash3(a: u32, b: u32, c: u32) -> u32 {
+    hash2(hash2(a, b), c)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn permute_is_a_permutation() {
+        for l in [1u32, 2, 3, 7, 16, 100, 400] {
+            for p in [0u32, 1, 0xdead_beef] {
+                let mut seen = vec![false; l as usize];
+                for i in 0..l {
+                    let j = permute(i, l, p) as usize;
+                    assert!(!seen[j], "l={l} p={p}: {j} twice");
+                    seen[j] = true;
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn cmj_stratifies_rows_columns_and_cells() {
+        for n in [4u32, 16, 100, 400, 7, 50] {
+            let pts: Vec<(f32, f32)> = (0..n).map(|s| cmj(s, n, 1234)).collect();
+            // Each of the n horizontal strips holds exactly one point.
+            let mut rows: Vec<u32> = pts.iter().map(|p| (p.1 * n as f32) as u32).collect();
+            rows.sort_unstable();
+            assert_eq!(rows, (0..n).collect::<Vec<_>>(), "n={n}");
+            // And each of the m columns holds about n/m points.
+            let m = (n as f32).sqrt() as u32;
+            let mut cols = vec![0u32; m as usize];
+            for p in &pts {
+                assert!((0.0..1.0).contains(&p.0) && (0.0..1.0).contains(&p.1));
+                cols[(p.0 * m as f32) as usize] += 1;
+            }
+            assert!(cols.iter().all(|&c| c >= n / m - 1 && c <= n.div_ceil(m)), "n={n}: {cols:?}");
+        }
+    }
+
+    #[test]
+    fn dimensions_differ_and_samples_repeat_exactly() {
+        let mut a = PixelSampler::new(7, 3, 4, 5, 16);
+        let mut b = PixelSampler::new(7, 3, 4, 5, 16);
+        let (p0, p1) = (a.next_2d(), a.next_2d());
+        assert_ne!(p0, p1);
+        assert_eq!(b.next_2d(), p0);
+        assert_eq!(b.next_2d(), p1);
+        let mut c = PixelSampler::new(8, 3, 4, 5, 16);
+        assert_ne!(c.next_2d(), p0);
+    }
+
+    #[test]
+    fn one_d_dimension_is_stratified() {
+        let n = 64;
+        let mut v: Vec<u32> =
+            (0..n).map(|i| (PixelSampler::new(1, 2, 3, i, n).next_1d() * n as f32) as u32).collect();
+        v.sort_unstable();
+        assert_eq!(v, (0..n).collect::<Vec<_>>());
+    }
+}
