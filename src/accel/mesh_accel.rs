@@ -71,6 +71,15 @@ impl MeshAccel {
     /// The closest hit with `t_min < t < t_max`, if any.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<TriHit> {
+        self.intersect_culled(ray, t_min, t_max, 0.0)
+    }
+
+    /// The closest hit, skipping triangles whose winding normal `n` has
+    /// `cull · (n · d) > 0`: `cull = 1` culls back faces, `-1` front faces
+    /// (for a mirroring transform), `0` nothing. The facing is checked only
+    /// for triangles the ray actually hits, so culling costs next to nothing.
+    #[inline]
+    pub fn intersect_culled(&self, ray: &Ray, t_min: f32, t_max: f32, cull: f32) -> Option<TriHit> {
         let wr = WatertightRay::new(ray);
         let mut best = None;
         let tris = &self.tris[..];
@@ -78,6 +87,9 @@ impl MeshAccel {
             let mut found = false;
             for tri in &tris[range] {
                 if let Some(h) = wr.intersect(tri, t_min, *t_max) {
+                    if cull != 0.0 && cull * tri.normal().dot(ray.d) > 0.0 {
+                        continue;
+                    }
                     *t_max = h.t;
                     best = Some(TriHit { t: h.t, prim: tri.prim, u: h.u, v: h.v });
                     found = true;

@@ -122,6 +122,13 @@ impl WatertightRay {
 }
 
 impl Triangle {
+    /// The (unnormalized) normal of the winding: `(v1 - v0) × (v2 - v0)`.
+    #[inline]
+    pub fn normal(&self) -> crate::math::Vec3 {
+        let [a, b, c] = self.v.map(crate::math::Vec3::from);
+        (b - a).cross(c - a)
+    }
+
     /// Builds a triangle from three vertices.
     pub fn new(p0: Vec3, p1: Vec3, p2: Vec3, prim: u32) -> Triangle {
         Triangle { v: [p0.to_array(), p1.to_array(), p2.to_array()], prim }

@@ -30,10 +30,10 @@ impl Mesh {
         self.triangles.len()
     }
 
-    /// The closest hit.
+    /// The closest hit; `cull` as in [`MeshAccel::intersect_culled`].
     #[inline]
-    pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<TriHit> {
-        self.accel.intersect(ray, t_min, t_max)
+    pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32, cull: f32) -> Option<TriHit> {
+        self.accel.intersect_culled(ray, t_min, t_max, cull)
     }
 
     /// Whether anything is hit.

@@ -103,7 +103,7 @@ impl RayStats {
 /// Radiance arriving along `ray`, which is at recursion `depth` (0 for camera rays).
 /// `weight` is the path's accumulated weight so far (1 for camera rays).
 pub fn radiance(scene: &Scene, ray: &Ray, depth: u32, weight: f32, st: &mut PathState) -> Vec3 {
-    match scene.intersect(ray, st.time) {
+    match scene.intersect(ray, st.time, depth == 0) {
         Some(hit) => shade(scene, ray, &hit, depth, weight, st),
         None => scene.background,
     }

@@ -37,6 +37,9 @@ struct Prim {
     /// `None` when the object's transform is the identity, which skips two
     /// matrix-vector products per ray.
     xf: Option<Box<Transform>>,
+    /// -1 when the transform mirrors (negative determinant), else 1: the
+    /// winding of a mirrored triangle, and so the side its normal is on, flips.
+    handedness: f32,
 }
 
 impl Prim {
@@ -155,7 +158,8 @@ impl Scene {
                     continue;
                 }
             }
-            prims.push(Prim { geom, material, motion: o.motion, xf });
+            let handedness = if o.transform.swaps_handedness() { -1.0 } else { 1.0 };
+            prims.push(Prim { geom, material, motion: o.motion, xf, handedness });
         }
         let bounds: Vec<Aabb> = prims.iter().map(|p| prim_bounds(p, &meshes)).collect();
         let tlas = Bvh::build(&bounds);
@@ -191,8 +195,10 @@ impl Scene {
     }
 
     /// The closest hit along `ray` at shutter `time` in [0, 1), beyond the
-    /// intersection epsilon.
-    pub fn intersect(&self, ray: &Ray, time: f32) -> Option<Hit> {
+    /// intersection epsilon. With `cull_back_faces`, triangles seen from the
+    /// back of their winding are skipped (the course culls them for camera
+    /// rays; shadow and secondary rays see both sides).
+    pub fn intersect(&self, ray: &Ray, time: f32, cull_back_faces: bool) -> Option<Hit> {
         let t_min = self.intersection_epsilon;
         let mut best_t = f32::INFINITY;
         let mut best = None;
@@ -209,7 +215,8 @@ impl Scene {
                 let local = p.to_local(ray, time);
                 match p.geom {
                     Geom::Mesh(m) => {
-                        if let Some(h) = self.meshes[m as usize].intersect(&local, t_min, *t_max) {
+                        let cull = if cull_back_faces { p.handedness } else { 0.0 };
+                        if let Some(h) = self.meshes[m as usize].intersect(&local, t_min, *t_max, cull) {
                             *t_max = h.t;
                             best = Some(Closest::Triangle(pi, h));
                             hit = true;
@@ -235,9 +242,11 @@ impl Scene {
                 return Some(Hit { t: best_t, p: ray.at(best_t), ng: pl.normal, ns: pl.normal, material });
             }
             Closest::Triangle(pi, h) => {
-                let Geom::Mesh(m) = self.prims[pi].geom else { return None };
+                let p = &self.prims[pi];
+                let Geom::Mesh(m) = p.geom else { return None };
                 let (ng, ns) = self.meshes[m as usize].normals_at(&h);
-                (pi, ng, ns)
+                // The world winding of a mirrored triangle is reversed.
+                (pi, ng * p.handedness, ns * p.handedness)
             }
             Closest::Sphere(pi) => {
                 let p = &self.prims[pi];
