@@ -119,48 +119,7 @@ fn shade(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, weight: f32, st: &mut 
     let mut color = Vec3::ZERO;
 
     if !inside_dielectric {
-        color += m.ambient * scene.ambient;
-        let (n, ng) = (hit.ns, hit.ng);
-        let origin = hit.p + ng * eps;
-        for light in &scene.lights {
-            let to_light = light.position - origin;
-            let d2 = to_light.length_squared();
-            let dist = d2.sqrt();
-            let l = to_light / dist;
-            let cos = n.dot(l);
-            if cos <= 0.0 {
-                continue;
-            }
-            st.stats.shadow += 1;
-            // The shadow ray reaches a little past the light, so a light lying exactly
-            // on a surface (hw2 mirror_room puts one in the ceiling plane) is blocked
-            // by it consistently, as in the references, not by per-pixel rounding.
-            if scene.occluded(&Ray::new(origin, l), dist + eps, st.time) {
-                continue;
-            }
-            let e = light.intensity / (light.position - hit.p).length_squared();
-            color += blinn_phong(m, n, l, ray.d, cos) * e;
-        }
-        for light in &scene.area_lights {
-            let q = light.point(st.sampler.next_2d());
-            let to_light = q - origin;
-            let d2 = to_light.length_squared();
-            let dist = d2.sqrt();
-            let l = to_light / dist;
-            let cos = n.dot(l);
-            let cos_light = light.normal.dot(l).abs();
-            if cos <= 0.0 || cos_light == 0.0 {
-                continue;
-            }
-            st.stats.shadow += 1;
-            // Stopping short of the light's own plane: it is an imaginary square,
-            // not geometry, and a surface it lies on must not shadow it.
-            if scene.occluded(&Ray::new(origin, l), dist - eps, st.time) {
-                continue;
-            }
-            let e = light.radiance * (light.area * cos_light / (q - hit.p).length_squared());
-            color += blinn_phong(m, n, l, ray.d, cos) * e;
-        }
+        color += direct(scene, m, hit, ray, st);
     }
 
     if depth < scene.max_depth {
@@ -218,6 +177,56 @@ fn shade(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, weight: f32, st: &mut 
         // The ray reached this exit point through the medium: Beer's law over
         // the distance covered (directions are unit length, so t is distance).
         color *= (-absorption * hit.t).exp();
+    }
+    color
+}
+
+/// Ambient plus the light that reaches the hit directly from every point and
+/// area light, with shadow rays.
+fn direct(scene: &Scene, m: &Material, hit: &Hit, ray: &Ray, st: &mut PathState) -> Vec3 {
+    let mut color = m.ambient * scene.ambient;
+    // The winding normals, not ones flipped towards the eye: see the module doc.
+    let (n, ng) = (hit.ns, hit.ng);
+    let eps = scene.shadow_epsilon;
+    let origin = hit.p + ng * eps;
+    for light in &scene.lights {
+        let to_light = light.position - origin;
+        let d2 = to_light.length_squared();
+        let dist = d2.sqrt();
+        let l = to_light / dist;
+        let cos = n.dot(l);
+        if cos <= 0.0 {
+            continue;
+        }
+        st.stats.shadow += 1;
+        // The shadow ray reaches a little past the light, so a light lying exactly
+        // on a surface (hw2 mirror_room puts one in the ceiling plane) is blocked
+        // by it consistently, as in the references, not by per-pixel rounding.
+        if scene.occluded(&Ray::new(origin, l), dist + eps, st.time) {
+            continue;
+        }
+        let e = light.intensity / (light.position - hit.p).length_squared();
+        color += blinn_phong(m, n, l, ray.d, cos) * e;
+    }
+    for light in &scene.area_lights {
+        let q = light.point(st.sampler.next_2d());
+        let to_light = q - origin;
+        let d2 = to_light.length_squared();
+        let dist = d2.sqrt();
+        let l = to_light / dist;
+        let cos = n.dot(l);
+        let cos_light = light.normal.dot(l).abs();
+        if cos <= 0.0 || cos_light == 0.0 {
+            continue;
+        }
+        st.stats.shadow += 1;
+        // Stopping short of the light's own plane: it is an imaginary square,
+        // not geometry, and a surface it lies on must not shadow it.
+        if scene.occluded(&Ray::new(origin, l), dist - eps, st.time) {
+            continue;
+        }
+        let e = light.radiance * (light.area * cos_light / (q - hit.p).length_squared());
+        color += blinn_phong(m, n, l, ray.d, cos) * e;
     }
     color
 }
