@@ -1,6 +1,7 @@
 //! Tests of the PLY loader: encodings, layouts, course files and every error.
 
 use super::*;
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// A small mesh written in any encoding: header lines after `format`,
