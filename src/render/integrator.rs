@@ -20,9 +20,11 @@
 //! light sample and per glossy bounce. An area light contributes, per sample,
 //! `L · A · |n_l · ω| / d²` as the irradiance of one point drawn uniformly on
 //! its square (hw3 spec eq. 1), shadowed by one ray to that point. Roughness
-//! `r` turns a mirror or conductor glossy: the reflected direction `R` is
-//! moved to `R + r (ξ₁ - ½) u + r (ξ₂ - ½) v` in a frame `(u, v)` around it
-//! (the course's model), and renormalized.
+//! `r` makes a mirror or conductor glossy and a dielectric frosted: the
+//! reflected (and refracted) direction `R` is moved to
+//! `R + r (ξ₁ - ½) u + r (ξ₂ - ½) v` in a frame `(u, v)` around it (the course's
+//! model), and renormalized. hw3 `metal_glass_plates` shows the course applies
+//! it to glass as well.
 //!
 //! Two guards keep a hostile scene (glass inside glass, a large
 //! `MaxRecursionDepth`) from spawning `2^depth` rays per pixel: a branch whose
@@ -125,17 +127,8 @@ fn shade(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, weight: f32, st: &mut 
     if depth < scene.max_depth {
         let cos_i = -ray.d.dot(n);
         let roughness = m.roughness;
-        let reflected = |st: &mut PathState| {
-            let r = reflect(ray.d, n);
-            let r = if roughness > 0.0 {
-                let (u, v) = orthonormal_basis(r);
-                let (a, b) = st.sampler.next_2d();
-                (r + (u * (a - 0.5) + v * (b - 0.5)) * roughness).normalize()
-            } else {
-                r
-            };
-            Ray::new(hit.p + ng * eps, r)
-        };
+        let reflected =
+            |st: &mut PathState| Ray::new(hit.p + ng * eps, glossy(reflect(ray.d, n), roughness, st));
         match m.kind {
             Specular::None => {}
             Specular::Mirror => {
@@ -157,12 +150,12 @@ fn shade(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, weight: f32, st: &mut 
                 let (n1, n2) = if entering { (1.0, ior) } else { (ior, 1.0) };
                 let (f, cos_t) = fresnel::dielectric(cos_i, n1, n2);
                 if st.spawn(weight * f) {
-                    let r = Ray::new(hit.p + ng * eps, reflect(ray.d, n));
+                    let r = reflected(st);
                     color += f * radiance(scene, &r, depth + 1, weight * f, st);
                 }
                 if let Some(cos_t) = cos_t {
                     let eta = n1 / n2;
-                    let dir = (ray.d * eta + n * (eta * cos_i - cos_t)).normalize();
+                    let dir = glossy((ray.d * eta + n * (eta * cos_i - cos_t)).normalize(), roughness, st);
                     let w = weight * (1.0 - f);
                     if st.spawn(w) {
                         color +=
@@ -237,6 +230,18 @@ fn direct(scene: &Scene, m: &Material, hit: &Hit, ray: &Ray, st: &mut PathState)
 fn blinn_phong(m: &Material, n: Vec3, l: Vec3, d: Vec3, cos: f32) -> Vec3 {
     let h = (l - d).normalize();
     m.diffuse * cos + m.specular * n.dot(h).max(0.0).powf(m.phong)
+}
+
+/// `dir` moved by the course's glossy model: `dir + r (ξ₁ - ½) u + r (ξ₂ - ½) v`
+/// in a frame `(u, v)` around it, renormalized; `dir` itself when `r` is 0.
+#[inline]
+fn glossy(dir: Vec3, roughness: f32, st: &mut PathState) -> Vec3 {
+    if roughness <= 0.0 {
+        return dir;
+    }
+    let (u, v) = orthonormal_basis(dir);
+    let (a, b) = st.sampler.next_2d();
+    (dir + (u * (a - 0.5) + v * (b - 0.5)) * roughness).normalize()
 }
 
 /// Mirror reflection of `d` about the unit normal `n`.

@@ -9,7 +9,7 @@
 //! | `RefractionIndex` | dielectric index, or a conductor's real part | 1 |
 //! | `AbsorptionCoefficient` | dielectric Beer's-law RGB coefficient | 0 |
 //! | `AbsorptionIndex` | a conductor's imaginary part | 0 |
-//! | `Roughness` | glossy spread of mirror and conductor reflections | 0 |
+//! | `Roughness` | glossy spread of mirror, conductor and dielectric rays | 0 |
 //!
 //! Only `type="mirror"` (or conductor) makes `MirrorReflectance` reflect: the
 //! course's scenes give plain materials a mirror reflectance that their
