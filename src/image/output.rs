@@ -27,11 +27,12 @@ pub fn write_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()
         _ => PathBuf::from("."),
     };
     std::fs::create_dir_all(&dir).map_err(|e| err(crate::scene::io_reason(&e)))?;
-    let tmp = tempfile::Builder::new()
-        .prefix(".luster-")
-        .suffix(".tmp")
-        .tempfile_in(&dir)
-        .map_err(|e| err(crate::scene::io_reason(&e)))?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".luster-").suffix(".tmp");
+    // A temporary file is private (0600) by default; the image is not.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o644));
+    let tmp = builder.tempfile_in(&dir).map_err(|e| err(crate::scene::io_reason(&e)))?;
     {
         let mut w = std::io::BufWriter::new(tmp.as_file());
         image::write_buffer_with_format(&mut w, rgb, width, height, image::ExtendedColorType::Rgb8, format)
@@ -56,6 +57,12 @@ mod tests {
         let names: Vec<_> =
             std::fs::read_dir(dir.path().join("sub")).unwrap().map(|e| e.unwrap().file_name()).collect();
         assert_eq!(names.len(), 1);
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(&p).unwrap().permissions().mode() & 0o777;
+            assert_eq!(mode & 0o044, 0o044, "the image must be readable by others: {mode:o}");
+        }
     }
 
     #[test]
