@@ -26,7 +26,17 @@ pub struct Threshold {
 impl Threshold {
     /// Whether a comparison meets the bar.
     pub fn accepts(&self, c: &Comparison) -> bool {
-        c.psnr >= self.min_psnr && c.flip <= self.max_flip
+        self.psnr_ok(c) && self.flip_ok(c)
+    }
+
+    /// Whether the PSNR reaches the bar.
+    pub fn psnr_ok(&self, c: &Comparison) -> bool {
+        c.psnr >= self.min_psnr
+    }
+
+    /// Whether the mean FLIP error stays under the bar.
+    pub fn flip_ok(&self, c: &Comparison) -> bool {
+        c.flip <= self.max_flip
     }
 }
 

@@ -28,7 +28,7 @@ mod assets;
 pub mod html;
 pub mod json;
 
-use crate::conformance::{CaseResult, ImageResult};
+use crate::conformance::{CaseResult, ImageResult, Threshold};
 use crate::image::{Comparison, MetricSpace};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -375,7 +375,7 @@ fn image_entry(i: &ImageResult, root: &Path, outdir: &Path) -> ImageEntry {
         expected_source: i.expected.as_ref().map(|p| p.display().to_string()),
         heatmap,
         thumbs,
-        metrics: i.comparison.as_ref().map(|c| metrics(c, t.min_psnr, t.max_flip)),
+        metrics: i.comparison.as_ref().map(|c| metrics(c, t)),
         threshold: ThresholdEntry {
             min_psnr: t.min_psnr,
             max_flip: t.max_flip,
@@ -386,7 +386,7 @@ fn image_entry(i: &ImageResult, root: &Path, outdir: &Path) -> ImageEntry {
     }
 }
 
-fn metrics(c: &Comparison, min_psnr: f64, max_flip: f64) -> Metrics {
+fn metrics(c: &Comparison, t: &Threshold) -> Metrics {
     Metrics {
         width: c.width,
         height: c.height,
@@ -401,7 +401,7 @@ fn metrics(c: &Comparison, min_psnr: f64, max_flip: f64) -> Metrics {
         differing_percent: 100.0 * c.differing_fraction(),
         diff_bbox: c.diff_bbox.map(|(a, b, x, y)| [a, b, x, y]),
         max_abs_diff: c.max_abs_diff,
-        psnr_ok: c.psnr >= min_psnr,
-        flip_ok: c.flip <= max_flip,
+        psnr_ok: t.psnr_ok(c),
+        flip_ok: t.flip_ok(c),
     }
 }
