@@ -22,3 +22,4 @@ pub mod render;
 pub mod report;
 pub mod scene;
 pub mod shading;
+pub mod texture;

@@ -2,7 +2,7 @@
 //! vertex normals, and the BVH over them.
 
 use crate::accel::{MeshAccel, TriHit};
-use crate::math::{Aabb, Ray, Vec3};
+use crate::math::{Aabb, Ray, Vec2, Vec3};
 
 /// A triangle mesh ready to trace.
 pub struct Mesh {
@@ -11,13 +11,65 @@ pub struct Mesh {
     triangles: Vec<[u32; 3]>,
     /// Per-vertex normals when the mesh is smooth-shaded.
     normals: Option<Vec<Vec3>>,
+    /// Per-vertex texture coordinates, when the mesh has them.
+    uvs: Option<Vec<Vec2>>,
+}
+
+/// Texture coordinates and their frame at a point of a triangle.
+#[derive(Clone, Copy, Debug)]
+pub struct UvFrame {
+    /// Interpolated texture coordinates (zero without any).
+    pub uv: Vec2,
+    /// Object-space ∂p/∂u.
+    pub dpdu: Vec3,
+    /// Object-space ∂p/∂v.
+    pub dpdv: Vec3,
+    /// Object-space position.
+    pub p: Vec3,
 }
 
 impl Mesh {
     /// Builds a mesh; `normals`, when given, are per-vertex shading normals.
     pub fn new(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>, normals: Option<Vec<Vec3>>) -> Mesh {
         let accel = MeshAccel::build(&positions, &triangles);
-        Mesh { accel, positions, triangles, normals }
+        Mesh { accel, positions, triangles, normals, uvs: None }
+    }
+
+    /// Gives the mesh per-vertex texture coordinates (one per position).
+    pub fn with_uvs(mut self, uvs: Option<Vec<Vec2>>) -> Mesh {
+        self.uvs = uvs.filter(|u| u.len() == self.positions.len());
+        self
+    }
+
+    /// Texture coordinates, ∂p/∂u and ∂p/∂v (constant over a triangle: the
+    /// inverse of its uv-to-position map), and the position at a hit. Without
+    /// texture coordinates, or where they are degenerate, the derivatives are
+    /// any frame around the face.
+    pub fn uv_frame(&self, hit: &TriHit) -> UvFrame {
+        let t = self.triangles[hit.prim as usize];
+        let [a, b, c] = t.map(|i| self.positions[i as usize]);
+        let w = 1.0 - hit.u - hit.v;
+        let p = a * w + b * hit.u + c * hit.v;
+        let (e1, e2) = (b - a, c - a);
+        let fallback = || {
+            let (s, t) = crate::math::orthonormal_basis(e1.cross(e2).normalize_or_zero());
+            (s, t)
+        };
+        let Some(uvs) = &self.uvs else {
+            let (dpdu, dpdv) = fallback();
+            return UvFrame { uv: Vec2::ZERO, dpdu, dpdv, p };
+        };
+        let [ta, tb, tc] = t.map(|i| uvs[i as usize]);
+        let uv = ta * w + tb * hit.u + tc * hit.v;
+        let (d1, d2) = (tb - ta, tc - ta);
+        let det = d1.x * d2.y - d1.y * d2.x;
+        let (dpdu, dpdv) = if det.abs() > 1e-20 {
+            let r = 1.0 / det;
+            ((e1 * d2.y - e2 * d1.y) * r, (e2 * d1.x - e1 * d2.x) * r)
+        } else {
+            fallback()
+        };
+        UvFrame { uv, dpdu, dpdv, p }
     }
 
     /// Object-space bounds.

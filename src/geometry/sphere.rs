@@ -1,6 +1,7 @@
 //! A sphere in object space; its object's transform makes ellipsoids of it.
 
-use crate::math::{Aabb, Ray, Vec3};
+use crate::math::{Aabb, Ray, Vec2, Vec3};
+use std::f32::consts::PI;
 
 /// A sphere.
 #[derive(Clone, Copy, Debug)]
@@ -46,6 +47,23 @@ impl Sphere {
     #[inline]
     pub fn normal(&self, p: Vec3) -> Vec3 {
         (p - self.center) / self.radius
+    }
+
+    /// Texture coordinates and their derivatives at a point on the sphere,
+    /// with the course's mapping: `θ = acos(y/r)` from the +y pole,
+    /// `φ = atan2(z, x)`, `u = (π − φ) / 2π`, `v = θ / π`.
+    pub fn uv_frame(&self, p: Vec3) -> (Vec2, Vec3, Vec3) {
+        let d = p - self.center;
+        let r = self.radius;
+        let theta = (d.y / r).clamp(-1.0, 1.0).acos();
+        let phi = d.z.atan2(d.x);
+        let uv = Vec2::new((PI - phi) / (2.0 * PI), theta / PI);
+        // p = c + r (sin θ cos φ, cos θ, sin θ sin φ), φ = π − 2πu, θ = πv.
+        let dpdu = Vec3::new(d.z, 0.0, -d.x) * (2.0 * PI);
+        let (sin_t, cos_t) = theta.sin_cos();
+        let (sin_p, cos_p) = phi.sin_cos();
+        let dpdv = Vec3::new(r * cos_t * cos_p, -r * sin_t, r * cos_t * sin_p) * PI;
+        (uv, dpdu, dpdv)
     }
 
     /// Bounds.

@@ -73,6 +73,21 @@ impl Camera {
         Ray::new(self.eye, (p - self.eye).normalize())
     }
 
+    /// The angle one pixel spans at the image centre, radians: the spread of
+    /// a ray cone (Akenine-Möller et al., Ray Tracing Gems ch. 20) that sizes
+    /// texture footprints for mipmapping.
+    pub fn pixel_spread(&self) -> f32 {
+        let to_center = (self.corner + self.du * (self.width as f32 * 0.5) + self.dv * (self.height as f32 * 0.5)
+            - self.eye)
+            .length();
+        let pixel = self.du.length().min(self.dv.length());
+        if to_center > 0.0 {
+            (pixel / to_center).atan()
+        } else {
+            0.0
+        }
+    }
+
     /// Whether the camera has a lens (depth of field).
     pub fn has_lens(&self) -> bool {
         self.lens_u != Vec3::ZERO

@@ -51,12 +51,25 @@ pub struct PathState {
     pub time: f32,
     /// Random dimensions for light and glossy samples.
     pub sampler: PixelSampler,
+    /// Where the camera sample lies on the image, 0–1 across and down (a
+    /// background texture is looked up there).
+    pub screen: Vec2,
+    /// Angle of the ray cone around each ray: the pixel's angular size.
+    pub spread: f32,
+    /// Distance the path has covered before the current ray.
+    travelled: f32,
 }
 
 impl PathState {
     /// A fresh state for a new camera ray, keeping the running counts.
     pub fn new(stats: RayStats, time: f32, sampler: PixelSampler) -> Self {
-        PathState { stats, budget: SECONDARY_BUDGET, time, sampler }
+        PathState { stats, budget: SECONDARY_BUDGET, time, sampler, screen: Vec2::ZERO, spread: 0.0, travelled: 0.0 }
+    }
+
+    /// The state for a camera sample at image position `screen` with ray
+    /// cone spread `spread`.
+    pub fn for_pixel(self, screen: Vec2, spread: f32) -> Self {
+        PathState { screen, spread, ..self }
     }
 
     /// Whether a secondary ray of `weight` may be traced; counts it if so.
@@ -70,7 +83,8 @@ impl PathState {
     }
 }
 
-use crate::math::{orthonormal_basis, Ray, Vec3};
+use crate::math::{orthonormal_basis, Ray, Vec2, Vec3};
+use crate::texture::Applied;
 use crate::render::sampler::PixelSampler;
 use crate::render::scene::{Hit, Scene};
 use crate::shading::fresnel;
@@ -106,22 +120,42 @@ impl RayStats {
 /// `weight` is the path's accumulated weight so far (1 for camera rays).
 pub fn radiance(scene: &Scene, ray: &Ray, depth: u32, weight: f32, st: &mut PathState) -> Vec3 {
     match scene.intersect(ray, st.time, depth == 0) {
-        Some(hit) => shade(scene, ray, &hit, depth, weight, st),
-        None => scene.background,
+        Some(hit) => {
+            let before = st.travelled;
+            st.travelled += hit.t;
+            let c = shade(scene, ray, &hit, depth, weight, st);
+            st.travelled = before;
+            c
+        }
+        None => scene.textures.background(st.screen).unwrap_or(scene.background),
     }
 }
 
 fn shade(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, weight: f32, st: &mut PathState) -> Vec3 {
-    let m = &scene.materials[hit.material as usize];
+    let mut material = scene.materials[hit.material as usize];
+    let mut ns = hit.ns;
+    if !hit.textures.is_empty() {
+        // The ray cone's width here, widened by the slant of the surface.
+        let cos = ray.d.dot(hit.ns).abs().max(0.05);
+        let footprint = st.spread * st.travelled / cos;
+        let frame = scene.tex_frame(hit, ray, st.time, footprint);
+        if let Applied::Unlit(c) = scene.textures.apply(hit.textures, &frame, &mut material, &mut ns) {
+            return c;
+        }
+        if ns.dot(hit.ng) < 0.0 {
+            ns = -ns;
+        }
+    }
+    let m = &material;
     let entering = ray.d.dot(hit.ng) < 0.0;
     // Normals facing the side the ray came from.
-    let (n, ng) = if entering { (hit.ns, hit.ng) } else { (-hit.ns, -hit.ng) };
+    let (n, ng) = if entering { (ns, hit.ng) } else { (-ns, -hit.ng) };
     let eps = scene.shadow_epsilon;
     let inside_dielectric = !entering && matches!(m.kind, Specular::Dielectric { .. });
     let mut color = Vec3::ZERO;
 
     if !inside_dielectric {
-        color += direct(scene, m, hit, ray, st);
+        color += direct(scene, m, hit, ns, ray, st);
     }
 
     if depth < scene.max_depth {
@@ -176,10 +210,10 @@ fn shade(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, weight: f32, st: &mut 
 
 /// Ambient plus the light that reaches the hit directly from every point and
 /// area light, with shadow rays.
-fn direct(scene: &Scene, m: &Material, hit: &Hit, ray: &Ray, st: &mut PathState) -> Vec3 {
+fn direct(scene: &Scene, m: &Material, hit: &Hit, ns: Vec3, ray: &Ray, st: &mut PathState) -> Vec3 {
     let mut color = m.ambient * scene.ambient;
     // The winding normals, not ones flipped towards the eye: see the module doc.
-    let (n, ng) = (hit.ns, hit.ng);
+    let (n, ng) = (ns, hit.ng);
     let eps = scene.shadow_epsilon;
     let origin = hit.p + ng * eps;
     for light in &scene.lights {

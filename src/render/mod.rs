@@ -8,7 +8,7 @@ pub mod scene;
 
 pub use scene::Scene;
 
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 use integrator::{radiance, PathState, RayStats};
 use rayon::prelude::*;
 use sampler::PixelSampler;
@@ -101,6 +101,7 @@ pub fn render_with(
     let camera = &scene.cameras[cam];
     let spp = opts.spp.unwrap_or(camera.num_samples).max(1);
     let (w, h) = (camera.width, camera.height);
+    let spread = camera.pixel_spread();
     let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
         .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
         .collect();
@@ -120,7 +121,8 @@ pub fn render_with(
                         let lens = sampler.next_2d();
                         let time = sampler.next_1d();
                         let ray = camera.lens_ray(x as f32 + jx, y as f32 + jy, lens);
-                        let mut st = PathState::new(stats, time, sampler);
+                        let screen = Vec2::new((x as f32 + jx) / w as f32, (y as f32 + jy) / h as f32);
+                        let mut st = PathState::new(stats, time, sampler).for_pixel(screen, spread);
                         st.stats.primary += 1;
                         let w = opts.filter.weight(jx - 0.5, jy - 0.5);
                         sum += radiance(scene, &ray, 0, 1.0, &mut st) * w;

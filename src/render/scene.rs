@@ -12,12 +12,13 @@
 use crate::accel::{Bvh, TriHit};
 use crate::geometry::mesh::vertex_normals;
 use crate::geometry::{Mesh, Plane, Sphere};
-use crate::math::{Aabb, Ray, Transform, Vec3};
+use crate::math::{Aabb, Ray, Transform, Vec2, Vec3};
 use crate::render::camera::Camera;
 use crate::scene::description::{Description, MeshSource, Shape};
 use crate::scene::ply::read_ply;
 use crate::scene::{SceneError, Warning};
 use crate::shading::{AreaLight, Material, PointLight};
+use crate::texture::{Image, TexFrame, TexList, Textures};
 use rayon::prelude::*;
 use std::collections::HashMap;
 
@@ -37,9 +38,8 @@ struct Prim {
     /// `None` when the object's transform is the identity, which skips two
     /// matrix-vector products per ray.
     xf: Option<Box<Transform>>,
-    /// -1 when the transform mirrors (negative determinant), else 1: the
-    /// winding of a mirrored triangle, and so the side its normal is on, flips.
-    handedness: f32,
+    /// The object's texture maps.
+    textures: TexList,
 }
 
 impl Prim {
@@ -64,6 +64,25 @@ enum Closest {
     Sphere(usize),
 }
 
+/// Which surface a hit is on, for computing its texture frame on demand.
+#[derive(Clone, Copy, Debug)]
+pub enum HitGeom {
+    /// Plane `i`.
+    Plane(u32),
+    /// A triangle of primitive `prim`.
+    Triangle {
+        /// Primitive.
+        prim: u32,
+        /// The mesh hit.
+        hit: TriHit,
+    },
+    /// The sphere of primitive `prim`.
+    Sphere {
+        /// Primitive.
+        prim: u32,
+    },
+}
+
 /// Everything about the closest hit that shading needs, in world space.
 #[derive(Clone, Copy, Debug)]
 pub struct Hit {
@@ -77,6 +96,10 @@ pub struct Hit {
     pub ns: Vec3,
     /// Material index.
     pub material: u32,
+    /// The object's texture maps.
+    pub textures: TexList,
+    /// The surface hit.
+    pub geom: HitGeom,
 }
 
 /// A scene ready to render.
@@ -84,7 +107,9 @@ pub struct Scene {
     meshes: Vec<Mesh>,
     prims: Vec<Prim>,
     tlas: Bvh,
-    planes: Vec<(Plane, u32)>,
+    planes: Vec<(Plane, u32, TexList)>,
+    /// Images and texture maps.
+    pub textures: Textures,
     /// Materials.
     pub materials: Vec<Material>,
     /// Point lights.
@@ -130,11 +155,13 @@ impl Scene {
             meshes.push(m);
         }
 
+        let mut textures = build_textures(desc)?;
         let mut prims = Vec::new();
         let mut planes = Vec::new();
         for (i, o) in desc.objects.iter().enumerate() {
             let xf = (!o.transform.is_identity()).then(|| Box::new(o.transform));
             let material = o.material as u32;
+            let tex = textures.add_list(&o.textures);
             let geom = match &o.shape {
                 Shape::Mesh { .. } | Shape::Triangle { .. } => Geom::Mesh(mesh_of_object[&i]),
                 Shape::Instance { mesh } => match mesh_of_object.get(mesh) {
@@ -149,7 +176,7 @@ impl Scene {
                         point: o.transform.point(*point),
                         normal: o.transform.normal_to_world(*normal).normalize(),
                     };
-                    planes.push((p, material));
+                    planes.push((p, material, tex));
                     continue;
                 }
             };
@@ -158,8 +185,7 @@ impl Scene {
                     continue;
                 }
             }
-            let handedness = if o.transform.swaps_handedness() { -1.0 } else { 1.0 };
-            prims.push(Prim { geom, material, motion: o.motion, xf, handedness });
+            prims.push(Prim { geom, material, motion: o.motion, xf, textures: tex });
         }
         let bounds: Vec<Aabb> = prims.iter().map(|p| prim_bounds(p, &meshes)).collect();
         let tlas = Bvh::build(&bounds);
@@ -172,6 +198,7 @@ impl Scene {
             prims,
             tlas,
             planes,
+            textures,
             materials: desc.materials.iter().map(Material::from_desc).collect(),
             lights: desc
                 .point_lights
@@ -202,7 +229,7 @@ impl Scene {
         let t_min = self.intersection_epsilon;
         let mut best_t = f32::INFINITY;
         let mut best = None;
-        for (i, (pl, _)) in self.planes.iter().enumerate() {
+        for (i, (pl, _, _)) in self.planes.iter().enumerate() {
             if let Some(t) = pl.intersect(ray, t_min, best_t) {
                 best_t = t;
                 best = Some(Closest::Plane(i));
@@ -215,7 +242,7 @@ impl Scene {
                 let local = p.to_local(ray, time);
                 match p.geom {
                     Geom::Mesh(m) => {
-                        let cull = if cull_back_faces { p.handedness } else { 0.0 };
+                        let cull = if cull_back_faces { 1.0 } else { 0.0 };
                         if let Some(h) = self.meshes[m as usize].intersect(&local, t_min, *t_max, cull) {
                             *t_max = h.t;
                             best = Some(Closest::Triangle(pi, h));
@@ -236,23 +263,30 @@ impl Scene {
             }
             hit
         });
-        let (pi, ng, ns) = match best? {
+        let (pi, ng, ns, geom) = match best? {
             Closest::Plane(i) => {
-                let (pl, material) = self.planes[i];
-                return Some(Hit { t: best_t, p: ray.at(best_t), ng: pl.normal, ns: pl.normal, material });
+                let (pl, material, textures) = self.planes[i];
+                return Some(Hit {
+                    t: best_t,
+                    p: ray.at(best_t),
+                    ng: pl.normal,
+                    ns: pl.normal,
+                    material,
+                    textures,
+                    geom: HitGeom::Plane(i as u32),
+                });
             }
             Closest::Triangle(pi, h) => {
                 let p = &self.prims[pi];
                 let Geom::Mesh(m) = p.geom else { return None };
                 let (ng, ns) = self.meshes[m as usize].normals_at(&h);
-                // The world winding of a mirrored triangle is reversed.
-                (pi, ng * p.handedness, ns * p.handedness)
+                (pi, ng, ns, HitGeom::Triangle { prim: pi as u32, hit: h })
             }
             Closest::Sphere(pi) => {
                 let p = &self.prims[pi];
                 let Geom::Sphere(s) = p.geom else { return None };
                 let n = s.normal(p.to_local(ray, time).at(best_t));
-                (pi, n, n)
+                (pi, n, n, HitGeom::Sphere { prim: pi as u32 })
             }
         };
         let p = &self.prims[pi];
@@ -265,14 +299,50 @@ impl Scene {
         if ns.dot(ng) < 0.0 {
             ns = -ns;
         }
-        Some(Hit { t: best_t, p: ray.at(best_t), ng, ns, material: p.material })
+        Some(Hit { t: best_t, p: ray.at(best_t), ng, ns, material: p.material, textures: p.textures, geom })
+    }
+
+    /// The texture frame at a hit of `ray` (at shutter `time`): texture
+    /// coordinates, object-space position, derivatives and shading normal.
+    /// `footprint` is the pixel's width there.
+    pub fn tex_frame(&self, hit: &Hit, ray: &Ray, time: f32, footprint: f32) -> TexFrame {
+        let (uv, p_object, dpdu, dpdv, n, prim) = match hit.geom {
+            HitGeom::Plane(i) => {
+                let (pl, _, _) = &self.planes[i as usize];
+                let (s, t) = crate::math::orthonormal_basis(pl.normal);
+                let d = hit.p - pl.point;
+                (Vec2::new(d.dot(s), d.dot(t)), hit.p, s, t, pl.normal, None)
+            }
+            HitGeom::Triangle { prim, hit: h } => {
+                let p = &self.prims[prim as usize];
+                let Geom::Mesh(m) = p.geom else { return flat_frame(hit, footprint) };
+                let mesh = &self.meshes[m as usize];
+                let f = mesh.uv_frame(&h);
+                let (ng, ns) = mesh.normals_at(&h);
+                let ns = if ns.dot(ng) < 0.0 { -ns } else { ns };
+                (f.uv, f.p, f.dpdu, f.dpdv, ns.normalize(), Some(p))
+            }
+            HitGeom::Sphere { prim } => {
+                let p = &self.prims[prim as usize];
+                let Geom::Sphere(s) = p.geom else { return flat_frame(hit, footprint) };
+                let local = p.to_local(ray, time).at(hit.t);
+                let (uv, dpdu, dpdv) = s.uv_frame(local);
+                (uv, local, dpdu, dpdv, s.normal(local), Some(p))
+            }
+        };
+        let to_world = prim.and_then(|p| p.xf.as_deref().copied());
+        let p_rest = match &to_world {
+            Some(xf) => xf.point(p_object),
+            None => p_object,
+        };
+        TexFrame { uv, p_object, p_rest, dpdu, dpdv, n, to_world, footprint }
     }
 
     /// Whether anything lies on `ray` at `time` between the intersection
     /// epsilon and `t_max`.
     pub fn occluded(&self, ray: &Ray, t_max: f32, time: f32) -> bool {
         let t_min = self.intersection_epsilon;
-        if self.planes.iter().any(|(pl, _)| pl.intersect(ray, t_min, t_max).is_some()) {
+        if self.planes.iter().any(|(pl, _, _)| pl.intersect(ray, t_min, t_max).is_some()) {
             return true;
         }
         self.tlas.any(ray, t_max, |range, t_max| {
@@ -286,6 +356,45 @@ impl Scene {
             })
         })
     }
+}
+
+/// A frame for a hit whose primitive cannot be found (never, by construction).
+fn flat_frame(hit: &Hit, footprint: f32) -> TexFrame {
+    let (dpdu, dpdv) = crate::math::orthonormal_basis(hit.ns);
+    TexFrame { uv: Vec2::ZERO, p_object: hit.p, p_rest: hit.p, dpdu, dpdv, n: hit.ns, to_world: None, footprint }
+}
+
+/// Decodes the scene's images (in parallel) and builds its texture maps.
+/// Images a trilinear map reads get mipmaps.
+fn build_textures(desc: &Description) -> Result<Textures, SceneError> {
+    use crate::scene::description::{Interpolation, TextureSource};
+    let trilinear: Vec<bool> = (0..desc.images.len())
+        .map(|i| {
+            desc.texture_maps.iter().any(|m| {
+                matches!(m.source, TextureSource::Image { image, interpolation: Interpolation::Trilinear, .. } if image == i)
+            })
+        })
+        .collect();
+    let used: Vec<bool> = (0..desc.images.len())
+        .map(|i| desc.texture_maps.iter().any(|m| matches!(m.source, TextureSource::Image { image, .. } if image == i)))
+        .collect();
+    let images: Vec<Image> = desc
+        .images
+        .par_iter()
+        .enumerate()
+        .map(|(i, d)| {
+            if !used[i] {
+                // A listed image no map reads is not decoded (nor required to exist).
+                return Image::from_rgb8(1, 1, vec![[0, 0, 0]]).ok_or_else(|| SceneError::at(&desc.file, &d.loc, "internal error"));
+            }
+            let mut img = Image::load(&d.path).map_err(|e| SceneError::at(&desc.file, &d.loc, e))?;
+            if trilinear[i] {
+                img.build_mipmaps();
+            }
+            Ok(img)
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(Textures::new(images, &desc.texture_maps, desc.background_texture))
 }
 
 /// World bounds over the whole shutter interval: a translation sweeps the box
@@ -306,8 +415,10 @@ fn prim_bounds(p: &Prim, meshes: &[Mesh]) -> Aabb {
 fn build_mesh(desc: &Description, i: usize) -> Result<(Mesh, Option<Warning>), SceneError> {
     let o = &desc.objects[i];
     match &o.shape {
-        Shape::Triangle { vertices } => Ok((Mesh::new(vertices.to_vec(), vec![[0, 1, 2]], None), None)),
-        Shape::Mesh { source: MeshSource::Inline(tris), smooth } => {
+        Shape::Triangle { vertices, uvs } => {
+            Ok((Mesh::new(vertices.to_vec(), vec![[0, 1, 2]], None).with_uvs(uvs.map(|u| u.to_vec())), None))
+        }
+        Shape::Mesh { source: MeshSource::Inline { triangles: tris, tex_shift }, smooth } => {
             // Keep only the vertices this mesh uses, renumbered.
             let mut remap: HashMap<u32, u32> = HashMap::new();
             let mut positions = Vec::new();
@@ -323,7 +434,19 @@ fn build_mesh(desc: &Description, i: usize) -> Result<(Mesh, Option<Warning>), S
                 })
                 .collect();
             let normals = smooth.then(|| vertex_normals(&positions, &local));
-            Ok((Mesh::new(positions, local, normals), None))
+            // Texture coordinate of vertex g is number g + tex_shift; all or none.
+            let mut globals = vec![0u32; positions.len()];
+            for (&g, &l) in &remap {
+                globals[l as usize] = g;
+            }
+            let uvs: Option<Vec<Vec2>> = globals
+                .iter()
+                .map(|&g| {
+                    let k = g as i64 + tex_shift;
+                    usize::try_from(k).ok().and_then(|k| desc.tex_coords.get(k).copied())
+                })
+                .collect();
+            Ok((Mesh::new(positions, local, normals).with_uvs(uvs), None))
         }
         Shape::Mesh { source: MeshSource::Ply(path), smooth } => {
             let ply = read_ply(path).map_err(|e| SceneError::at(&desc.file, &o.loc, e.to_string()))?;
@@ -336,7 +459,7 @@ fn build_mesh(desc: &Description, i: usize) -> Result<(Mesh, Option<Warning>), S
                 ),
             });
             let normals = smooth.then(|| vertex_normals(&ply.positions, &ply.triangles));
-            Ok((Mesh::new(ply.positions, ply.triangles, normals), warning))
+            Ok((Mesh::new(ply.positions, ply.triangles, normals).with_uvs(ply.uvs), warning))
         }
         _ => Err(SceneError::at(&desc.file, &o.loc, "internal error: not a mesh")),
     }

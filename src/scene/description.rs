@@ -3,7 +3,7 @@
 //! or JSON; `render::Scene::build` turns it into something to trace.
 
 use super::error::{Loc, Warning};
-use crate::math::{Transform, Vec3};
+use crate::math::{Transform, Vec2, Vec3};
 use std::path::PathBuf;
 
 /// A whole scene as the file describes it.
@@ -33,6 +33,14 @@ pub struct Description {
     pub materials: Vec<MaterialDesc>,
     /// Shared vertex positions (the course's 1-based `VertexData`).
     pub vertices: Vec<Vec3>,
+    /// Shared texture coordinates (the course's 1-based `TexCoordData`).
+    pub tex_coords: Vec<Vec2>,
+    /// Image files, referenced by index from image texture maps.
+    pub images: Vec<ImageDesc>,
+    /// Texture maps, referenced by index from objects.
+    pub texture_maps: Vec<TextureMapDesc>,
+    /// The texture map that replaces the background colour, if any.
+    pub background_texture: Option<usize>,
     /// Objects in file order; instances refer to earlier or later ones by index.
     pub objects: Vec<ObjectDesc>,
     /// What the loader accepted but did not use or had to correct.
@@ -158,7 +166,14 @@ pub struct MaterialDesc {
 #[derive(Clone, Debug)]
 pub enum MeshSource {
     /// Triangles given inline, as 0-based indices into [`Description::vertices`].
-    Inline(Vec<[u32; 3]>),
+    Inline {
+        /// The triangles.
+        triangles: Vec<[u32; 3]>,
+        /// Added to a vertex index to get the index of its texture coordinate
+        /// in [`Description::tex_coords`] (the `Faces` element's
+        /// `textureOffset - vertexOffset`; 0 when they are numbered alike).
+        tex_shift: i64,
+    },
     /// A PLY file with its own vertices.
     Ply(PathBuf),
 }
@@ -177,6 +192,8 @@ pub enum Shape {
     Triangle {
         /// Its corners.
         vertices: [Vec3; 3],
+        /// Texture coordinates of the corners, when `TexCoordData` has them.
+        uvs: Option<[Vec2; 3]>,
     },
     /// An infinite plane through `point` with `normal`.
     Plane {
@@ -215,6 +232,108 @@ pub struct ObjectDesc {
     /// Translation over the shutter interval (`MotionBlur`): at time `τ` the
     /// object is moved by `τ · motion` after its transform.
     pub motion: Vec3,
+    /// Indices into [`Description::texture_maps`], in the order listed.
+    pub textures: Vec<usize>,
+    /// Where.
+    pub loc: Loc,
+}
+
+/// An image file that texture maps read.
+#[derive(Clone, Debug)]
+pub struct ImageDesc {
+    /// The image's id.
+    pub id: String,
+    /// Resolved path.
+    pub path: PathBuf,
+    /// Where.
+    pub loc: Loc,
+}
+
+/// How an image texture is filtered.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interpolation {
+    /// The texel the point falls in.
+    Nearest,
+    /// The four nearest texels, weighted by distance.
+    Bilinear,
+    /// Bilinear in the two mipmap levels around the pixel's footprint, blended.
+    Trilinear,
+}
+
+/// What a texture's value does to the surface.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DecalMode {
+    /// The value is the diffuse reflectance.
+    ReplaceKd,
+    /// The diffuse reflectance is the mean of the material's and the value.
+    BlendKd,
+    /// The value is the specular reflectance.
+    ReplaceKs,
+    /// The value is the colour of camera rays that miss (sampled at the pixel).
+    ReplaceBackground,
+    /// The value is a tangent-space normal.
+    ReplaceNormal,
+    /// The value is a height whose gradient perturbs the normal.
+    BumpNormal,
+    /// The value is the surface's colour, unlit.
+    ReplaceAll,
+}
+
+/// How Perlin noise in [-1, 1] becomes a texture value in [0, 1].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NoiseConversion {
+    /// `(n + 1) / 2`: patchy.
+    Linear,
+    /// `|n|`: veins.
+    AbsVal,
+}
+
+/// Where a texture map's value comes from.
+#[derive(Clone, Debug)]
+pub enum TextureSource {
+    /// An image, looked up by the surface's texture coordinates.
+    Image {
+        /// Index into [`Description::images`].
+        image: usize,
+        /// Filtering.
+        interpolation: Interpolation,
+        /// Texel values are divided by this (`Normalizer`; 255 by default for
+        /// 8-bit images, 1 for floating-point ones when not given).
+        normalizer: Option<f32>,
+    },
+    /// Perlin noise of the object-space position.
+    Perlin {
+        /// Multiplies the position before the noise (`NoiseScale`).
+        scale: f32,
+        /// From noise to value.
+        conversion: NoiseConversion,
+        /// Octaves summed (`NumOctaves`, 1 by default).
+        octaves: u32,
+    },
+    /// A 3D checkerboard of the object-space position.
+    Checkerboard {
+        /// Squares per unit (`Scale`).
+        scale: f32,
+        /// Shift of the pattern (`Offset`).
+        offset: f32,
+        /// Colour of the "black" squares.
+        black: Vec3,
+        /// Colour of the "white" squares.
+        white: Vec3,
+    },
+}
+
+/// A texture map.
+#[derive(Clone, Debug)]
+pub struct TextureMapDesc {
+    /// The map's id.
+    pub id: String,
+    /// Its source.
+    pub source: TextureSource,
+    /// What it does.
+    pub decal: DecalMode,
+    /// Height multiplier of bump maps (`BumpFactor`, 1 by default).
+    pub bump_factor: f32,
     /// Where.
     pub loc: Loc,
 }

@@ -46,6 +46,21 @@ pub struct Material {
     pub roughness: f32,
 }
 
+impl Default for Material {
+    /// A black, non-reflective surface.
+    fn default() -> Material {
+        Material {
+            ambient: Vec3::ZERO,
+            diffuse: Vec3::ZERO,
+            specular: Vec3::ZERO,
+            phong: 1.0,
+            mirror: Vec3::ZERO,
+            kind: Specular::None,
+            roughness: 0.0,
+        }
+    }
+}
+
 impl Material {
     /// From the description.
     pub fn from_desc(d: &MaterialDesc) -> Material {

@@ -13,6 +13,7 @@
 //! | `Lights/AmbientLight`, `Lights/PointLight` | see [`lights`] | none |
 //! | `Materials/Material` | see [`material`] | |
 //! | `Transformations`, `VertexData`, `Objects` | see [`objects`] | |
+//! | `Textures`, `TexCoordData` | see [`textures`] | none |
 //!
 //! Anything else gets a warning naming it, so a scene that relies on a feature
 //! luster lacks says so instead of rendering silently wrong.
@@ -21,6 +22,7 @@ pub mod camera;
 pub mod lights;
 pub mod material;
 pub mod objects;
+pub mod textures;
 pub mod transforms;
 
 use super::description::Description;
@@ -74,6 +76,8 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
             "Materials",
             "Transformations",
             "VertexData",
+            "TexCoordData",
+            "Textures",
             "Objects",
         ],
     );
@@ -125,14 +129,26 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
         Some(v) => objects::read_vertices(&r, v)?,
         None => Vec::new(),
     };
+    let tex_coords = match root.child("TexCoordData") {
+        Some(t) => textures::read_tex_coords(&r, t)?,
+        None => Vec::new(),
+    };
     let base_dir = file.parent().map(Path::to_path_buf).unwrap_or_default();
+    let (images, texture_maps) = match root.child("Textures") {
+        Some(t) => textures::read_all(&r, t, &base_dir, &mut w)?,
+        None => (Vec::new(), Vec::new()),
+    };
+    let texture_ids: HashMap<&str, usize> =
+        texture_maps.iter().enumerate().rev().map(|(i, m)| (m.id.as_str(), i)).collect();
     let objects = match root.child("Objects") {
         Some(o) => {
             let ctx = objects::Context {
                 r,
                 materials: &material_ids,
+                textures: &texture_ids,
                 transforms: &transforms,
                 vertices: &vertices,
+                tex_coords: &tex_coords,
                 base_dir: &base_dir,
             };
             objects::read_all(&ctx, o, &mut w)?
@@ -152,6 +168,12 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
         area_lights,
         materials,
         vertices,
+        tex_coords,
+        background_texture: texture_maps
+            .iter()
+            .position(|m| m.decal == super::description::DecalMode::ReplaceBackground),
+        images,
+        texture_maps,
         objects,
         warnings: w.0,
     })

@@ -8,6 +8,13 @@
 //! | `Plane` | `Material`, `Transformations`, `Point` (a vertex index), `Normal` |
 //! | `MeshInstance` | `baseMeshId`, `resetTransform`, `Material`, `Transformations` |
 //!
+//! Every object may list texture maps in `Textures` (hw4). Texture
+//! coordinates come from `TexCoordData`, numbered like `VertexData`: vertex
+//! `i` has coordinate `i`. A `Faces` element may shift both numberings
+//! (`vertexOffset`, `textureOffset`: the numbers in the list are 0-based and
+//! the offset is added to each). An instance without `Textures` uses its
+//! base's, as it does its material.
+//!
 //! Every object but a plane may have a `MotionBlur` translation (x y z): it
 //! moves by that much, after its transform, over the shutter interval.
 //!
@@ -18,7 +25,8 @@
 
 use super::transforms::compose;
 use super::Warnings;
-use crate::math::{Transform, Vec3};
+use super::textures::object_textures;
+use crate::math::{Transform, Vec2, Vec3};
 use crate::scene::description::{MeshSource, ObjectDesc, Shape};
 use crate::scene::element::{Element, Reader};
 use crate::scene::error::SceneError;
@@ -31,10 +39,14 @@ pub struct Context<'a> {
     pub r: Reader<'a>,
     /// Material id to index.
     pub materials: &'a HashMap<&'a str, usize>,
+    /// Texture map id to index.
+    pub textures: &'a HashMap<&'a str, usize>,
     /// Named transforms.
     pub transforms: &'a HashMap<String, Transform>,
     /// Shared vertices.
     pub vertices: &'a [Vec3],
+    /// Shared texture coordinates.
+    pub tex_coords: &'a [Vec2],
     /// Folder of the scene file.
     pub base_dir: &'a Path,
 }
@@ -54,6 +66,7 @@ struct PendingInstance {
     base_id: String,
     reset: bool,
     material: Option<usize>,
+    textures: Option<Vec<usize>>,
     own: Transform,
 }
 
@@ -68,18 +81,27 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Vec<O
         let shape = match el.name.as_str() {
             "Mesh" => mesh(ctx, el, w)?,
             "Triangle" => {
-                w.unknown_children(el, &["Material", "Transformations", "Indices", "MotionBlur"]);
+                w.unknown_children(el, &["Material", "Transformations", "Indices", "MotionBlur", "Textures"]);
                 let ix = r.uints(r.required(el, "Indices")?)?;
                 if ix.len() != 3 {
                     return Err(r.err(el, format!("<Indices> needs 3 vertex indices, found {}", ix.len())));
                 }
                 let idx = r.required(el, "Indices")?;
+                let uv = |i: u32| ctx.tex_coords.get((i as usize).wrapping_sub(1)).copied();
+                let uvs = match (uv(ix[0]), uv(ix[1]), uv(ix[2])) {
+                    (Some(a), Some(b), Some(c)) => Some([a, b, c]),
+                    _ => None,
+                };
                 Shape::Triangle {
                     vertices: [vertex(ctx, idx, ix[0])?, vertex(ctx, idx, ix[1])?, vertex(ctx, idx, ix[2])?],
+                    uvs,
                 }
             }
             "Sphere" => {
-                w.unknown_children(el, &["Material", "Transformations", "Center", "Radius", "MotionBlur"]);
+                w.unknown_children(
+                    el,
+                    &["Material", "Transformations", "Center", "Radius", "MotionBlur", "Textures"],
+                );
                 let c = r.required(el, "Center")?;
                 let center = vertex(ctx, c, r.uint(c)?)?;
                 let re = r.required(el, "Radius")?;
@@ -90,7 +112,7 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Vec<O
                 Shape::Sphere { center, radius }
             }
             "Plane" => {
-                w.unknown_children(el, &["Material", "Transformations", "Point", "Normal"]);
+                w.unknown_children(el, &["Material", "Transformations", "Point", "Normal", "Textures"]);
                 let p = r.required(el, "Point")?;
                 let point = vertex(ctx, p, r.uint(p)?)?;
                 let ne = r.required(el, "Normal")?;
@@ -101,7 +123,7 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Vec<O
                 Shape::Plane { point, normal: normal.normalize() }
             }
             "MeshInstance" => {
-                w.unknown_children(el, &["Material", "Transformations", "MotionBlur"]);
+                w.unknown_children(el, &["Material", "Transformations", "MotionBlur", "Textures"]);
                 let base_id = el
                     .attr("baseMeshId")
                     .map(str::trim)
@@ -113,6 +135,7 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Vec<O
                     base_id: base_id.to_string(),
                     reset: r.bool_attr(el, "resetTransform", false)?,
                     material,
+                    textures: textures(ctx, el)?,
                     own: transform(ctx, el)?,
                 });
                 let id = el.attr("id").unwrap_or("").trim().to_string();
@@ -123,6 +146,7 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Vec<O
                     material: usize::MAX,
                     transform: Transform::IDENTITY,
                     motion: ctx.r.vec3_or(el, "MotionBlur", Vec3::ZERO)?,
+                    textures: Vec::new(),
                     loc: el.loc.clone(),
                 });
                 continue;
@@ -139,6 +163,7 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Vec<O
             material: material(ctx, r.required(el, "Material")?)?,
             transform: transform(ctx, el)?,
             motion: if el.name == "Plane" { Vec3::ZERO } else { r.vec3_or(el, "MotionBlur", Vec3::ZERO)? },
+            textures: textures(ctx, el)?.unwrap_or_default(),
             loc: el.loc.clone(),
         });
     }
@@ -156,7 +181,7 @@ fn register(ids: &mut HashMap<String, usize>, id: &str, index: usize, el: &Eleme
 
 fn mesh(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, SceneError> {
     let r = &ctx.r;
-    w.unknown_children(el, &["Material", "Transformations", "Faces", "MotionBlur"]);
+    w.unknown_children(el, &["Material", "Transformations", "Faces", "MotionBlur", "Textures"]);
     let smooth = match el.attr("shadingMode").map(str::trim) {
         None | Some("") | Some("flat") => false,
         Some("smooth") => true,
@@ -166,7 +191,7 @@ fn mesh(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, SceneErr
     };
     let faces = r.required(el, "Faces")?;
     for (k, _) in &faces.attrs {
-        if !matches!(k.as_str(), "plyFile" | "type") {
+        if !matches!(k.as_str(), "plyFile" | "type" | "vertexOffset" | "textureOffset") {
             w.at(faces, format!("<Faces> attribute {k} is not supported yet; ignored"));
         }
     }
@@ -177,6 +202,15 @@ fn mesh(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, SceneErr
         let path = ctx.base_dir.join(ply.trim());
         return Ok(Shape::Mesh { source: MeshSource::Ply(path), smooth });
     }
+    let offset = |name: &str| -> Result<i64, SceneError> {
+        match faces.attr(name).map(str::trim) {
+            None => Ok(0),
+            Some(v) => v.parse::<i64>().ok().filter(|o| o.abs() <= u32::MAX as i64).ok_or_else(|| {
+                r.err(faces, format!("<Faces> attribute {name}=\"{v}\" is not an integer"))
+            }),
+        }
+    };
+    let (vertex_offset, texture_offset) = (offset("vertexOffset")?, offset("textureOffset")?);
     let ix = r.uints(faces)?;
     if ix.len() % 3 != 0 {
         return Err(r.err(faces, format!("<Faces> has {} indices, which is not a multiple of 3", ix.len())));
@@ -184,14 +218,20 @@ fn mesh(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, SceneErr
     let n = ctx.vertices.len();
     let mut tris = Vec::with_capacity(ix.len() / 3);
     let mut degenerate = 0;
-    for c in ix.chunks_exact(3) {
-        for &i in c {
-            if i == 0 || i as usize > n {
+    for ix_chunk in ix.chunks_exact(3) {
+        let mut c = [0u32; 3];
+        for (k, &raw) in ix_chunk.iter().enumerate() {
+            let i = raw as i64 + vertex_offset;
+            if i <= 0 || i > n as i64 {
                 return Err(r.err(
                     faces,
-                    format!("face index {i} is out of range (VertexData has {n} vertices, numbered from 1)"),
+                    format!(
+                        "face index {raw}{} is out of range (VertexData has {n} vertices, numbered from 1)",
+                        if vertex_offset != 0 { format!(" + vertexOffset {vertex_offset}") } else { String::new() }
+                    ),
                 ));
             }
+            c[k] = i as u32;
         }
         if c[0] == c[1] || c[1] == c[2] || c[0] == c[2] {
             degenerate += 1;
@@ -202,7 +242,7 @@ fn mesh(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, SceneErr
     if degenerate > 0 {
         w.at(faces, format!("{degenerate} degenerate triangle(s) skipped"));
     }
-    Ok(Shape::Mesh { source: MeshSource::Inline(tris), smooth })
+    Ok(Shape::Mesh { source: MeshSource::Inline { triangles: tris, tex_shift: texture_offset - vertex_offset }, smooth })
 }
 
 fn vertex(ctx: &Context, el: &Element, i: u32) -> Result<Vec3, SceneError> {
@@ -224,6 +264,10 @@ fn material(ctx: &Context, el: &Element) -> Result<usize, SceneError> {
         .ok_or_else(|| ctx.r.err(el, format!("material \"{id}\" is not defined in <Materials>")))
 }
 
+fn textures(ctx: &Context, el: &Element) -> Result<Option<Vec<usize>>, SceneError> {
+    el.child("Textures").map(|t| object_textures(&ctx.r, t, ctx.textures)).transpose()
+}
+
 fn transform(ctx: &Context, el: &Element) -> Result<Transform, SceneError> {
     match el.child("Transformations") {
         Some(t) => compose(&ctx.r, t, ctx.transforms),
@@ -242,11 +286,12 @@ fn resolve_instances(
 ) -> Result<(), SceneError> {
     let r = &ctx.r;
     let by_index: HashMap<usize, &PendingInstance> = pending.iter().map(|p| (p.index, p)).collect();
-    let mut done: HashMap<usize, (usize, Transform, usize)> = HashMap::new();
+    type Resolved = (usize, Transform, usize, Vec<usize>);
+    let mut done: HashMap<usize, Resolved> = HashMap::new();
     for p in pending {
         // Walk down the chain, then compose on the way back up.
         let mut chain = vec![p.index];
-        let (mesh, mut t, mut mat) = loop {
+        let (mesh, mut t, mut mat, mut tex) = loop {
             let cur = *chain.last().unwrap_or(&p.index);
             let inst = by_index[&cur];
             let base = *mesh_ids.get(&inst.base_id).ok_or_else(|| {
@@ -255,11 +300,11 @@ fn resolve_instances(
                     format!("baseMeshId \"{}\" names no Mesh or MeshInstance", inst.base_id),
                 )
             })?;
-            if let Some(&(m, t, mat)) = done.get(&base) {
-                break (m, t, mat);
+            if let Some((m, t, mat, tex)) = done.get(&base) {
+                break (*m, *t, *mat, tex.clone());
             }
             if !by_index.contains_key(&base) {
-                break (base, out[base].transform, out[base].material);
+                break (base, out[base].transform, out[base].material, out[base].textures.clone());
             }
             if chain.contains(&base) {
                 return Err(r.err(
@@ -273,13 +318,17 @@ fn resolve_instances(
             let inst = by_index[&i];
             t = if inst.reset { inst.own } else { t.then(&inst.own) };
             mat = inst.material.unwrap_or(mat);
-            done.insert(i, (mesh, t, mat));
+            if let Some(own) = &inst.textures {
+                tex = own.clone();
+            }
+            done.insert(i, (mesh, t, mat, tex.clone()));
         }
     }
-    for (i, (mesh, t, mat)) in done {
+    for (i, (mesh, t, mat, tex)) in done {
         out[i].shape = Shape::Instance { mesh };
         out[i].transform = t;
         out[i].material = mat;
+        out[i].textures = tex;
     }
     Ok(())
 }

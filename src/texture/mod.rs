@@ -1,0 +1,259 @@
+//! Textures on the render side (hw4): the images a scene decodes once, the
+//! texture maps that read them (or compute a procedural value), and what a
+//! map's `DecalMode` does to a surface point.
+//!
+//! Every object has a (usually short) list of maps. At a hit, [`Textures::apply`]
+//! goes through the list in order: colour maps change the point's copy of the
+//! material, a normal or bump map changes its shading normal, and
+//! `replace_all` makes the point an unlit colour.
+//!
+//! What each decal mode does, as the hw4 text defines it (the value `c` is
+//! the texel divided by the map's `Normalizer`, the Perlin value in [0, 1] as
+//! grey, or the checkerboard colour):
+//!
+//! | mode | effect |
+//! |---|---|
+//! | `replace_kd` | `kd = c` |
+//! | `blend_kd` | `kd = (kd + c) / 2` |
+//! | `replace_ks` | `ks = c` |
+//! | `replace_all` | the point's colour is `c`, no lighting |
+//! | `replace_normal` | `n = normalize(T x + B y + N z)` with `(x, y, z) = 2 texel/255 - 1` |
+//! | `bump_normal` | see [`bump`] |
+//! | `replace_background` | camera rays that miss take `c` at their image position |
+
+pub mod bump;
+pub mod image;
+pub mod procedural;
+
+pub use image::Image;
+pub use procedural::{Checkerboard, Perlin};
+
+use crate::math::{Transform, Vec2, Vec3};
+use crate::scene::description::{DecalMode, Interpolation, TextureMapDesc, TextureSource};
+use crate::shading::Material;
+
+/// Where a map's value comes from.
+#[derive(Clone, Copy, Debug)]
+pub enum Texture {
+    /// An image of [`Textures::images`].
+    Image {
+        /// Index of the image.
+        image: u32,
+        /// Filtering.
+        interpolation: Interpolation,
+        /// `1 / Normalizer`.
+        scale: f32,
+    },
+    /// Perlin noise.
+    Perlin(Perlin),
+    /// The 3D checkerboard.
+    Checkerboard(Checkerboard),
+}
+
+/// A texture map.
+#[derive(Clone, Copy, Debug)]
+pub struct TextureMap {
+    /// The value's source.
+    pub texture: Texture,
+    /// What the value does.
+    pub decal: DecalMode,
+    /// Height multiplier for bump maps.
+    pub bump_factor: f32,
+}
+
+/// A slice of [`Textures::lists`]: one object's maps.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TexList {
+    /// First entry.
+    pub start: u32,
+    /// Number of maps.
+    pub len: u32,
+}
+
+impl TexList {
+    /// Whether the object has no maps.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+}
+
+/// Everything texturing needs to know about a surface point.
+#[derive(Clone, Copy, Debug)]
+pub struct TexFrame {
+    /// Texture coordinates.
+    pub uv: Vec2,
+    /// Object-space position (before the object's transform and motion).
+    pub p_object: Vec3,
+    /// The position at rest: in world space, but without the motion blur
+    /// translation, so procedural patterns move with their object. The
+    /// course evaluates Perlin noise and checkerboards here (hw4
+    /// `ellipsoids_texture`: the noise on a squashed sphere is not squashed).
+    pub p_rest: Vec3,
+    /// Object-space ∂p/∂u.
+    pub dpdu: Vec3,
+    /// Object-space ∂p/∂v.
+    pub dpdv: Vec3,
+    /// Unit shading normal, object space.
+    pub n: Vec3,
+    /// The object's transform (`None`: the identity).
+    pub to_world: Option<Transform>,
+    /// World-space width of the pixel's footprint at the point (for mipmaps).
+    pub footprint: f32,
+}
+
+impl TexFrame {
+    /// An object-space normal in world space, unit length.
+    pub fn normal_to_world(&self, n: Vec3) -> Vec3 {
+        match &self.to_world {
+            Some(xf) => xf.normal_to_world(n).normalize(),
+            None => n,
+        }
+    }
+
+    /// World-space area swept by a unit square of texture coordinates here.
+    fn world_uv_area(&self) -> f32 {
+        match &self.to_world {
+            Some(xf) => xf.vector(self.dpdu).cross(xf.vector(self.dpdv)).length(),
+            None => self.dpdu.cross(self.dpdv).length(),
+        }
+    }
+}
+
+/// What the maps made of a surface point.
+pub enum Applied {
+    /// Shade it with the (possibly changed) material and normal.
+    Lit,
+    /// Its colour is this, unlit (`replace_all`).
+    Unlit(Vec3),
+}
+
+/// The scene's images and texture maps.
+#[derive(Default)]
+pub struct Textures {
+    /// Decoded images.
+    pub images: Vec<Image>,
+    /// Texture maps.
+    pub maps: Vec<TextureMap>,
+    /// Every object's maps, one run per object.
+    pub lists: Vec<u32>,
+    /// The map that replaces the background.
+    pub background: Option<u32>,
+}
+
+impl Textures {
+    /// Builds the maps from their descriptions; `images` are already decoded
+    /// (mipmapped where a trilinear map reads them).
+    pub fn new(images: Vec<Image>, descs: &[TextureMapDesc], background: Option<usize>) -> Textures {
+        let maps = descs
+            .iter()
+            .map(|d| {
+                let texture = match &d.source {
+                    TextureSource::Image { image, interpolation, normalizer } => {
+                        let default = if images[*image].is_hdr() { 1.0 } else { 255.0 };
+                        Texture::Image {
+                            image: *image as u32,
+                            interpolation: *interpolation,
+                            scale: 1.0 / normalizer.unwrap_or(default),
+                        }
+                    }
+                    TextureSource::Perlin { scale, conversion, octaves } => {
+                        Texture::Perlin(Perlin { scale: *scale, conversion: *conversion, octaves: *octaves })
+                    }
+                    &TextureSource::Checkerboard { scale, offset, black, white } => {
+                        Texture::Checkerboard(Checkerboard { scale, offset, black, white })
+                    }
+                };
+                TextureMap { texture, decal: d.decal, bump_factor: d.bump_factor }
+            })
+            .collect();
+        Textures { images, maps, lists: Vec::new(), background: background.map(|b| b as u32) }
+    }
+
+    /// Records an object's maps; returns its list.
+    pub fn add_list(&mut self, maps: &[usize]) -> TexList {
+        let start = self.lists.len() as u32;
+        self.lists.extend(maps.iter().map(|&m| m as u32));
+        TexList { start, len: maps.len() as u32 }
+    }
+
+    /// The maps of a list.
+    #[inline]
+    pub fn maps_of(&self, list: TexList) -> impl Iterator<Item = &TextureMap> + '_ {
+        self.lists[list.start as usize..(list.start + list.len) as usize].iter().map(|&m| &self.maps[m as usize])
+    }
+
+    /// A map's raw value at a point: texel (not yet normalized), Perlin grey,
+    /// or checkerboard colour.
+    pub fn raw(&self, texture: &Texture, uv: Vec2, p: Vec3, lod: f32) -> Vec3 {
+        match *texture {
+            Texture::Image { image, interpolation, .. } => {
+                let img = &self.images[image as usize];
+                match interpolation {
+                    Interpolation::Nearest => img.nearest(uv),
+                    Interpolation::Bilinear => img.bilinear(uv),
+                    Interpolation::Trilinear => img.trilinear(uv, lod),
+                }
+            }
+            Texture::Perlin(t) => Vec3::splat(t.value(p)),
+            Texture::Checkerboard(c) => c.value(p),
+        }
+    }
+
+    /// A map's colour value `c` (see the module table).
+    pub fn value(&self, texture: &Texture, uv: Vec2, p: Vec3, lod: f32) -> Vec3 {
+        let raw = self.raw(texture, uv, p, lod);
+        match *texture {
+            Texture::Image { scale, .. } => raw * scale,
+            _ => raw,
+        }
+    }
+
+    /// Mipmap level for an image map at a frame: the log2 of texels per
+    /// footprint width, from the texel density the uv parameterization gives
+    /// (`W·H` texels over the area `|∂p/∂u × ∂p/∂v|`).
+    fn lod(&self, texture: &Texture, f: &TexFrame) -> f32 {
+        let Texture::Image { image, interpolation: Interpolation::Trilinear, .. } = *texture else { return 0.0 };
+        let (w, h) = self.images[image as usize].size();
+        let area = f.world_uv_area();
+        if area <= 0.0 || f.footprint <= 0.0 {
+            return 0.0;
+        }
+        (f.footprint * (w as f32 * h as f32 / area).sqrt()).log2()
+    }
+
+    /// Applies an object's maps to a surface point: may change `m` (its own
+    /// copy of the material) and the world shading normal `n`. Normal and
+    /// bump maps work in object space, on the object's own derivatives, and
+    /// the result is carried to the world like any normal: the course's
+    /// references show a bump's strength does not change when the object is
+    /// scaled (hw4 `bump_mapping_transformed`).
+    pub fn apply(&self, list: TexList, f: &TexFrame, m: &mut Material, n: &mut Vec3) -> Applied {
+        for map in self.maps_of(list) {
+            let lod = self.lod(&map.texture, f);
+            match map.decal {
+                DecalMode::ReplaceKd => m.diffuse = self.value(&map.texture, f.uv, f.p_rest, lod),
+                DecalMode::BlendKd => m.diffuse = (m.diffuse + self.value(&map.texture, f.uv, f.p_rest, lod)) * 0.5,
+                DecalMode::ReplaceKs => m.specular = self.value(&map.texture, f.uv, f.p_rest, lod),
+                DecalMode::ReplaceAll => return Applied::Unlit(self.value(&map.texture, f.uv, f.p_rest, lod)),
+                DecalMode::ReplaceNormal => {
+                    let c = self.raw(&map.texture, f.uv, f.p_rest, lod) / 255.0;
+                    *n = f.normal_to_world(bump::normal_map(f, c * 2.0 - Vec3::ONE));
+                }
+                DecalMode::BumpNormal => *n = bump::bump(self, map, f),
+                DecalMode::ReplaceBackground => {}
+            }
+        }
+        Applied::Lit
+    }
+
+    /// The background at image position `uv` (0–1 across and down), if a map
+    /// replaces it.
+    pub fn background(&self, uv: Vec2) -> Option<Vec3> {
+        let map = &self.maps[self.background? as usize];
+        Some(self.value(&map.texture, uv, uv.extend(0.0), 0.0))
+    }
+}
+
+#[cfg(test)]
+mod tests;

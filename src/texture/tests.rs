@@ -1,0 +1,182 @@
+//! Texture lookups, uv frames, normal and bump mapping on synthetic inputs.
+
+use super::*;
+use crate::accel::TriHit;
+use crate::geometry::{Mesh, Sphere};
+use crate::scene::description::NoiseConversion;
+
+fn frame(n: Vec3, dpdu: Vec3, dpdv: Vec3, uv: Vec2) -> TexFrame {
+    TexFrame { uv, p_object: Vec3::new(0.3, 0.2, 0.1), p_rest: Vec3::new(0.3, 0.2, 0.1), dpdu, dpdv, n, to_world: None, footprint: 0.0 }
+}
+
+/// A 2×2 image: black, white / red, blue.
+fn tiny() -> Image {
+    Image::from_rgb8(2, 2, vec![[0, 0, 0], [255, 255, 255], [255, 0, 0], [0, 0, 255]]).unwrap()
+}
+
+#[test]
+fn nearest_picks_the_texel_containing_the_point() {
+    let img = tiny();
+    assert_eq!(img.nearest(Vec2::new(0.1, 0.1)), Vec3::ZERO);
+    assert_eq!(img.nearest(Vec2::new(0.9, 0.1)), Vec3::splat(255.0));
+    assert_eq!(img.nearest(Vec2::new(0.1, 0.9)), Vec3::new(255.0, 0.0, 0.0));
+    assert_eq!(img.nearest(Vec2::new(0.9, 0.9)), Vec3::new(0.0, 0.0, 255.0));
+    // Repeats outside [0, 1].
+    assert_eq!(img.nearest(Vec2::new(1.9, -0.1)), img.nearest(Vec2::new(0.9, 0.9)));
+}
+
+#[test]
+fn bilinear_weights_texels_at_integer_coordinates_and_repeats_edges() {
+    let img = tiny();
+    // The course's convention: texel (i, j) has full weight at (i, j)·size.
+    assert_eq!(img.bilinear(Vec2::new(0.0, 0.0)), Vec3::ZERO);
+    let mid = img.bilinear(Vec2::new(0.25, 0.0));
+    assert!((mid - Vec3::splat(127.5)).length() < 1e-3, "{mid}");
+    let c = img.bilinear(Vec2::new(0.25, 0.25));
+    assert!((c - Vec3::new(127.5, 63.75, 127.5)).length() < 1e-3, "{c}");
+    // Beyond the last texel the edge repeats rather than wrapping around.
+    assert_eq!(img.bilinear(Vec2::new(0.75, 0.0)), Vec3::splat(255.0));
+    assert_eq!(img.bilinear(Vec2::new(0.75, 0.75)), Vec3::new(0.0, 0.0, 255.0));
+}
+
+#[test]
+fn trilinear_blends_mip_levels() {
+    let mut img = tiny();
+    img.build_mipmaps();
+    assert_eq!(img.level_count(), 2);
+    let mean = Vec3::new(127.5, 63.75, 127.5);
+    let top = img.trilinear(Vec2::new(0.0, 0.0), 0.0);
+    assert_eq!(top, Vec3::ZERO);
+    // Level 1 is the 1×1 average (rounded to 8 bits).
+    let l1 = img.trilinear(Vec2::new(0.0, 0.0), 1.0);
+    assert!((l1 - mean).abs().max_element() <= 0.5, "{l1}");
+    let half = img.trilinear(Vec2::new(0.0, 0.0), 0.5);
+    assert!((half - (top + l1) * 0.5).length() < 1e-3, "{half}");
+    // Beyond the coarsest level, the coarsest level; below 0, level 0.
+    assert_eq!(img.trilinear(Vec2::new(0.0, 0.0), 7.0), l1);
+    assert_eq!(img.trilinear(Vec2::new(0.0, 0.0), -3.0), top);
+    // A 5×3 image halves to 2×1 and then 1×1.
+    let mut odd = Image::from_rgb8(5, 3, vec![[10, 20, 30]; 15]).unwrap();
+    odd.build_mipmaps();
+    assert_eq!(odd.level_count(), 3);
+    assert_eq!(odd.trilinear(Vec2::new(0.5, 0.5), 2.0), Vec3::new(10.0, 20.0, 30.0));
+}
+
+#[test]
+fn sphere_uv_follows_the_course_mapping_and_derivatives_match_differences() {
+    let s = Sphere { center: Vec3::new(1.0, 2.0, 3.0), radius: 2.0 };
+    // The +y pole is v = 0, the equator v = 1/2; +x is u = 1/2, +z u = 1/4.
+    let (uv, _, _) = s.uv_frame(s.center + Vec3::new(2.0, 0.0, 0.0));
+    assert!((uv - Vec2::new(0.5, 0.5)).length() < 1e-6, "{uv}");
+    let (uv, _, _) = s.uv_frame(s.center + Vec3::new(0.0, 0.0, 2.0));
+    assert!((uv - Vec2::new(0.25, 0.5)).length() < 1e-6, "{uv}");
+    let (uv, _, _) = s.uv_frame(s.center + Vec3::new(0.0, 2.0, 0.0) * 0.999_999);
+    assert!(uv.y < 1e-3, "{uv}");
+    // Derivatives against moving along the sphere by (du, dv).
+    let point = |u: f32, v: f32| {
+        let (phi, theta) = (std::f32::consts::PI - 2.0 * std::f32::consts::PI * u, std::f32::consts::PI * v);
+        s.center + Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin()) * s.radius
+    };
+    for &(u, v) in &[(0.1, 0.3), (0.6, 0.7), (0.85, 0.45)] {
+        let p = point(u, v);
+        let (uv, dpdu, dpdv) = s.uv_frame(p);
+        assert!((uv - Vec2::new(u, v)).length() < 1e-4, "{uv} vs {u} {v}");
+        let h = 1e-3;
+        let fu = (point(u + h, v) - point(u - h, v)) / (2.0 * h);
+        let fv = (point(u, v + h) - point(u, v - h)) / (2.0 * h);
+        assert!((fu - dpdu).length() < 1e-2 * dpdu.length(), "{fu} vs {dpdu}");
+        assert!((fv - dpdv).length() < 1e-2 * dpdv.length(), "{fv} vs {dpdv}");
+    }
+}
+
+#[test]
+fn triangle_uv_interpolates_and_its_frame_inverts_the_uv_map() {
+    let positions = vec![Vec3::new(0.0, 0.0, 0.0), Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 3.0, 1.0)];
+    let uvs = vec![Vec2::new(0.1, 0.2), Vec2::new(0.5, 0.2), Vec2::new(0.1, 0.8)];
+    let mesh = Mesh::new(positions.clone(), vec![[0, 1, 2]], None).with_uvs(Some(uvs.clone()));
+    let hit = TriHit { t: 1.0, prim: 0, u: 0.25, v: 0.5 };
+    let f = mesh.uv_frame(&hit);
+    let w = 1.0 - hit.u - hit.v;
+    let expect_uv = uvs[0] * w + uvs[1] * hit.u + uvs[2] * hit.v;
+    assert!((f.uv - expect_uv).length() < 1e-6);
+    assert!((f.p - (positions[0] * w + positions[1] * hit.u + positions[2] * hit.v)).length() < 1e-6);
+    // Moving by (du, dv) in texture space moves the point by dpdu du + dpdv dv:
+    // check on the edges, where both are known exactly.
+    let e1 = positions[1] - positions[0];
+    let e2 = positions[2] - positions[0];
+    let (d1, d2) = (uvs[1] - uvs[0], uvs[2] - uvs[0]);
+    assert!((f.dpdu * d1.x + f.dpdv * d1.y - e1).length() < 1e-5);
+    assert!((f.dpdu * d2.x + f.dpdv * d2.y - e2).length() < 1e-5);
+}
+
+#[test]
+fn flat_normal_map_texel_leaves_the_normal_unchanged() {
+    let n = Vec3::new(0.0, 0.0, 1.0);
+    let f = frame(n, Vec3::new(3.0, 0.0, 0.0), Vec3::new(0.0, -2.0, 0.0), Vec2::new(0.3, 0.3));
+    // (0.5, 0.5, 1) in [0, 1], i.e. (0, 0, 1) in tangent space.
+    let out = bump::normal_map(&f, Vec3::new(0.5, 0.5, 1.0) * 2.0 - Vec3::ONE);
+    assert!((out - n).length() < 1e-6, "{out}");
+    // Through the whole map pipeline too, with a uniform image of (128, 128, 255).
+    let img = Image::from_rgb8(1, 1, vec![[128, 128, 255]]).unwrap();
+    let mut tex = Textures::new(vec![img], &[], None);
+    tex.maps.push(TextureMap {
+        texture: Texture::Image { image: 0, interpolation: Interpolation::Bilinear, scale: 1.0 / 255.0 },
+        decal: DecalMode::ReplaceNormal,
+        bump_factor: 1.0,
+    });
+    let list = tex.add_list(&[0]);
+    let mut m = crate::shading::Material::default();
+    let mut out = n;
+    assert!(matches!(tex.apply(list, &f, &mut m, &mut out), Applied::Lit));
+    assert!((out - n).length() < 0.01, "{out}");
+}
+
+#[test]
+fn zero_bump_factor_leaves_the_normal_unchanged() {
+    let n = Vec3::new(0.0, 1.0, 0.0);
+    let f = frame(n, Vec3::X, Vec3::Z, Vec2::new(0.4, 0.6));
+    let img = Image::from_rgb8(2, 2, vec![[0, 0, 0], [255, 255, 255], [90, 10, 30], [7, 200, 100]]).unwrap();
+    let tex = Textures::new(vec![img], &[], None);
+    for (texture, k) in [
+        (Texture::Image { image: 0, interpolation: Interpolation::Bilinear, scale: 1.0 / 255.0 }, 0.0),
+        (Texture::Perlin(Perlin { scale: 3.0, conversion: NoiseConversion::AbsVal, octaves: 2 }), 0.0),
+    ] {
+        let map = TextureMap { texture, decal: DecalMode::BumpNormal, bump_factor: k };
+        assert_eq!(bump::bump(&tex, &map, &f), n);
+        // A non-zero factor does tilt it (the test can fail).
+        let tilted = bump::bump(&tex, &TextureMap { bump_factor: 1.0, ..map }, &f);
+        assert!((tilted - n).length() > 1e-4, "{tilted}");
+        assert!((tilted.length() - 1.0).abs() < 1e-5);
+    }
+}
+
+#[test]
+fn decal_modes_change_the_right_component() {
+    let img = Image::from_rgb8(1, 1, vec![[51, 102, 255]]).unwrap();
+    let mut tex = Textures::new(vec![img], &[], None);
+    let c = Vec3::new(0.2, 0.4, 1.0);
+    for decal in [DecalMode::ReplaceKd, DecalMode::BlendKd, DecalMode::ReplaceKs, DecalMode::ReplaceAll] {
+        tex.maps.push(TextureMap {
+            texture: Texture::Image { image: 0, interpolation: Interpolation::Nearest, scale: 1.0 / 255.0 },
+            decal,
+            bump_factor: 1.0,
+        });
+    }
+    let f = frame(Vec3::Z, Vec3::X, Vec3::Y, Vec2::new(0.5, 0.5));
+    let base = crate::shading::Material { diffuse: Vec3::splat(0.6), specular: Vec3::splat(0.1), ..Default::default() };
+    tex.lists = vec![0, 1, 2, 3];
+    let apply = |i: u32| {
+        let mut m = base;
+        let mut n = Vec3::Z;
+        let r = tex.apply(TexList { start: i, len: 1 }, &f, &mut m, &mut n);
+        (r, m)
+    };
+    let (_, m) = apply(0);
+    assert!((m.diffuse - c).length() < 1e-6 && m.specular == base.specular);
+    let (_, m) = apply(1);
+    assert!((m.diffuse - (c + base.diffuse) * 0.5).length() < 1e-6);
+    let (_, m) = apply(2);
+    assert!((m.specular - c).length() < 1e-6 && m.diffuse == base.diffuse);
+    let (r, _) = apply(3);
+    assert!(matches!(r, Applied::Unlit(v) if (v - c).length() < 1e-6));
+}
