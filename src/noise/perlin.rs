@@ -52,7 +52,7 @@ pub(crate) static P: [u8; 512] = {
 
 /// The 3D gradients indexed by `hash & 15`, exactly as Perlin's `grad` picks
 /// them (his bit tricks unrolled, so the analytic gradient can reuse them).
-const GRAD3: [[f32; 3]; 16] = [
+pub(crate) const GRAD3: [[f32; 3]; 16] = [
     [1.0, 1.0, 0.0],
     [-1.0, 1.0, 0.0],
     [1.0, -1.0, 0.0],
