@@ -20,16 +20,18 @@
 //! | marble, fire (\|noise\| sums) | [`fractal::turbulence3`] | [0, 1.04·Σ\|gain\|ⁱ] |
 //! | mountain ridges | [`fractal::ridged3`] | [0, 1] for gain ≥ 0 |
 //! | cells, stones, cracks (F2 − F1) | [`voronoi::voronoi3`], [`voronoi::voronoi2`] | see [`voronoi`] |
-//! | the CENG795 `perlin` texture | [`course::noise`] | [-1, 1] |
+//! | the CENG795 `perlin` texture | [`course::noise`] | [-1, 1] (peak ±1.003) |
 //!
 //! # Speed
 //!
 //! `cargo bench --bench noise` on the 2-core development machine, ns per call:
 //! see the figures in `benches/noise.rs`'s header.
 
+pub mod course;
 pub mod fractal;
 pub mod perlin;
 pub mod simplex;
+pub mod voronoi;
 
 /// Helpers shared by the noise tests: a tiny LCG (no `rand` needed) and the
 /// checks every noise function has to pass.
