@@ -77,9 +77,10 @@ impl Camera {
     /// a ray cone (Akenine-Möller et al., Ray Tracing Gems ch. 20) that sizes
     /// texture footprints for mipmapping.
     pub fn pixel_spread(&self) -> f32 {
-        let to_center = (self.corner + self.du * (self.width as f32 * 0.5) + self.dv * (self.height as f32 * 0.5)
-            - self.eye)
-            .length();
+        let to_center =
+            (self.corner + self.du * (self.width as f32 * 0.5) + self.dv * (self.height as f32 * 0.5)
+                - self.eye)
+                .length();
         let pixel = self.du.length().min(self.dv.length());
         if to_center > 0.0 {
             (pixel / to_center).atan()

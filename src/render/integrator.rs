@@ -63,7 +63,15 @@ pub struct PathState {
 impl PathState {
     /// A fresh state for a new camera ray, keeping the running counts.
     pub fn new(stats: RayStats, time: f32, sampler: PixelSampler) -> Self {
-        PathState { stats, budget: SECONDARY_BUDGET, time, sampler, screen: Vec2::ZERO, spread: 0.0, travelled: 0.0 }
+        PathState {
+            stats,
+            budget: SECONDARY_BUDGET,
+            time,
+            sampler,
+            screen: Vec2::ZERO,
+            spread: 0.0,
+            travelled: 0.0,
+        }
     }
 
     /// The state for a camera sample at image position `screen` with ray
@@ -84,12 +92,12 @@ impl PathState {
 }
 
 use crate::math::{orthonormal_basis, Ray, Vec2, Vec3};
-use crate::texture::Applied;
 use crate::render::sampler::PixelSampler;
 use crate::render::scene::{Hit, Scene};
 use crate::shading::fresnel;
 use crate::shading::material::Specular;
 use crate::shading::Material;
+use crate::texture::Applied;
 
 /// Ray counts, for the Mrays/s summary.
 #[derive(Clone, Copy, Debug, Default)]

@@ -361,7 +361,16 @@ impl Scene {
 /// A frame for a hit whose primitive cannot be found (never, by construction).
 fn flat_frame(hit: &Hit, footprint: f32) -> TexFrame {
     let (dpdu, dpdv) = crate::math::orthonormal_basis(hit.ns);
-    TexFrame { uv: Vec2::ZERO, p_object: hit.p, p_rest: hit.p, dpdu, dpdv, n: hit.ns, to_world: None, footprint }
+    TexFrame {
+        uv: Vec2::ZERO,
+        p_object: hit.p,
+        p_rest: hit.p,
+        dpdu,
+        dpdv,
+        n: hit.ns,
+        to_world: None,
+        footprint,
+    }
 }
 
 /// Decodes the scene's images (in parallel) and builds its texture maps.
@@ -376,7 +385,11 @@ fn build_textures(desc: &Description) -> Result<Textures, SceneError> {
         })
         .collect();
     let used: Vec<bool> = (0..desc.images.len())
-        .map(|i| desc.texture_maps.iter().any(|m| matches!(m.source, TextureSource::Image { image, .. } if image == i)))
+        .map(|i| {
+            desc.texture_maps
+                .iter()
+                .any(|m| matches!(m.source, TextureSource::Image { image, .. } if image == i))
+        })
         .collect();
     let images: Vec<Image> = desc
         .images
@@ -385,7 +398,8 @@ fn build_textures(desc: &Description) -> Result<Textures, SceneError> {
         .map(|(i, d)| {
             if !used[i] {
                 // A listed image no map reads is not decoded (nor required to exist).
-                return Image::from_rgb8(1, 1, vec![[0, 0, 0]]).ok_or_else(|| SceneError::at(&desc.file, &d.loc, "internal error"));
+                return Image::from_rgb8(1, 1, vec![[0, 0, 0]])
+                    .ok_or_else(|| SceneError::at(&desc.file, &d.loc, "internal error"));
             }
             let mut img = Image::load(&d.path).map_err(|e| SceneError::at(&desc.file, &d.loc, e))?;
             if trilinear[i] {

@@ -98,7 +98,9 @@ impl Level {
             }
         }
         let texels = match self.texels {
-            Texels::Ldr(_) => Texels::Ldr(out.iter().map(|c| c.to_array().map(|v| v.round() as u8)).collect()),
+            Texels::Ldr(_) => {
+                Texels::Ldr(out.iter().map(|c| c.to_array().map(|v| v.round() as u8)).collect())
+            }
             Texels::Hdr(_) => Texels::Hdr(out.iter().map(|c| c.to_array()).collect()),
         };
         Level { width: w, height: h, texels }

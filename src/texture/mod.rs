@@ -180,7 +180,9 @@ impl Textures {
     /// The maps of a list.
     #[inline]
     pub fn maps_of(&self, list: TexList) -> impl Iterator<Item = &TextureMap> + '_ {
-        self.lists[list.start as usize..(list.start + list.len) as usize].iter().map(|&m| &self.maps[m as usize])
+        self.lists[list.start as usize..(list.start + list.len) as usize]
+            .iter()
+            .map(|&m| &self.maps[m as usize])
     }
 
     /// A map's raw value at a point: texel (not yet normalized), Perlin grey,
@@ -213,7 +215,9 @@ impl Textures {
     /// footprint width, from the texel density the uv parameterization gives
     /// (`W·H` texels over the area `|∂p/∂u × ∂p/∂v|`).
     fn lod(&self, texture: &Texture, f: &TexFrame) -> f32 {
-        let Texture::Image { image, interpolation: Interpolation::Trilinear, .. } = *texture else { return 0.0 };
+        let Texture::Image { image, interpolation: Interpolation::Trilinear, .. } = *texture else {
+            return 0.0;
+        };
         let (w, h) = self.images[image as usize].size();
         let area = f.world_uv_area();
         if area <= 0.0 || f.footprint <= 0.0 {
@@ -233,9 +237,13 @@ impl Textures {
             let lod = self.lod(&map.texture, f);
             match map.decal {
                 DecalMode::ReplaceKd => m.diffuse = self.value(&map.texture, f.uv, f.p_rest, lod),
-                DecalMode::BlendKd => m.diffuse = (m.diffuse + self.value(&map.texture, f.uv, f.p_rest, lod)) * 0.5,
+                DecalMode::BlendKd => {
+                    m.diffuse = (m.diffuse + self.value(&map.texture, f.uv, f.p_rest, lod)) * 0.5
+                }
                 DecalMode::ReplaceKs => m.specular = self.value(&map.texture, f.uv, f.p_rest, lod),
-                DecalMode::ReplaceAll => return Applied::Unlit(self.value(&map.texture, f.uv, f.p_rest, lod)),
+                DecalMode::ReplaceAll => {
+                    return Applied::Unlit(self.value(&map.texture, f.uv, f.p_rest, lod))
+                }
                 DecalMode::ReplaceNormal => {
                     let c = self.raw(&map.texture, f.uv, f.p_rest, lod) / 255.0;
                     *n = f.normal_to_world(bump::normal_map(f, c * 2.0 - Vec3::ONE));

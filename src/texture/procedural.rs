@@ -130,16 +130,20 @@ mod tests {
                     let (v, g) = t.value_grad(p, true);
                     assert!((0.0..=1.0).contains(&v), "{v} at {p}");
                     assert_eq!(v, t.value(p));
+                    // |n| has a kink wherever an octave's noise crosses zero.
+                    let near_kink = (0..octaves).any(|o| {
+                        let q = p * (1.7 * 2f32.powi(o as i32));
+                        course::noise(q.x, q.y, q.z).abs() < 0.02
+                    });
+                    if conversion == NoiseConversion::AbsVal && near_kink {
+                        continue;
+                    }
                     let h = 1e-3;
                     let fd = Vec3::new(
                         t.value(p + Vec3::X * h) - t.value(p - Vec3::X * h),
                         t.value(p + Vec3::Y * h) - t.value(p - Vec3::Y * h),
                         t.value(p + Vec3::Z * h) - t.value(p - Vec3::Z * h),
                     ) / (2.0 * h);
-                    // |n| has kinks where n = 0; skip points next to one.
-                    if conversion == NoiseConversion::AbsVal && v < 0.02 {
-                        continue;
-                    }
                     assert!((fd - g).length() < 0.02 * (1.0 + g.length()), "{fd} vs {g} at {p}");
                 }
             }

@@ -6,7 +6,16 @@ use crate::geometry::{Mesh, Sphere};
 use crate::scene::description::NoiseConversion;
 
 fn frame(n: Vec3, dpdu: Vec3, dpdv: Vec3, uv: Vec2) -> TexFrame {
-    TexFrame { uv, p_object: Vec3::new(0.3, 0.2, 0.1), p_rest: Vec3::new(0.3, 0.2, 0.1), dpdu, dpdv, n, to_world: None, footprint: 0.0 }
+    TexFrame {
+        uv,
+        p_object: Vec3::new(0.3, 0.2, 0.1),
+        p_rest: Vec3::new(0.3, 0.2, 0.1),
+        dpdu,
+        dpdv,
+        n,
+        to_world: None,
+        footprint: 0.0,
+    }
 }
 
 /// A 2×2 image: black, white / red, blue.
@@ -163,7 +172,11 @@ fn decal_modes_change_the_right_component() {
         });
     }
     let f = frame(Vec3::Z, Vec3::X, Vec3::Y, Vec2::new(0.5, 0.5));
-    let base = crate::shading::Material { diffuse: Vec3::splat(0.6), specular: Vec3::splat(0.1), ..Default::default() };
+    let base = crate::shading::Material {
+        diffuse: Vec3::splat(0.6),
+        specular: Vec3::splat(0.1),
+        ..Default::default()
+    };
     tex.lists = vec![0, 1, 2, 3];
     let apply = |i: u32| {
         let mut m = base;

@@ -23,9 +23,9 @@
 //! `resetTransform="true"` (hw2 spec, eq. 3). Degenerate inline triangles (two
 //! equal indices) are dropped with a warning, as the course's specs advise.
 
+use super::textures::object_textures;
 use super::transforms::compose;
 use super::Warnings;
-use super::textures::object_textures;
 use crate::math::{Transform, Vec2, Vec3};
 use crate::scene::description::{MeshSource, ObjectDesc, Shape};
 use crate::scene::element::{Element, Reader};
@@ -202,14 +202,15 @@ fn mesh(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, SceneErr
         let path = ctx.base_dir.join(ply.trim());
         return Ok(Shape::Mesh { source: MeshSource::Ply(path), smooth });
     }
-    let offset = |name: &str| -> Result<i64, SceneError> {
-        match faces.attr(name).map(str::trim) {
-            None => Ok(0),
-            Some(v) => v.parse::<i64>().ok().filter(|o| o.abs() <= u32::MAX as i64).ok_or_else(|| {
-                r.err(faces, format!("<Faces> attribute {name}=\"{v}\" is not an integer"))
-            }),
-        }
-    };
+    let offset =
+        |name: &str| -> Result<i64, SceneError> {
+            match faces.attr(name).map(str::trim) {
+                None => Ok(0),
+                Some(v) => v.parse::<i64>().ok().filter(|o| o.abs() <= u32::MAX as i64).ok_or_else(|| {
+                    r.err(faces, format!("<Faces> attribute {name}=\"{v}\" is not an integer"))
+                }),
+            }
+        };
     let (vertex_offset, texture_offset) = (offset("vertexOffset")?, offset("textureOffset")?);
     let ix = r.uints(faces)?;
     if ix.len() % 3 != 0 {
@@ -227,7 +228,11 @@ fn mesh(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, SceneErr
                     faces,
                     format!(
                         "face index {raw}{} is out of range (VertexData has {n} vertices, numbered from 1)",
-                        if vertex_offset != 0 { format!(" + vertexOffset {vertex_offset}") } else { String::new() }
+                        if vertex_offset != 0 {
+                            format!(" + vertexOffset {vertex_offset}")
+                        } else {
+                            String::new()
+                        }
                     ),
                 ));
             }
@@ -242,7 +247,10 @@ fn mesh(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, SceneErr
     if degenerate > 0 {
         w.at(faces, format!("{degenerate} degenerate triangle(s) skipped"));
     }
-    Ok(Shape::Mesh { source: MeshSource::Inline { triangles: tris, tex_shift: texture_offset - vertex_offset }, smooth })
+    Ok(Shape::Mesh {
+        source: MeshSource::Inline { triangles: tris, tex_shift: texture_offset - vertex_offset },
+        smooth,
+    })
 }
 
 fn vertex(ctx: &Context, el: &Element, i: u32) -> Result<Vec3, SceneError> {

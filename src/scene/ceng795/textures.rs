@@ -36,7 +36,9 @@ pub const MAX_OCTAVES: u32 = 24;
 pub fn read_tex_coords(r: &Reader, el: &Element) -> Result<Vec<Vec2>, SceneError> {
     let f = r.floats(el)?;
     if f.len() % 2 != 0 {
-        return Err(r.err(el, format!("<TexCoordData> has {} numbers, which is not a multiple of 2", f.len())));
+        return Err(
+            r.err(el, format!("<TexCoordData> has {} numbers, which is not a multiple of 2", f.len()))
+        );
     }
     Ok(f.chunks_exact(2).map(|c| Vec2::new(c[0], c[1])).collect())
 }
@@ -117,12 +119,12 @@ fn texture_map(
                 Some((_, "nearest")) => Interpolation::Nearest,
                 Some((_, "bilinear")) => Interpolation::Bilinear,
                 Some((_, "trilinear")) => Interpolation::Trilinear,
-                Some((e, other)) => {
-                    return Err(r.err(
-                        e,
-                        format!("<Interpolation> \"{other}\" is unknown (expected nearest, bilinear or trilinear)"),
-                    ))
-                }
+                Some((e, other)) => return Err(r.err(
+                    e,
+                    format!(
+                        "<Interpolation> \"{other}\" is unknown (expected nearest, bilinear or trilinear)"
+                    ),
+                )),
             };
             let normalizer = match el.child("Normalizer") {
                 Some(n) => {
@@ -161,10 +163,7 @@ fn texture_map(
             TextureSource::Perlin { scale: r.float_or(el, "NoiseScale", 1.0)?, conversion, octaves }
         }
         "checkerboard" => {
-            w.unknown_children(
-                el,
-                &[&common[..], &["Scale", "Offset", "BlackColor", "WhiteColor"]].concat(),
-            );
+            w.unknown_children(el, &[&common[..], &["Scale", "Offset", "BlackColor", "WhiteColor"]].concat());
             TextureSource::Checkerboard {
                 scale: r.float_or(el, "Scale", 1.0)?,
                 offset: r.float_or(el, "Offset", 0.0)?,
