@@ -3,8 +3,9 @@
 //!
 //! Metric and bars live in `luster::conformance::thresholds` (shared with
 //! `luster suite`): PSNR on 8-bit RGB and mean LDR-FLIP, by default
-//! PSNR ≥ 40 dB and FLIP ≤ 0.02 per image. Every render and a FLIP heatmap is
-//! written under `target/tmp/golden/`, so a failure can be looked at.
+//! PSNR ≥ 40 dB and FLIP ≤ 0.01 per image (hw3, which is noisy, is in
+//! `golden_hw3.rs`). Every render and a FLIP heatmap is written under
+//! `target/tmp/golden/`, so a failure can be looked at.
 //!
 //! The course folder is read from `../shared/scenes/ceng795`; without it the
 //! tests say they skipped.
@@ -62,8 +63,8 @@ fn check_homework(hw: &str) {
                     img.image_name,
                     c.psnr,
                     c.flip,
-                    img.threshold.min_psnr,
-                    img.threshold.max_flip,
+                    img.bar.min_psnr,
+                    img.bar.max_flip,
                     img.render.display(),
                     img.heatmap.as_ref().map(|p| p.display().to_string()).unwrap_or_default()
                 ));

@@ -132,6 +132,10 @@ enum Command {
         /// Exit 1 if any image failed or errored.
         #[arg(long)]
         strict: bool,
+        /// Samples per pixel, overriding each camera's NumSamples (a quick
+        /// look at hw3: noise-aware bars adapt to the noise).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_048_576))]
+        spp: Option<u32>,
     },
 }
 
@@ -164,13 +168,14 @@ fn main() -> ExitCode {
                 exposure,
             })
         }
-        Command::Suite { dir, outdir, jobs, only, threads, strict } => suite::run(&suite::Args {
+        Command::Suite { dir, outdir, jobs, only, threads, strict, spp } => suite::run(&suite::Args {
             dir,
             outdir,
             jobs: usize::from(jobs),
             only,
             threads: threads.map(usize::from),
             strict,
+            spp,
         }),
     }
 }

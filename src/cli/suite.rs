@@ -29,6 +29,8 @@ pub struct Args {
     pub threads: Option<usize>,
     /// Exit 1 on failures.
     pub strict: bool,
+    /// Samples per pixel instead of each camera's.
+    pub spp: Option<u32>,
 }
 
 /// Runs the suite and returns the exit code.
@@ -61,7 +63,8 @@ pub fn run(args: &Args) -> ExitCode {
     if let Err(e) = std::fs::create_dir_all(&renders) {
         return fail(format!("could not create the report folder `{}`: {e}", renders.display()));
     }
-    let opts = RunOptions::new(args.jobs, args.threads);
+    let mut opts = RunOptions::new(args.jobs, args.threads);
+    opts.render.spp = args.spp;
     say!(
         "luster suite: {} scene{} from {}{} ({} job{} × {} thread{})",
         cases.len(),
@@ -116,8 +119,14 @@ fn progress(r: &CaseResult, n: usize, total: usize, width: usize) {
                 } else {
                     "FAIL"
                 };
+                let pair = match &i.pair {
+                    Some(p) => format!("; seed pair FLIP {:.4}, {:.1} dB", p.flip, p.psnr),
+                    None => String::new(),
+                };
                 match &i.comparison {
-                    Some(c) => format!("{} {verdict} (FLIP {:.4}, {:.1} dB)", i.image_name, c.flip, c.psnr),
+                    Some(c) => {
+                        format!("{} {verdict} (FLIP {:.4}, {:.1} dB{pair})", i.image_name, c.flip, c.psnr)
+                    }
                     None => format!("{} {verdict}", i.image_name),
                 }
             })

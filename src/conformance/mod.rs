@@ -12,10 +12,10 @@ pub mod runner;
 pub mod thresholds;
 
 use crate::image::{compare, CompareOptions, Comparison, Rgb32Image};
-use crate::render::{self, Scene};
+use crate::render::{self, RenderOptions, Scene};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-pub use thresholds::{threshold, Threshold};
+pub use thresholds::{threshold, Bar, Rule, Threshold};
 
 /// Which encoding a scene uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -143,7 +143,17 @@ pub struct ImageResult {
     pub comparison: Option<Comparison>,
     /// The threshold it was judged by.
     pub threshold: Threshold,
-    /// Render seconds for this camera.
+    /// The numbers it had to reach (the threshold applied to `pair`).
+    pub bar: Bar,
+    /// For a noise-aware threshold: our render against our render with the
+    /// next seed, which measures our own noise.
+    pub pair: Option<Comparison>,
+    /// PSNR of the means of 8×8-pixel blocks against the expected image
+    /// (where noise averages out), when the bar tests it.
+    pub coarse_psnr: Option<f64>,
+    /// Samples per pixel it was rendered with.
+    pub spp: u32,
+    /// Render seconds for this camera (both renders of a pair).
     pub seconds: f64,
     /// Whether it met the threshold (false without an expected image).
     pub pass: bool,
@@ -171,9 +181,17 @@ pub struct CaseResult {
 /// Loads, builds and renders `case` on the current rayon pool, writes each
 /// image and its heatmap under `outdir`, and compares with the expected images.
 pub fn run_case(case: &Case, outdir: &Path) -> CaseResult {
+    run_case_with(case, outdir, &RenderOptions::default())
+}
+
+/// [`run_case`] with render options (a reduced sample count for quick checks,
+/// a seed, a filter). An image judged by a noise-aware threshold is rendered
+/// a second time with the next seed, and the distance between the two sets
+/// its bar.
+pub fn run_case_with(case: &Case, outdir: &Path, opts: &RenderOptions) -> CaseResult {
     let t0 = Instant::now();
     let mut result = CaseResult::failed(case, None);
-    run_case_into(case, outdir, &mut result);
+    run_case_into(case, outdir, opts, &mut result);
     result.seconds = t0.elapsed().as_secs_f64();
     result
 }
@@ -182,9 +200,9 @@ pub fn run_case(case: &Case, outdir: &Path) -> CaseResult {
 /// comparing caught and turned into the case's error, so that one bad scene
 /// cannot stop a suite. The panic message is kept; images finished before the
 /// panic are lost.
-pub fn run_case_guarded(case: &Case, outdir: &Path) -> CaseResult {
+pub fn run_case_guarded(case: &Case, outdir: &Path, opts: &RenderOptions) -> CaseResult {
     let t0 = Instant::now();
-    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run_case(case, outdir))) {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run_case_with(case, outdir, opts))) {
         Ok(r) => r,
         Err(payload) => {
             let msg = payload
@@ -215,14 +233,14 @@ impl CaseResult {
     /// Frees the per-pixel FLIP and difference maps of every comparison,
     /// keeping the summary numbers (the heatmap is already written).
     pub fn drop_pixel_maps(&mut self) {
-        for c in self.images.iter_mut().filter_map(|i| i.comparison.as_mut()) {
+        for c in self.images.iter_mut().flat_map(|i| i.comparison.iter_mut().chain(i.pair.iter_mut())) {
             c.flip_map = Vec::new();
             c.diff_map = Vec::new();
         }
     }
 }
 
-fn run_case_into(case: &Case, outdir: &Path, result: &mut CaseResult) {
+fn run_case_into(case: &Case, outdir: &Path, opts: &RenderOptions, result: &mut CaseResult) {
     let t0 = Instant::now();
     let built = crate::scene::load(&case.scene).and_then(|d| {
         result.warnings.extend(d.warnings.iter().map(|w| w.to_string()));
@@ -240,43 +258,60 @@ fn run_case_into(case: &Case, outdir: &Path, result: &mut CaseResult) {
     let stem = case.label().replace(['/', '.'], "_");
     for (i, cam) in scene.cameras.iter().enumerate() {
         let t = Instant::now();
-        let img = render::render(&scene, i, &|_| {});
-        let seconds = t.elapsed().as_secs_f64();
-        let render_path = outdir.join(format!("{stem}__{}", sanitize(&cam.image_name)));
+        let img = render::render_with(&scene, i, opts, &|_| {});
+        let threshold = threshold(case, &cam.image_name, cam.num_samples);
         let expected = case.expected_image(&cam.image_name);
-        let threshold = threshold(case, &cam.image_name);
+        // The second render is only worth its time when there is a
+        // reference to judge.
+        let second = (threshold.needs_pair() && expected.is_some()).then(|| {
+            let next = RenderOptions { seed: opts.seed.wrapping_add(1), ..*opts };
+            render::render_with(&scene, i, &next, &|_| {}).to_rgb8()
+        });
+        let seconds = t.elapsed().as_secs_f64();
+        let png = outdir.join(format!("{stem}__{}", sanitize(&cam.image_name))).with_extension("png");
         let mut r = ImageResult {
             image_name: cam.image_name.clone(),
-            render: render_path.clone(),
+            render: png.clone(),
             expected: expected.clone(),
             heatmap: None,
             comparison: None,
             threshold,
+            bar: threshold.bar(None),
+            pair: None,
+            coarse_psnr: None,
+            spp: opts.spp.unwrap_or(cam.num_samples).max(1),
             seconds,
             pass: false,
             error: None,
         };
         let rgb = img.to_rgb8();
-        let png = render_path.with_extension("png");
-        r.render = png.clone();
         if let Err(e) = crate::image::output::write_rgb8(&png, img.width, img.height, &rgb) {
             r.error = Some(e.to_string());
             result.images.push(r);
             continue;
         }
+        if let Some(second) = &second {
+            match compare_rgb8(img.width, img.height, second, &rgb) {
+                Ok(p) => r.pair = Some(p),
+                Err(e) => r.error = Some(e),
+            }
+            r.bar = threshold.bar(r.pair.as_ref());
+            let pair_png =
+                png.with_file_name(format!("{}__seed{}.png", file_stem(&png), opts.seed.wrapping_add(1)));
+            // Kept for looking at; judging does not need the file.
+            let _ = crate::image::output::write_rgb8(&pair_png, img.width, img.height, second);
+        }
         if let Some(exp) = expected {
-            match compare_with(&exp, img.width, img.height, &rgb) {
-                Ok(c) => {
-                    let heat = png.with_file_name(format!(
-                        "{}__heatmap.png",
-                        png.file_stem().map(|s| s.to_string_lossy()).unwrap_or_default()
-                    ));
+            match compare_with(&exp, img.width, img.height, &rgb, r.bar.tests_coarse()) {
+                Ok((c, coarse)) => {
+                    r.coarse_psnr = coarse;
+                    let heat = png.with_file_name(format!("{}__heatmap.png", file_stem(&png)));
                     if let Ok(h) = crate::image::comparison_heatmap(&c, crate::image::HeatmapSource::Flip) {
                         if crate::image::write_heatmap(&h, &heat).is_ok() {
                             r.heatmap = Some(heat);
                         }
                     }
-                    r.pass = threshold.accepts(&c);
+                    r.pass = r.error.is_none() && r.bar.accepts(&c, r.coarse_psnr);
                     r.comparison = Some(c);
                 }
                 Err(e) => r.error = Some(e),
@@ -286,12 +321,34 @@ fn run_case_into(case: &Case, outdir: &Path, result: &mut CaseResult) {
     }
 }
 
-/// Compares an 8-bit render with the expected image file.
-fn compare_with(expected: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<Comparison, String> {
+fn file_stem(p: &Path) -> String {
+    p.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default()
+}
+
+/// Compares an 8-bit render with the expected image file; with `coarse`,
+/// also the means of 8×8 blocks (see [`thresholds::coarse_psnr`]).
+fn compare_with(
+    expected: &Path,
+    w: u32,
+    h: u32,
+    rgb: &[u8],
+    coarse: bool,
+) -> Result<(Comparison, Option<f64>), String> {
     let reference = Rgb32Image::load(expected).map_err(|e| e.to_string())?;
-    let buf = image::RgbImage::from_raw(w, h, rgb.to_vec()).ok_or("render buffer has the wrong size")?;
-    let test = Rgb32Image::from_rgb8(&buf);
-    compare(&reference, &test, &CompareOptions::default()).map_err(|e| e.to_string())
+    let test = rgb8_image(w, h, rgb).ok_or("render buffer has the wrong size")?;
+    let c = compare(&reference, &test, &CompareOptions::default()).map_err(|e| e.to_string())?;
+    Ok((c, if coarse { thresholds::coarse_psnr(&reference, &test) } else { None }))
+}
+
+/// Compares two 8-bit renders of the same camera (so of the same size).
+fn compare_rgb8(w: u32, h: u32, reference: &[u8], test: &[u8]) -> Result<Comparison, String> {
+    let a = rgb8_image(w, h, reference).ok_or("the second render has the wrong size")?;
+    let b = rgb8_image(w, h, test).ok_or("render buffer has the wrong size")?;
+    compare(&a, &b, &CompareOptions::default()).map_err(|e| e.to_string())
+}
+
+fn rgb8_image(w: u32, h: u32, rgb: &[u8]) -> Option<Rgb32Image> {
+    image::RgbImage::from_raw(w, h, rgb.to_vec()).map(|b| Rgb32Image::from_rgb8(&b))
 }
 
 fn sanitize(name: &str) -> String {

@@ -13,6 +13,7 @@
 //! pool cannot fill. The pools are built once per job and reused.
 
 use super::{run_case_guarded, Case, CaseResult};
+use crate::render::RenderOptions;
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -24,6 +25,8 @@ pub struct RunOptions {
     pub jobs: usize,
     /// Worker threads of each scene's rayon pool (at least 1).
     pub threads: usize,
+    /// Sample count, seed and filter of every render.
+    pub render: RenderOptions,
 }
 
 impl RunOptions {
@@ -33,7 +36,7 @@ impl RunOptions {
         let jobs = jobs.max(1);
         let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
         let threads = threads.unwrap_or(cores / jobs).max(1);
-        RunOptions { jobs, threads }
+        RunOptions { jobs, threads, render: RenderOptions::default() }
     }
 }
 
@@ -60,7 +63,7 @@ pub fn run_cases(
             s.spawn(|| loop {
                 let i = next.fetch_add(1, Ordering::Relaxed);
                 let Some(case) = cases.get(i) else { break };
-                let mut result = pool.install(|| run_case_guarded(case, outdir));
+                let mut result = pool.install(|| run_case_guarded(case, outdir, &opts.render));
                 result.drop_pixel_maps();
                 let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
                 // A failing progress callback must not lose the result.

@@ -67,7 +67,7 @@ impl Filter {
 }
 
 /// Settings of a render beyond the scene's own.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RenderOptions {
     /// Samples per pixel instead of the camera's `NumSamples`.
     pub spp: Option<u32>,

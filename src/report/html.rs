@@ -107,6 +107,7 @@ td.img .none { display: block; width: 112px; color: #adb5bd; font-size: 12px; te
                padding: 30px 0; border: 1px dashed var(--line); }
 .bad { color: var(--fail); font-weight: 700; }
 .sub { display: block; color: var(--muted); font-size: 11px; }
+.sub.bad { color: var(--fail); }
 .thr { text-decoration: underline dotted; cursor: help; white-space: nowrap; font-size: 11px; }
 .verdict { display: inline-block; font-weight: 700; font-size: 12px; padding: 2px 8px; border-radius: 10px;
            color: #fff; white-space: nowrap; }
@@ -433,9 +434,28 @@ fn image_cells(h: &mut String, scene: &SceneEntry, img: &ImageEntry) {
         seconds(img.seconds)
     );
     let t = &img.threshold;
+    // A noise-aware bar is derived from our own pair of renders: show the
+    // pair's numbers under it, so the bar can be checked by eye.
+    let pair = match (t.pair_psnr, t.pair_flip) {
+        (p, Some(f)) => format!(
+            "<span class=\"sub\">{} spp; seed pair {}, {f:.4}</span>",
+            t.spp,
+            p.map(|p| format!("{p:.2} dB")).unwrap_or_else(|| "∞ dB".to_string())
+        ),
+        _ => String::new(),
+    };
+    // The bias test on 8×8 block means: its bar, the value, red when missed.
+    let coarse = match (t.min_coarse_psnr, img.metrics.as_ref()) {
+        (Some(min), Some(m)) => format!(
+            "<span class=\"sub{}\">8×8 means {} ≥ {min}</span>",
+            if m.coarse_ok { "" } else { " bad" },
+            m.coarse_psnr.map(|p| format!("{p:.1} dB")).unwrap_or_else(|| "∞ dB".to_string())
+        ),
+        _ => String::new(),
+    };
     let _ = write!(
         h,
-        "<td><span class=\"thr\" title=\"{}\">PSNR ≥ {}<br>FLIP ≤ {}</span></td>",
+        "<td><span class=\"thr\" title=\"{}\">PSNR ≥ {:.2}<br>FLIP ≤ {:.4}</span>{pair}{coarse}</td>",
         escape(&t.reason),
         t.min_psnr,
         t.max_flip

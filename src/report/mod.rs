@@ -28,7 +28,7 @@ mod assets;
 pub mod html;
 pub mod json;
 
-use crate::conformance::{CaseResult, ImageResult, Threshold};
+use crate::conformance::{Bar, CaseResult, ImageResult, Rule};
 use crate::image::{Comparison, MetricSpace};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -222,17 +222,32 @@ pub struct Metrics {
     pub psnr_ok: bool,
     /// Whether the FLIP part of the threshold was met.
     pub flip_ok: bool,
+    /// PSNR of the means of 8×8 blocks, when the threshold tests it.
+    pub coarse_psnr: Option<f64>,
+    /// Whether that part of the threshold was met (true when not tested).
+    pub coarse_ok: bool,
 }
 
 /// The bar an image was judged by.
 #[derive(Clone, Debug, Serialize)]
 pub struct ThresholdEntry {
-    /// Minimum PSNR in dB.
+    /// `fixed` or `noise-aware`.
+    pub kind: &'static str,
+    /// Minimum PSNR in dB (for a noise-aware rule, derived from the pair).
     pub min_psnr: f64,
-    /// Maximum mean LDR-FLIP.
+    /// Maximum mean LDR-FLIP (likewise).
     pub max_flip: f64,
-    /// Why this bar.
+    /// Why this bar, and the rule in words.
     pub reason: String,
+    /// Samples per pixel of the render.
+    pub spp: u32,
+    /// Noise-aware: PSNR of our render against our render with the next
+    /// seed; `null` when identical or not rendered.
+    pub pair_psnr: Option<f64>,
+    /// Noise-aware: mean LDR-FLIP between our two renders.
+    pub pair_flip: Option<f64>,
+    /// Noise-aware: minimum PSNR of the means of 8×8 blocks.
+    pub min_coarse_psnr: Option<f64>,
 }
 
 /// How the run was made, for the report's header.
@@ -365,7 +380,7 @@ fn image_entry(i: &ImageResult, root: &Path, outdir: &Path) -> ImageEntry {
             Err(e) => note(e),
         }
     }
-    let t = &i.threshold;
+    let t = &i.bar;
     ImageEntry {
         image_name: i.image_name.clone(),
         verdict,
@@ -375,18 +390,26 @@ fn image_entry(i: &ImageResult, root: &Path, outdir: &Path) -> ImageEntry {
         expected_source: i.expected.as_ref().map(|p| p.display().to_string()),
         heatmap,
         thumbs,
-        metrics: i.comparison.as_ref().map(|c| metrics(c, t)),
+        metrics: i.comparison.as_ref().map(|c| metrics(c, t, i.coarse_psnr)),
         threshold: ThresholdEntry {
+            kind: match i.threshold.rule {
+                Rule::Fixed { .. } => "fixed",
+                Rule::NoiseAware { .. } => "noise-aware",
+            },
             min_psnr: t.min_psnr,
             max_flip: t.max_flip,
-            reason: t.reason.to_string(),
+            reason: i.threshold.describe(),
+            spp: i.spp,
+            pair_psnr: i.pair.as_ref().and_then(|p| p.psnr.is_finite().then_some(p.psnr)),
+            pair_flip: i.pair.as_ref().map(|p| p.flip),
+            min_coarse_psnr: t.tests_coarse().then_some(t.min_coarse_psnr),
         },
         seconds: i.seconds,
         error,
     }
 }
 
-fn metrics(c: &Comparison, t: &Threshold) -> Metrics {
+fn metrics(c: &Comparison, t: &Bar, coarse_psnr: Option<f64>) -> Metrics {
     Metrics {
         width: c.width,
         height: c.height,
@@ -403,5 +426,7 @@ fn metrics(c: &Comparison, t: &Threshold) -> Metrics {
         max_abs_diff: c.max_abs_diff,
         psnr_ok: t.psnr_ok(c),
         flip_ok: t.flip_ok(c),
+        coarse_psnr: coarse_psnr.filter(|p| p.is_finite()),
+        coarse_ok: t.coarse_ok(coarse_psnr),
     }
 }

@@ -1,0 +1,144 @@
+//! Golden-image tests of hw3 (distribution ray tracing), at reduced sample
+//! counts so that CI can afford them.
+//!
+//! The course's images took 16 to 900 samples per pixel; at those counts the
+//! whole homework takes over half an hour here. Each image is rendered twice
+//! (seeds 0 and 1) at the reduced count below and judged by the noise-aware
+//! rule of `luster::conformance::thresholds`: PSNR and FLIP against the
+//! course's image must be about as good as between our two renders. Fewer
+//! samples mean more noise and so a looser bar, but a bias — a wrong light
+//! falloff, a lens of the wrong size, an object in the wrong place — adds
+//! error that the pair does not have, at any count, and shows in the means of
+//! 8×8-pixel blocks, which the bar also compares: noise averages out there, a
+//! bias does not. The resolution is kept (no downsampling of the reference),
+//! so edges and sharp details are judged as they are.
+//!
+//! Renders, second-seed renders and FLIP heatmaps go under
+//! `target/tmp/golden/hw3/`. Without `../shared/scenes/ceng795` the test says
+//! it skipped.
+
+use luster::conformance::{discover, run_case_with, CaseResult};
+use luster::render::RenderOptions;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Samples per pixel per scene file (its name without extension, either
+/// encoding), with why. The cost of one sample per pixel
+/// of an 800×800 image ranges from 0.12 s (spheres_dof) to about 1 s
+/// (wine_glass) on two cores; the counts keep all 13 images, two renders
+/// each, near a minute and a half on two cores, and each at least 4
+/// so that every pixel is stratified over its area, lens and light.
+const SPP: &[(&str, u32, &str)] = &[
+    ("spheres_dof", 16, "cheapest scene (spheres only): 16 keeps its defocus blur smooth"),
+    ("cornellbox_area", 16, "soft shadows are the whole test: 16 light samples per pixel"),
+    ("chessboard_arealight", 9, "soft shadows on a high-contrast board"),
+    ("chessboard_arealight_dof", 9, "as chessboard_arealight, plus a thin lens"),
+    ("cornellbox_brushed_metal", 9, "glossy reflections and an area light"),
+    ("cornellbox_boxes_dynamic", 9, "motion blur needs several shutter times per pixel"),
+    ("metal_glass_plates", 9, "frosted dielectrics trace many rays per sample"),
+    ("wine_glass_scene", 4, "the dearest scene (about 1 s per sample per pixel): 4 keeps it to seconds"),
+];
+
+/// Images with a bias we have found and not fixed, with the evidence. They
+/// must still fail (so the test notices the day they are fixed and this entry
+/// should go); every other image must pass.
+const KNOWN_BIAS: &[(&str, &str)] = &[(
+    "wine_glass.png",
+    "inside the bowl our image is brighter above the liquid line and darker in the liquid band than the \
+     course's: the 8×8 block means differ by up to 36 levels there (PSNR 43.4 dB against 50.1 between our \
+     two seeds), a structure that does not average out as noise does",
+)];
+
+fn course_root() -> Option<PathBuf> {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes/ceng795");
+    root.is_dir().then_some(root)
+}
+
+#[test]
+fn hw3_scenes_match_expected_images_within_their_noise() {
+    let Some(root) = course_root() else {
+        eprintln!("skipped: ../shared/scenes/ceng795 is absent, so the hw3 golden images were not checked");
+        return;
+    };
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("golden").join("hw3");
+    let _ = std::fs::create_dir_all(&out);
+    let cases: Vec<_> =
+        discover(&root).into_iter().filter(|c| c.hw == "hw3" && c.mentions_expected_image()).collect();
+    assert!(!cases.is_empty(), "no hw3 scenes found under {}", root.display());
+
+    let t0 = Instant::now();
+    let mut failures = Vec::new();
+    let mut compared = 0;
+    println!(
+        "{:<44} {:>4} {:>8} {:>7} {:>8} {:>7} {:>8} {:>7} {:>6} {:>6}",
+        "scene", "spp", "PSNR", "FLIP", "pairPSNR", "pairFLP", "≥PSNR", "≤FLIP", "8×8dB", "sec"
+    );
+    for case in &cases {
+        let name = case.scene.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default();
+        // A hw3 scene not in the table gets the lowest count.
+        let spp = SPP.iter().find(|(stem, ..)| *stem == name).map_or(4, |e| e.1);
+        let r: CaseResult =
+            run_case_with(case, &out, &RenderOptions { spp: Some(spp), ..Default::default() });
+        if let Some(e) = &r.error {
+            failures.push(format!("{}: {e}", case.label()));
+            continue;
+        }
+        for img in &r.images {
+            let (Some(c), Some(p)) = (&img.comparison, &img.pair) else {
+                if img.expected.is_some() {
+                    failures.push(format!(
+                        "{} {}: not compared: {:?}",
+                        case.label(),
+                        img.image_name,
+                        img.error
+                    ));
+                }
+                continue;
+            };
+            compared += 1;
+            println!(
+                "{:<44} {:>4} {:>8.2} {:>7.4} {:>8.2} {:>7.4} {:>8.2} {:>7.4} {:>6.1} {:>6.1} {}",
+                case.label(),
+                img.spp,
+                c.psnr,
+                c.flip,
+                p.psnr,
+                p.flip,
+                img.bar.min_psnr,
+                img.bar.max_flip,
+                img.coarse_psnr.unwrap_or(f64::NAN),
+                img.seconds,
+                if img.pass { "ok" } else { "FAIL" }
+            );
+            let known = KNOWN_BIAS.iter().find(|(n, _)| *n == img.image_name);
+            if let (Some((_, why)), false) = (known, img.pass) {
+                println!("  known bias, still there: {why}");
+            } else if known.is_some() {
+                failures.push(format!(
+                    "{} {} now passes: remove it from KNOWN_BIAS in tests/golden_hw3.rs",
+                    case.label(),
+                    img.image_name
+                ));
+            } else if !img.pass {
+                failures.push(format!(
+                    "{} {} at {spp} spp: PSNR {:.2} dB, FLIP {:.4}, 8×8 means {:.2} dB; our two seeds: \
+                     {:.2} dB, {:.4} (needs PSNR ≥ {:.2}, FLIP ≤ {:.4}, 8×8 ≥ {}); render {}",
+                    case.label(),
+                    img.image_name,
+                    c.psnr,
+                    c.flip,
+                    img.coarse_psnr.unwrap_or(f64::NAN),
+                    p.psnr,
+                    p.flip,
+                    img.bar.min_psnr,
+                    img.bar.max_flip,
+                    img.bar.min_coarse_psnr,
+                    img.render.display()
+                ));
+            }
+        }
+    }
+    println!("hw3: {compared} images in {:.1} s", t0.elapsed().as_secs_f64());
+    assert!(compared > 0, "no hw3 image had an expected image to compare with");
+    assert!(failures.is_empty(), "{} hw3 image(s) failed:\n{}", failures.len(), failures.join("\n"));
+}
