@@ -21,4 +21,5 @@ pub mod math;
 pub mod render;
 pub mod report;
 pub mod scene;
+pub mod shader;
 pub mod shading;
