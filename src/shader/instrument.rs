@@ -16,7 +16,9 @@
 //! * after every `do` (the bodies of `while` and both `for` forms, and plain
 //!   blocks);
 //! * after every `repeat`;
-//! * after every label `::name::` (the target of a backward `goto`);
+//! * before every `goto` (every `goto` loop has one; a tick after the label
+//!   instead would break the common `goto continue` idiom, whose label must
+//!   end its block when locals are declared before it);
 //! * after the parameter list of every `function` (recursion, including tail
 //!   calls, which grow no stack).
 //!
@@ -47,16 +49,6 @@ pub(crate) struct ReservedName {
     pub name: String,
 }
 
-/// What the scanner last saw, as far as insertion points care.
-#[derive(Clone, Copy, PartialEq, Debug)]
-enum Tok {
-    Other,
-    /// `::`
-    DoubleColon,
-    /// A name that follows `::` (a label being opened).
-    LabelName,
-}
-
 /// Returns `code` with deadline checks inserted (see the module doc).
 pub(crate) fn instrument(code: &str) -> Result<String, ReservedName> {
     let b = code.as_bytes();
@@ -71,7 +63,6 @@ pub(crate) fn instrument(code: &str) -> Result<String, ReservedName> {
     let mut copied = 0; // bytes of `code` already copied to `out`
     let mut i = 0;
     let mut line = 1;
-    let mut prev = Tok::Other;
     let mut in_params = false; // between `function` and the `)` closing its parameters
     let flush = |out: &mut String, upto: usize, copied: &mut usize| {
         out.push_str(&code[*copied..upto]);
@@ -105,22 +96,16 @@ pub(crate) fn instrument(code: &str) -> Result<String, ReservedName> {
                     Some(end) => i = end,
                     None => break,
                 }
-                prev = Tok::Other;
             }
-            b'"' | b'\'' => {
-                match skip_short_string(b, i, &mut line) {
-                    Some(end) => i = end,
-                    None => break,
-                }
-                prev = Tok::Other;
-            }
+            b'"' | b'\'' => match skip_short_string(b, i, &mut line) {
+                Some(end) => i = end,
+                None => break,
+            },
             b'0'..=b'9' => {
                 i = skip_number(b, i);
-                prev = Tok::Other;
             }
             b'.' if b.get(i + 1).is_some_and(u8::is_ascii_digit) => {
                 i = skip_number(b, i);
-                prev = Tok::Other;
             }
             c if c == b'_' || c.is_ascii_alphabetic() => {
                 let start = i;
@@ -131,26 +116,17 @@ pub(crate) fn instrument(code: &str) -> Result<String, ReservedName> {
                 if word.starts_with(RESERVED) {
                     return Err(ReservedName { line, name: word.to_string() });
                 }
-                let mut tok = Tok::Other;
                 match word {
                     "do" | "repeat" => {
                         flush(&mut out, i, &mut copied);
                         out.push_str(&insert);
                     }
+                    "goto" => {
+                        flush(&mut out, start, &mut copied);
+                        out.push_str(&insert);
+                    }
                     "function" => in_params = true,
-                    _ if prev == Tok::DoubleColon => tok = Tok::LabelName,
                     _ => {}
-                }
-                prev = tok;
-            }
-            b':' if b.get(i + 1) == Some(&b':') => {
-                i += 2;
-                if prev == Tok::LabelName {
-                    flush(&mut out, i, &mut copied);
-                    out.push_str(&insert);
-                    prev = Tok::Other;
-                } else {
-                    prev = Tok::DoubleColon;
                 }
             }
             b')' => {
@@ -160,14 +136,12 @@ pub(crate) fn instrument(code: &str) -> Result<String, ReservedName> {
                     flush(&mut out, i, &mut copied);
                     out.push_str(&insert);
                 }
-                prev = Tok::Other;
             }
             _ => {
                 // Any other byte is an operator or punctuation (or, in invalid
                 // code, something Lua will report); none of them matters here.
                 // Multi-byte UTF-8 is stepped over whole to keep slicing valid.
                 i += utf8_len(c);
-                prev = Tok::Other;
             }
         }
     }
@@ -247,9 +221,9 @@ fn skip_short_string(b: &[u8], i: usize, line: &mut usize) -> Option<usize> {
 fn skip_number(b: &[u8], mut i: usize) -> usize {
     while i < b.len() {
         let c = b[i];
-        if c.is_ascii_alphanumeric() || c == b'_' || c == b'.' {
-            i += 1;
-        } else if (c == b'+' || c == b'-') && i > 0 && matches!(b[i - 1], b'e' | b'E' | b'p' | b'P') {
+        let exponent_sign =
+            (c == b'+' || c == b'-') && i > 0 && matches!(b[i - 1], b'e' | b'E' | b'p' | b'P');
+        if c.is_ascii_alphanumeric() || c == b'_' || c == b'.' || exponent_sign {
             i += 1;
         } else {
             break;
@@ -268,7 +242,7 @@ mod tests {
     }
 
     #[test]
-    fn loops_functions_and_labels_get_ticks() {
+    fn loops_functions_and_gotos_get_ticks() {
         let t = format!(" {TICK}(); ");
         assert_eq!(body("while true do end"), format!("while true do{t} end"));
         assert_eq!(body("repeat x() until y"), format!("repeat{t} x() until y"));
@@ -278,7 +252,7 @@ mod tests {
             format!("local function f(a, b){t} return a end")
         );
         assert_eq!(body("f = function(...) end"), format!("f = function(...){t} end"));
-        assert_eq!(body("::top:: goto top"), format!("::top::{t} goto top"));
+        assert_eq!(body("::top:: goto top"), format!("::top:: {t}goto top"));
     }
 
     #[test]
