@@ -191,13 +191,22 @@ local function fract(x) return x - floor(x) end
 local function checker(x, y, z)
   return (floor(x) + floor(y) + floor(z or 0)) % 2
 end
--- A 32-bit integer hash (lowbias32 by Chris Wellons) of up to three integers.
-local function hash_int(a, b, c)
-  local h = tobit(a) + tobit(b or 0) * 0x27d4eb2d + tobit(c or 0) * 0x165667b1
-  h = tobit(h)
-  h = bxor(h, rshift(h, 16)); h = tobit(h * 0x7feb352d)
-  h = bxor(h, rshift(h, 15)); h = tobit(h * 0x846ca68b % 0x100000000)
+-- 32-bit integer hashing (the lowbias32 finaliser by Chris Wellons). Lua
+-- numbers are doubles, so products are split to stay exact below 2^53.
+local function mul32(a, b)
+  return tobit(a * band(b, 0xffff) + tobit(a * rshift(b, 16)) * 65536)
+end
+local function mix32(h)
   h = bxor(h, rshift(h, 16))
+  h = mul32(h, 0x7feb352d)
+  h = bxor(h, rshift(h, 15))
+  h = mul32(h, tobit(0x846ca68b))
+  return bxor(h, rshift(h, 16))
+end
+local function hash_int(a, b, c)
+  local h = mix32(tobit(a))
+  h = mix32(bxor(h, tobit(b or 0)))
+  h = mix32(bxor(h, tobit(c or 0)))
   return band(h, 0x7fffffff)
 end
 local function hash(a, b, c) return hash_int(floor(a), floor(b or 0), floor(c or 0)) / 0x80000000 end

@@ -260,6 +260,31 @@ fn pattern_helpers() {
 }
 
 #[test]
+fn hash_is_repeatable_and_spread() {
+    let set = set_of(
+        "function color(s)
+           local seen, lo, hi, n = {}, 1, 0, 0
+           for i = -50, 49 do
+             for j = 0, 9 do
+               local h = hash(i, j, 7)
+               if not seen[h] then seen[h] = true n = n + 1 end
+               lo, hi = math.min(lo, h), math.max(hi, h)
+             end
+           end
+           return n, lo, hi
+         end
+         function height(s) return hash(s.P.x, s.P.y, s.P.z) end",
+    )
+    .unwrap();
+    let [distinct, lo, hi] = set.color(0, &input([0.0; 3])).unwrap();
+    assert_eq!(distinct, 1000.0);
+    assert!((0.0..0.01).contains(&lo) && (0.99..1.0).contains(&hi), "{lo} {hi}");
+    let a = set.height(0, &input([3.5, -2.0, 9.0])).unwrap();
+    assert_eq!(a, set.height(0, &input([3.9, -1.5, 9.2])).unwrap());
+    assert_ne!(a, set.height(0, &input([4.0, -2.0, 9.0])).unwrap());
+}
+
+#[test]
 fn threads_give_identical_results() {
     let set = set_of(
         "function color(s)
