@@ -50,8 +50,11 @@ local cell = ffi.new("luster_cell")
 ---------------------------------------------------------------------------
 -- The deadline. Instrumented user code calls tick() in every loop body and
 -- function entry (see instrument.rs); the clock is read every TICKS ticks.
+-- A clock read costs about 25 ns, so 256 ticks make it ~0.1 ns per tick,
+-- while a loop whose body makes slow library calls (string.rep of megabytes)
+-- still overshoots the deadline by well under a second.
 ---------------------------------------------------------------------------
-local TICKS = 4096
+local TICKS = 256
 local budget = TICKS
 local clock_check = B.clock_check
 local function tick()
@@ -263,7 +266,7 @@ end
 -- its metatable, so it is cleaned in place; everything else a script sees
 -- is a copy made per shader, so one shader cannot change another's library.
 ---------------------------------------------------------------------------
-local MAX_REP = 64 * 1024 * 1024
+local MAX_REP = 16 * 1024 * 1024
 local rep = string.rep
 local function safe_rep(s, n, sep)
   local len = #tostring(s) + (sep and #tostring(sep) or 0)

@@ -155,6 +155,8 @@ fn endless_loops_are_stopped_even_when_jit_compiled() {
     assert_stops("local function f(n) return f(n + 1) end function color(s) return f(0) end");
     assert_stops("function color(s) while true do pcall(function() while true do end end) end end");
     assert_stops("function color(s) local t = {} for i = 1, 1e12 do t[i % 8 + 1] = i end end");
+    assert_stops("function color(s) while true do local x = string.rep('ab', 5e5) end end");
+    assert_stops("function color(s) while true do local a, b = voronoi(1, 2, 3) end end");
 }
 
 #[test]
