@@ -18,6 +18,7 @@ pub mod conformance;
 pub mod geometry;
 pub mod image;
 pub mod math;
+pub mod noise;
 pub mod render;
 pub mod report;
 pub mod scene;
