@@ -12,7 +12,7 @@
 //! no per-call marshalling.
 //!
 //! The C declarations in `prelude.lua` must match these records field for field;
-//! `layout_matches_prelude` in the tests checks the sizes Lua sees.
+//! every new state compares the sizes Lua reports with these (`state.rs`).
 //!
 //! # Soundness
 //!
