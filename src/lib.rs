@@ -22,5 +22,6 @@ pub mod noise;
 pub mod render;
 pub mod report;
 pub mod scene;
+pub mod shader;
 pub mod shading;
 pub mod texture;

@@ -1,0 +1,242 @@
+//! The Lua shading language: user scripts that compute a surface's color,
+//! bump height or reflectance at a point, run by LuaJIT in a sandbox.
+//!
+//! `docs/shaders.md` is the reference for shader authors; this is the Rust side.
+//!
+//! # Use
+//!
+//! ```
+//! use std::time::Duration;
+//! use luster::shader::{ShadeInput, ShaderSet, ShaderSource};
+//!
+//! let marble = ShaderSource::new("marble", "marble.lua", r#"
+//!     function color(s)
+//!       local t = turbulence(s.P.x, s.P.y, s.P.z, 4)
+//!       local v = 0.5 + 0.5 * math.sin(s.P.x * param.freq + 4 * t)
+//!       return v, v, v * 0.9
+//!     end
+//! "#).with_number("freq", 3.0);
+//! let set = ShaderSet::new(vec![marble], Duration::from_secs(10))?;
+//! assert!(set.has_color(0) && !set.has_height(0));
+//! let rgb = set.color(0, &ShadeInput { p: [0.1, 0.2, 0.3], ..ShadeInput::default() })?;
+//! assert!(rgb.iter().all(|c| c.is_finite()));
+//! # Ok::<(), luster::shader::ShaderError>(())
+//! ```
+//!
+//! [`ShaderSet`] is `Send + Sync`: the render scene owns one and every worker
+//! calls it. Each thread gets its own Lua state per set, built on first use
+//! with every script compiled once (`threads.rs` explains how they are kept and
+//! freed). [`ShaderSet::new`] compiles everything once on the calling thread,
+//! so syntax errors, missing entry points and errors in a script's top level
+//! are reported before rendering starts.
+//!
+//! # How a call works
+//!
+//! Rust writes the shading point into a `#[repr(C)]` record that the state's
+//! prelude allocated as FFI cdata (`ffi.rs`), then calls a no-argument Lua
+//! wrapper that passes the record to the script as `s`, checks the results and
+//! writes them into a second record. Nothing is converted through the Lua
+//! stack; `benches/shader.rs` compares this with `Function::call` on scalars.
+//! Built-in noise is Rust, reached through a table of function pointers.
+//!
+//! # Safety of user scripts
+//!
+//! Scripts run in a per-shader environment that has no `io`, `os`, `package`,
+//! `require`, `debug`, `ffi`, `jit`, `load*`, `dofile`, `getfenv`/`setfenv`,
+//! `newproxy` or `string.dump`; the string metatable is hidden. A call that
+//! runs past its timeout is stopped by checks inserted into every loop and
+//! function (`instrument.rs`), which also work inside JIT-compiled code. What is
+//! not bounded: a single call into a C library function (`string.find` with a
+//! pathological pattern on a long string) runs to its end before the next check.
+
+mod error;
+mod ffi;
+mod instrument;
+mod state;
+#[cfg(test)]
+mod tests;
+#[cfg(test)]
+mod tests_sandbox;
+mod threads;
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
+
+pub use error::{ShaderError, ShaderErrorKind};
+
+/// The default per-call time limit: generous, since a shader that needs it is
+/// broken, and a false stop would lose a render.
+pub const DEFAULT_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// One shader script and the parameters the scene gives it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShaderSource {
+    /// The name errors use (the scene's shader name).
+    pub name: String,
+    /// The script's file, for messages (`file:line`).
+    pub path: PathBuf,
+    /// The Lua source text.
+    pub code: String,
+    /// Values the script reads as `param.NAME`.
+    pub params: Vec<(String, ParamValue)>,
+}
+
+impl ShaderSource {
+    /// A script with no parameters.
+    pub fn new(name: impl Into<String>, path: impl Into<PathBuf>, code: impl Into<String>) -> ShaderSource {
+        ShaderSource { name: name.into(), path: path.into(), code: code.into(), params: Vec::new() }
+    }
+
+    /// The same source with one more parameter.
+    pub fn with_param(mut self, name: impl Into<String>, value: ParamValue) -> ShaderSource {
+        self.params.push((name.into(), value));
+        self
+    }
+
+    /// The same source with one more number parameter.
+    pub fn with_number(self, name: impl Into<String>, value: f64) -> ShaderSource {
+        self.with_param(name, ParamValue::Number(value))
+    }
+}
+
+/// A shader parameter's value, as the scene file gives it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ParamValue {
+    /// A number: a Lua number.
+    Number(f64),
+    /// Three numbers: a `vec3` in Lua.
+    Vec3([f64; 3]),
+    /// Text: a Lua string.
+    Text(String),
+}
+
+/// The shading point a script receives as `s`.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ShadeInput {
+    /// Object-space position (`s.P`).
+    pub p: [f32; 3],
+    /// World-space position (`s.Pw`).
+    pub pw: [f32; 3],
+    /// Shading normal, world space, unit length (`s.N`).
+    pub n: [f32; 3],
+    /// Texture coordinates (`s.uv.u`, `s.uv.v`).
+    pub uv: [f32; 2],
+    /// The ray's time within the shutter, 0 to 1 (`s.time`).
+    pub time: f32,
+}
+
+/// The three entry points a script may define.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Entry {
+    Color = 0,
+    Height = 1,
+    Reflect = 2,
+}
+
+impl Entry {
+    pub(crate) const ALL: [Entry; 3] = [Entry::Color, Entry::Height, Entry::Reflect];
+
+    pub(crate) fn name(self) -> &'static str {
+        match self {
+            Entry::Color => "color",
+            Entry::Height => "height",
+            Entry::Reflect => "reflect",
+        }
+    }
+}
+
+/// What every thread's state is built from.
+pub(crate) struct Shared {
+    id: u64,
+    sources: Vec<ShaderSource>,
+    timeout: Duration,
+}
+
+/// A compiled set of shaders, addressed by their index in the list given to
+/// [`ShaderSet::new`]. `Send + Sync`; see the module doc.
+pub struct ShaderSet {
+    shared: Arc<Shared>,
+    entries: Vec<[bool; 3]>,
+}
+
+impl ShaderSet {
+    /// Compiles every script once (syntax errors carry `file:line`), runs each
+    /// one's top level, and checks that each defines at least one entry point.
+    /// `timeout` bounds every later call (and each top level).
+    pub fn new(sources: Vec<ShaderSource>, timeout: Duration) -> Result<ShaderSet, ShaderError> {
+        static NEXT_ID: AtomicU64 = AtomicU64::new(1);
+        let shared = Arc::new(Shared { id: NEXT_ID.fetch_add(1, Ordering::Relaxed), sources, timeout });
+        let state = state::ThreadState::new(&shared.sources, timeout)?;
+        let entries = (0..shared.sources.len()).map(|id| state.entries(id)).collect();
+        threads::adopt(&shared, state);
+        Ok(ShaderSet { shared, entries })
+    }
+
+    /// How many shaders the set holds.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Whether the set holds no shader.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+
+    /// The name of shader `id`.
+    pub fn name(&self, id: usize) -> Option<&str> {
+        self.shared.sources.get(id).map(|s| s.name.as_str())
+    }
+
+    fn has(&self, id: usize, entry: Entry) -> bool {
+        self.entries.get(id).is_some_and(|e| e[entry as usize])
+    }
+
+    /// Whether shader `id` defines `color(s)`.
+    pub fn has_color(&self, id: usize) -> bool {
+        self.has(id, Entry::Color)
+    }
+
+    /// Whether shader `id` defines `height(s)`.
+    pub fn has_height(&self, id: usize) -> bool {
+        self.has(id, Entry::Height)
+    }
+
+    /// Whether shader `id` defines `reflect(s)`.
+    pub fn has_reflect(&self, id: usize) -> bool {
+        self.has(id, Entry::Reflect)
+    }
+
+    fn call(&self, id: usize, entry: Entry, input: &ShadeInput) -> Result<[f64; 3], ShaderError> {
+        threads::with_state(&self.shared, |state| state.call(id, entry, input))
+    }
+
+    /// The diffuse color of shader `id` at `input`.
+    pub fn color(&self, id: usize, input: &ShadeInput) -> Result<[f32; 3], ShaderError> {
+        self.call(id, Entry::Color, input).map(|c| c.map(|x| x as f32))
+    }
+
+    /// The bump height of shader `id` at `input` (the renderer differentiates it).
+    pub fn height(&self, id: usize, input: &ShadeInput) -> Result<f32, ShaderError> {
+        self.call(id, Entry::Height, input).map(|c| c[0] as f32)
+    }
+
+    /// The reflective color of shader `id` at `input`.
+    pub fn reflect(&self, id: usize, input: &ShadeInput) -> Result<[f32; 3], ShaderError> {
+        self.call(id, Entry::Reflect, input).map(|c| c.map(|x| x as f32))
+    }
+}
+
+impl Drop for ShaderSet {
+    fn drop(&mut self) {
+        threads::release(self.shared.id);
+    }
+}
+
+impl std::fmt::Debug for ShaderSet {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let names: Vec<&str> = self.shared.sources.iter().map(|s| s.name.as_str()).collect();
+        f.debug_struct("ShaderSet").field("shaders", &names).field("timeout", &self.shared.timeout).finish()
+    }
+}

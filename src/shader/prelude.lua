@@ -1,0 +1,404 @@
+-- The trusted prelude: runs once in every shader Lua state, with the FFI, before
+-- any user script. It declares the records shared with Rust (src/shader/ffi.rs
+-- must match them field for field), wraps the Rust built-ins in plain Lua
+-- functions, defines the pure-Lua helpers, and returns the small API Rust uses
+-- to build sandboxes and entry wrappers. Its locals (ffi, the built-in table,
+-- the scratch records) are reachable from user code only through the wrapper
+-- functions: user scripts get no debug library, no getfenv and no ffi.
+local builtins_address, log = ...
+local ffi = ffi
+local error, type, tostring, select, pairs, ipairs = error, type, tostring, select, pairs, ipairs
+local floor, sqrt, format = math.floor, math.sqrt, string.format
+local band, bxor, rshift, tobit = bit.band, bit.bxor, bit.rshift, bit.tobit
+
+ffi.cdef [[
+typedef struct { double x, y, z; } luster_vec3;
+typedef struct { double u, v; } luster_vec2;
+typedef struct { luster_vec3 P, Pw, N; luster_vec2 uv; double time; } luster_shade;
+typedef struct { double r, g, b; int32_t bad; } luster_out;
+typedef struct { uint64_t start_ns, timeout_ns; int32_t expired; } luster_clock;
+typedef struct { double f1, f2, px, py, pz, id; } luster_cell;
+typedef struct {
+  double (*perlin1)(double);
+  double (*perlin2)(double, double);
+  double (*perlin3)(double, double, double);
+  double (*perlin4)(double, double, double, double);
+  double (*perlin3_grad)(double, double, double, luster_vec3 *);
+  double (*pperlin3)(double, double, double, int32_t, int32_t, int32_t);
+  double (*simplex2)(double, double);
+  double (*simplex3)(double, double, double);
+  double (*simplex4)(double, double, double, double);
+  double (*simplex3_grad)(double, double, double, luster_vec3 *);
+  double (*fbm)(double, double, double, int32_t, double, double);
+  double (*fbm_grad)(double, double, double, int32_t, double, double, luster_vec3 *);
+  double (*turbulence)(double, double, double, int32_t, double, double);
+  double (*ridged)(double, double, double, int32_t, double, double, double);
+  void (*voronoi3)(double, double, double, uint32_t, double, luster_cell *);
+  void (*voronoi2)(double, double, uint32_t, double, luster_cell *);
+  int32_t (*clock_check)(luster_clock *);
+  const void *texture;
+} luster_builtins;
+]]
+
+local B = ffi.cast("const luster_builtins *", builtins_address)
+local shade = ffi.new("luster_shade")
+local out = ffi.new("luster_out")
+local clock = ffi.new("luster_clock")
+local grad = ffi.new("luster_vec3")
+local cell = ffi.new("luster_cell")
+
+---------------------------------------------------------------------------
+-- The deadline. Instrumented user code calls tick() in every loop body and
+-- function entry (see instrument.rs); the clock is read every TICKS ticks.
+-- A clock read costs about 25 ns, so 256 ticks make it ~0.1 ns per tick,
+-- while a loop whose body makes slow library calls (string.rep of megabytes)
+-- still overshoots the deadline by well under a second.
+---------------------------------------------------------------------------
+local TICKS = 256
+local budget = TICKS
+local clock_check = B.clock_check
+local function tick()
+  budget = budget - 1
+  if budget <= 0 then
+    if clock_check(clock) ~= 0 then
+      -- Stay at 0 so that every later tick of this call fails too, even if
+      -- the script catches this error with pcall.
+      budget = 0
+      error("stopped: the shader ran past its time limit", 2)
+    end
+    budget = TICKS
+  end
+end
+
+---------------------------------------------------------------------------
+-- vec3: a cdata struct with arithmetic metamethods. Inside JIT traces
+-- temporaries are allocation-sunk, so vector code costs about what the
+-- scalar code costs (benches/shader.rs measures both).
+---------------------------------------------------------------------------
+local vec3_t
+local vec3_methods = {}
+local vec3_mt = { __index = vec3_methods }
+local function isvec(v) return type(v) == "cdata" and ffi.istype(vec3_t, v) end
+-- Operands are vec3s or numbers (a number applies to every component). A
+-- wrong operand is reported at the script's line, not inside the prelude.
+local function operand(v, op)
+  if type(v) == "number" or isvec(v) then return end
+  error(format("vec3 %s: expected a vec3 or a number, got %s", op, type(v)), 3)
+end
+local function binary(op, f)
+  return function(a, b)
+    operand(a, op)
+    operand(b, op)
+    if type(a) == "number" then return vec3_t(f(a, b.x), f(a, b.y), f(a, b.z)) end
+    if type(b) == "number" then return vec3_t(f(a.x, b), f(a.y, b), f(a.z, b)) end
+    return vec3_t(f(a.x, b.x), f(a.y, b.y), f(a.z, b.z))
+  end
+end
+vec3_mt.__add = binary("+", function(a, b) return a + b end)
+vec3_mt.__sub = binary("-", function(a, b) return a - b end)
+vec3_mt.__mul = binary("*", function(a, b) return a * b end)
+vec3_mt.__div = binary("/", function(a, b) return a / b end)
+function vec3_mt.__unm(a) return vec3_t(-a.x, -a.y, -a.z) end
+function vec3_mt.__tostring(a) return format("vec3(%g, %g, %g)", a.x, a.y, a.z) end
+local function dot(a, b) return a.x * b.x + a.y * b.y + a.z * b.z end
+local function cross(a, b)
+  return vec3_t(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x)
+end
+local function length(a) return sqrt(a.x * a.x + a.y * a.y + a.z * a.z) end
+local function normalize(a)
+  local l = length(a)
+  if l == 0 then return vec3_t(0, 0, 0) end
+  return vec3_t(a.x / l, a.y / l, a.z / l)
+end
+vec3_methods.dot, vec3_methods.cross = dot, cross
+vec3_methods.length, vec3_methods.normalize = length, normalize
+function vec3_methods.unpack(a) return a.x, a.y, a.z end
+vec3_t = ffi.metatype("luster_vec3", vec3_mt)
+local function vec3(x, y, z)
+  x = x or 0
+  if y == nil and z == nil then return vec3_t(x, x, x) end
+  return vec3_t(x, y or 0, z or 0)
+end
+
+---------------------------------------------------------------------------
+-- Noise: thin wrappers over the Rust built-ins (the JIT inlines them into a
+-- direct native call). Defaults match docs/shaders.md.
+---------------------------------------------------------------------------
+local function perlin1(x) return B.perlin1(x) end
+local function perlin2(x, y) return B.perlin2(x, y) end
+local function perlin3(x, y, z) return B.perlin3(x, y, z) end
+local function perlin4(x, y, z, w) return B.perlin4(x, y, z, w) end
+local function perlin3_grad(x, y, z)
+  local v = B.perlin3_grad(x, y, z, grad)
+  return v, grad.x, grad.y, grad.z
+end
+local function pperlin3(x, y, z, px, py, pz) return B.pperlin3(x, y, z, px, py, pz) end
+local function simplex2(x, y) return B.simplex2(x, y) end
+local function simplex3(x, y, z) return B.simplex3(x, y, z) end
+local function simplex4(x, y, z, w) return B.simplex4(x, y, z, w) end
+local function simplex3_grad(x, y, z)
+  local v = B.simplex3_grad(x, y, z, grad)
+  return v, grad.x, grad.y, grad.z
+end
+local function fbm(x, y, z, octaves, lacunarity, gain)
+  return B.fbm(x, y, z, octaves or 4, lacunarity or 2, gain or 0.5)
+end
+local function fbm_grad(x, y, z, octaves, lacunarity, gain)
+  local v = B.fbm_grad(x, y, z, octaves or 4, lacunarity or 2, gain or 0.5, grad)
+  return v, grad.x, grad.y, grad.z
+end
+local function turbulence(x, y, z, octaves, lacunarity, gain)
+  return B.turbulence(x, y, z, octaves or 4, lacunarity or 2, gain or 0.5)
+end
+local function ridged(x, y, z, octaves, lacunarity, gain, offset)
+  return B.ridged(x, y, z, octaves or 4, lacunarity or 2, gain or 0.5, offset or 1)
+end
+local METRICS = { euclidean = 0, manhattan = 1, chebyshev = 2 }
+local function metric_of(m)
+  local id = METRICS[m or "euclidean"]
+  if id == nil then
+    error(format("unknown Voronoi metric %s (use \"euclidean\", \"manhattan\" or \"chebyshev\")", tostring(m)), 3)
+  end
+  return id
+end
+local function voronoi(x, y, z, metric, jitter)
+  local m = metric_of(metric)
+  B.voronoi3(x, y, z, m, jitter or 1, cell)
+  return cell.f1, cell.f2, cell.id, cell.px, cell.py, cell.pz
+end
+local function voronoi2(x, y, metric, jitter)
+  local m = metric_of(metric)
+  B.voronoi2(x, y, m, jitter or 1, cell)
+  return cell.f1, cell.f2, cell.id, cell.px, cell.py
+end
+-- The slot for image textures from the scene: Rust's table has a `texture`
+-- pointer reserved for it, null until it is implemented.
+local function texture()
+  error("texture(name, u, v) is not available yet", 2)
+end
+
+---------------------------------------------------------------------------
+-- Pattern helpers, in plain Lua: the JIT compiles them as well as Rust would.
+---------------------------------------------------------------------------
+local function clamp(x, lo, hi)
+  if x < lo then return lo elseif x > hi then return hi end
+  return x
+end
+local function mix(a, b, t) return a + (b - a) * t end
+local function smoothstep(e0, e1, x)
+  local t = clamp((x - e0) / (e1 - e0), 0, 1)
+  return t * t * (3 - 2 * t)
+end
+local function step(edge, x) if x < edge then return 0 end return 1 end
+local function fract(x) return x - floor(x) end
+local function checker(x, y, z)
+  return (floor(x) + floor(y) + floor(z or 0)) % 2
+end
+-- 32-bit integer hashing (the lowbias32 finaliser by Chris Wellons). Lua
+-- numbers are doubles, so products are split to stay exact below 2^53.
+local function mul32(a, b)
+  return tobit(a * band(b, 0xffff) + tobit(a * rshift(b, 16)) * 65536)
+end
+local function mix32(h)
+  h = bxor(h, rshift(h, 16))
+  h = mul32(h, 0x7feb352d)
+  h = bxor(h, rshift(h, 15))
+  h = mul32(h, tobit(0x846ca68b))
+  return bxor(h, rshift(h, 16))
+end
+local function hash_int(a, b, c)
+  local h = mix32(tobit(a))
+  h = mix32(bxor(h, tobit(b or 0)))
+  h = mix32(bxor(h, tobit(c or 0)))
+  return band(h, 0x7fffffff)
+end
+local function hash(a, b, c) return hash_int(floor(a), floor(b or 0), floor(c or 0)) / 0x80000000 end
+local function brick(x, y, width, height, mortar)
+  width, height, mortar = width or 1, height or 0.5, mortar or 0.05
+  local row = floor(y / height)
+  local bx = x / width + (row % 2) * 0.5
+  local col = floor(bx)
+  local bu, bv = bx - col, y / height - row
+  local mu, mv = 0.5 * mortar / width, 0.5 * mortar / height
+  local m = 0
+  if bu < mu or bu > 1 - mu or bv < mv or bv > 1 - mv then m = 1 end
+  return m, hash_int(col, row), bu, bv
+end
+local function ramp(positions, colors)
+  if type(positions) ~= "table" or type(colors) ~= "table" then
+    error("ramp(positions, colors) takes two lists", 2)
+  end
+  local n = #positions
+  if n == 0 or #colors ~= n then
+    error(format("ramp: %d positions but %d colors", n, #colors), 2)
+  end
+  local ps, rs, gs, bs = {}, {}, {}, {}
+  for i = 1, n do
+    local c = colors[i]
+    ps[i] = positions[i]
+    if isvec(c) then
+      rs[i], gs[i], bs[i] = c.x, c.y, c.z
+    elseif type(c) == "table" then
+      rs[i], gs[i], bs[i] = c[1], c[2], c[3]
+    else
+      rs[i], gs[i], bs[i] = c, c, c
+    end
+    if type(ps[i]) ~= "number" or type(rs[i]) ~= "number" or type(gs[i]) ~= "number" or type(bs[i]) ~= "number" then
+      error(format("ramp: entry %d is not a number position with an {r, g, b} color", i), 2)
+    end
+    if i > 1 and ps[i] < ps[i - 1] then error("ramp: positions must not decrease", 2) end
+  end
+  return function(t)
+    if not (t > ps[1]) then return rs[1], gs[1], bs[1] end
+    for i = 2, n do
+      if t < ps[i] then
+        local f = (t - ps[i - 1]) / (ps[i] - ps[i - 1])
+        return rs[i - 1] + (rs[i] - rs[i - 1]) * f, gs[i - 1] + (gs[i] - gs[i - 1]) * f,
+          bs[i - 1] + (bs[i] - bs[i - 1]) * f
+      end
+    end
+    return rs[n], gs[n], bs[n]
+  end
+end
+
+---------------------------------------------------------------------------
+-- The sandbox. The real string table is reachable from any string through
+-- its metatable, so it is cleaned in place; everything else a script sees
+-- is a copy made per shader, so one shader cannot change another's library.
+---------------------------------------------------------------------------
+local MAX_REP = 16 * 1024 * 1024
+local rep = string.rep
+local function safe_rep(s, n, sep)
+  local len = #tostring(s) + (sep and #tostring(sep) or 0)
+  if type(n) == "number" and n > 0 and len * n > MAX_REP then
+    error(format("string.rep: result of %.0f bytes is over the %d-byte limit", len * n, MAX_REP), 2)
+  end
+  return rep(s, n, sep)
+end
+string.dump = nil
+string.rep = safe_rep
+getmetatable("").__metatable = false
+
+local function copy(t, drop)
+  local c = {}
+  for k, v in pairs(t) do
+    if not (drop and drop[k]) then c[k] = v end
+  end
+  return c
+end
+local real_collectgarbage = collectgarbage
+local function safe_collectgarbage(opt)
+  if opt == "count" then return real_collectgarbage("count") end
+  error("collectgarbage: shaders may only ask for \"count\"", 2)
+end
+local SAFE_GLOBALS = {
+  "assert", "error", "ipairs", "next", "pairs", "pcall", "xpcall", "select", "tonumber", "tostring",
+  "type", "unpack", "rawequal", "rawget", "rawset", "setmetatable", "getmetatable", "_VERSION",
+}
+local real_globals = _G
+local BUILTINS = {
+  vec3 = vec3, dot = dot, cross = cross, length = length, normalize = normalize,
+  perlin1 = perlin1, perlin2 = perlin2, perlin3 = perlin3, perlin4 = perlin4,
+  perlin3_grad = perlin3_grad, pperlin3 = pperlin3,
+  simplex2 = simplex2, simplex3 = simplex3, simplex4 = simplex4, simplex3_grad = simplex3_grad,
+  fbm = fbm, fbm_grad = fbm_grad, turbulence = turbulence, ridged = ridged,
+  voronoi = voronoi, voronoi2 = voronoi2, texture = texture,
+  clamp = clamp, mix = mix, lerp = mix, smoothstep = smoothstep, step = step, fract = fract,
+  checker = checker, brick = brick, ramp = ramp, hash = hash,
+  collectgarbage = safe_collectgarbage,
+}
+
+local function make_env(shader_name, params)
+  local env = {}
+  for _, k in ipairs(SAFE_GLOBALS) do env[k] = real_globals[k] end
+  for k, v in pairs(BUILTINS) do env[k] = v end
+  -- math.random would make images depend on thread scheduling; hash() and
+  -- the noise functions give repeatable randomness instead.
+  env.math = copy(math, { random = true, randomseed = true })
+  env.string = copy(string)
+  env.table = copy(table)
+  env.bit = copy(bit)
+  env.coroutine = copy(coroutine)
+  env.print = function(...)
+    local n = select("#", ...)
+    local parts = { ... }
+    for i = 1, n do parts[i] = tostring(parts[i]) end
+    log(shader_name, table.concat(parts, "\t", 1, n))
+  end
+  local param = {}
+  for k, v in pairs(params) do
+    if type(v) == "table" then v = vec3_t(v[1], v[2], v[3]) end
+    param[k] = v
+  end
+  env.param = param
+  env._G = env
+  return env
+end
+
+---------------------------------------------------------------------------
+-- Entry wrappers: Rust writes the shading point into `shade`, calls the
+-- wrapper with no arguments, and reads `out`. Results are checked here, where
+-- their Lua types are still known.
+---------------------------------------------------------------------------
+local function describe(v)
+  if v ~= v then return "NaN" end
+  if v == nil then return "nothing (nil)" end
+  if type(v) == "number" then return tostring(v) end
+  return "a " .. type(v)
+end
+local function bad(shader_name, entry, what)
+  out.bad = 1
+  error(format("shader '%s': %s() returned %s", shader_name, entry, what), 0)
+end
+local function color_entry(f, shader_name, entry)
+  return function()
+    local r, g, b = f(shade)
+    if isvec(r) and g == nil then r, g, b = r.x, r.y, r.z end
+    if type(r) == "number" and type(g) == "number" and type(b) == "number" and r == r and g == g and b == b then
+      out.r, out.g, out.b = r, g, b
+      return
+    end
+    local names = { "red", "green", "blue" }
+    for i = 1, 3 do
+      local v = select(i, r, g, b)
+      if type(v) ~= "number" or v ~= v then
+        bad(shader_name, entry, format("%s as its %s value (expected r, g, b numbers or a vec3)", describe(v), names[i]))
+      end
+    end
+  end
+end
+local function height_entry(f, shader_name)
+  return function()
+    local h = f(shade)
+    if type(h) == "number" and h == h then
+      out.r = h
+      return
+    end
+    bad(shader_name, "height", describe(h) .. " (expected a number)")
+  end
+end
+local function make_entry(env, entry, shader_name)
+  local f = env[entry]
+  if type(f) ~= "function" then return nil end
+  if entry == "height" then return height_entry(f, shader_name) end
+  return color_entry(f, shader_name, entry)
+end
+
+-- Scripts run in their own environments, but the real globals lose the
+-- dangerous libraries too, as a second line of defence.
+for _, k in ipairs({ "ffi", "jit", "debug", "require", "package", "io", "os", "load", "loadstring",
+  "loadfile", "dofile", "getfenv", "setfenv", "newproxy", "module" }) do
+  real_globals[k] = nil
+end
+-- Rust gets the record addresses as numbers (exact: addresses fit in 53 bits).
+local function address(p) return tonumber(ffi.cast("uintptr_t", ffi.cast("void *", p))) end
+return {
+  make_env = make_env,
+  make_entry = make_entry,
+  tick = tick,
+  shade = address(shade),
+  out = address(out),
+  clock = address(clock),
+  sizes = { shade = ffi.sizeof("luster_shade"), out = ffi.sizeof("luster_out"),
+    clock = ffi.sizeof("luster_clock"), cell = ffi.sizeof("luster_cell") },
+}

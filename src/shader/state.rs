@@ -1,0 +1,191 @@
+//! One Lua state with every shader of a [`ShaderSet`](super::ShaderSet)
+//! compiled into it: built once per worker thread, then called per shading
+//! point without allocating.
+
+use std::time::Duration;
+
+use mlua::{Function, LightUserData, Lua, LuaOptions, StdLib, Table, Value};
+
+use super::error::{ShaderError, ShaderErrorKind};
+use super::ffi::{self, IoBlock, Shade};
+use super::instrument::instrument;
+use super::{Entry, ParamValue, ShadeInput, ShaderSource};
+
+/// The trusted prelude (see its header comment).
+const PRELUDE: &str = include_str!("prelude.lua");
+
+/// Each state may hold this much Lua memory; a script that builds huge strings
+/// or tables fails with a memory error instead of exhausting the machine.
+pub(crate) const MEMORY_LIMIT: usize = 256 * 1024 * 1024;
+
+/// The entry wrappers of one compiled shader.
+struct Compiled {
+    name: String,
+    entries: [Option<Function>; 3],
+}
+
+/// A Lua state and the compiled shaders of one set.
+pub(crate) struct ThreadState {
+    io: IoBlock,
+    shaders: Vec<Compiled>,
+    timeout: Duration,
+    lua: Lua,
+}
+
+impl ThreadState {
+    /// Creates the state, runs the prelude, and compiles and runs every
+    /// script's top level (each under the per-call timeout).
+    pub(crate) fn new(sources: &[ShaderSource], timeout: Duration) -> Result<ThreadState, ShaderError> {
+        let internal = |e: mlua::Error| {
+            ShaderError::new(ShaderErrorKind::Internal, "(prelude)", format!("shader runtime: {e}"))
+        };
+        let libs = StdLib::TABLE | StdLib::STRING | StdLib::MATH | StdLib::BIT | StdLib::JIT | StdLib::FFI;
+        // SAFETY (of the `unsafe_` constructor, which only marks that the FFI
+        // is loaded): the FFI is used by the trusted prelude alone, which hides
+        // it from user scripts; see prelude.lua and ffi.rs.
+        let lua = unsafe { Lua::unsafe_new_with(libs, LuaOptions::new()) };
+        // LuaJIT's allocator can be replaced, so the limit normally works; if a
+        // build cannot, scripts still get string.rep's cap, and the state its
+        // 64-bit LuaJIT heap.
+        let _ = lua.set_memory_limit(MEMORY_LIMIT);
+
+        let log = lua
+            .create_function(|_, (name, text): (String, String)| {
+                eprintln!("[shader {name}] {text}");
+                Ok(())
+            })
+            .map_err(internal)?;
+        let api: Table = lua
+            .load(PRELUDE)
+            .set_name("@luster/prelude.lua")
+            .call((LightUserData(ffi::builtins_address()), log))
+            .map_err(internal)?;
+        // The C declarations in the prelude must describe Rust's records.
+        let sizes: Table = api.get("sizes").map_err(internal)?;
+        for (k, size) in [
+            ("shade", std::mem::size_of::<Shade>()),
+            ("out", std::mem::size_of::<ffi::Out>()),
+            ("clock", std::mem::size_of::<ffi::Clock>()),
+            ("cell", std::mem::size_of::<ffi::CellOut>()),
+        ] {
+            if sizes.get::<usize>(k).map_err(internal)? != size {
+                let msg = format!("shader runtime: luster_{k} differs between prelude.lua and ffi.rs");
+                return Err(ShaderError::new(ShaderErrorKind::Internal, "(prelude)", msg));
+            }
+        }
+        let addr = |k: &str| api.get::<f64>(k).map(|a| a as usize).map_err(internal);
+        let timeout_ns = u64::try_from(timeout.as_nanos()).unwrap_or(u64::MAX);
+        let io = IoBlock::new(addr("shade")?, addr("out")?, addr("clock")?, timeout_ns).ok_or_else(|| {
+            ShaderError::new(ShaderErrorKind::Internal, "(prelude)", "shader runtime: bad record addresses")
+        })?;
+
+        let mut state = ThreadState { io, shaders: Vec::with_capacity(sources.len()), timeout, lua };
+        let make_env: Function = api.get("make_env").map_err(internal)?;
+        let make_entry: Function = api.get("make_entry").map_err(internal)?;
+        let tick: Function = api.get("tick").map_err(internal)?;
+        for src in sources {
+            let compiled = state.compile(src, &make_env, &make_entry, &tick)?;
+            state.shaders.push(compiled);
+        }
+        Ok(state)
+    }
+
+    fn compile(
+        &self,
+        src: &ShaderSource,
+        make_env: &Function,
+        make_entry: &Function,
+        tick: &Function,
+    ) -> Result<Compiled, ShaderError> {
+        let name = src.name.as_str();
+        let file = src.path.display().to_string();
+        let code = instrument(&src.code).map_err(|r| {
+            ShaderError::new(
+                ShaderErrorKind::Syntax,
+                name,
+                format!("{file}:{}: the name '{}' is reserved for the shader runtime", r.line, r.name),
+            )
+        })?;
+        let lua_err = |e: mlua::Error| self.error(name, &e);
+
+        let params = self.lua.create_table().map_err(lua_err)?;
+        for (key, value) in &src.params {
+            let v = match value {
+                ParamValue::Number(x) => Value::Number(*x),
+                ParamValue::Text(s) => Value::String(self.lua.create_string(s).map_err(lua_err)?),
+                ParamValue::Vec3(v) => Value::Table(self.lua.create_sequence_from(*v).map_err(lua_err)?),
+            };
+            params.set(key.as_str(), v).map_err(lua_err)?;
+        }
+        let env: Table = make_env.call((name, params)).map_err(lua_err)?;
+        // Lua shortens long chunk names from the left, keeping the file name.
+        let chunk = self
+            .lua
+            .load(&code)
+            .set_name(format!("@{file}"))
+            .set_environment(env.clone())
+            .into_function()
+            .map_err(lua_err)?;
+        self.io.begin(&Shade::default());
+        chunk.call::<()>(tick.clone()).map_err(lua_err)?;
+
+        let mut entries: [Option<Function>; 3] = [None, None, None];
+        for entry in Entry::ALL {
+            entries[entry as usize] = make_entry.call((env.clone(), entry.name(), name)).map_err(lua_err)?;
+        }
+        if entries.iter().all(Option::is_none) {
+            return Err(ShaderError::new(
+                ShaderErrorKind::NoEntryPoint,
+                name,
+                format!("{file}: defines none of the functions color, height or reflect"),
+            ));
+        }
+        Ok(Compiled { name: name.to_string(), entries })
+    }
+
+    fn error(&self, shader: &str, e: &mlua::Error) -> ShaderError {
+        ShaderError::from_lua(shader, e, self.io.timed_out(), self.io.bad_result(), self.timeout)
+    }
+
+    /// Which entry points shader `id` defines.
+    pub(crate) fn entries(&self, id: usize) -> [bool; 3] {
+        self.shaders.get(id).map_or([false; 3], |c| c.entries.each_ref().map(Option::is_some))
+    }
+
+    /// Calls one entry point; the result's channels (a height in `[0]`).
+    pub(crate) fn call(&self, id: usize, entry: Entry, input: &ShadeInput) -> Result<[f64; 3], ShaderError> {
+        let Some(shader) = self.shaders.get(id) else {
+            return Err(ShaderError::new(
+                ShaderErrorKind::Usage,
+                &format!("#{id}"),
+                format!("no shader with id {id} (the set has {})", self.shaders.len()),
+            ));
+        };
+        let Some(f) = &shader.entries[entry as usize] else {
+            return Err(ShaderError::new(
+                ShaderErrorKind::Usage,
+                &shader.name,
+                format!("the script defines no {}() function", entry.name()),
+            ));
+        };
+        self.io.begin(&shade_of(input));
+        match f.call::<()>(()) {
+            Ok(()) => {
+                let o = self.io.out();
+                Ok([o.r, o.g, o.b])
+            }
+            Err(e) => Err(self.error(&shader.name, &e)),
+        }
+    }
+}
+
+fn shade_of(i: &ShadeInput) -> Shade {
+    let v = |a: [f32; 3]| ffi::Vec3 { x: a[0].into(), y: a[1].into(), z: a[2].into() };
+    Shade {
+        p: v(i.p),
+        pw: v(i.pw),
+        n: v(i.n),
+        uv: ffi::Vec2 { u: i.uv[0].into(), v: i.uv[1].into() },
+        time: i.time.into(),
+    }
+}
