@@ -119,12 +119,14 @@ fn texture_map(
                 Some((_, "nearest")) => Interpolation::Nearest,
                 Some((_, "bilinear")) => Interpolation::Bilinear,
                 Some((_, "trilinear")) => Interpolation::Trilinear,
-                Some((e, other)) => return Err(r.err(
-                    e,
-                    format!(
+                Some((e, other)) => {
+                    return Err(r.err(
+                        e,
+                        format!(
                         "<Interpolation> \"{other}\" is unknown (expected nearest, bilinear or trilinear)"
                     ),
-                )),
+                    ))
+                }
             };
             let normalizer = match el.child("Normalizer") {
                 Some(n) => {
