@@ -33,7 +33,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::OnceLock;
 use std::time::Instant;
 
-use crate::noise::{fractal, perlin, simplex, voronoi};
+use crate::noise::{course, fractal, perlin, simplex, voronoi};
 
 /// A 3-vector as Lua sees it (`luster_vec3`).
 #[repr(C)]
@@ -119,6 +119,7 @@ pub(crate) struct Builtins {
     voronoi3: extern "C" fn(f64, f64, f64, u32, f64, *mut CellOut),
     voronoi2: extern "C" fn(f64, f64, u32, f64, *mut CellOut),
     clock_check: extern "C" fn(*mut Clock) -> i32,
+    course_noise: extern "C" fn(f64, f64, f64) -> f64,
     /// The slot for `texture(name, u, v)` (image sampling from the scene): null
     /// until it is implemented; the prelude's `texture` reports that.
     texture: *const std::ffi::c_void,
@@ -147,6 +148,7 @@ pub(crate) static BUILTINS: Builtins = Builtins {
     voronoi3,
     voronoi2,
     clock_check,
+    course_noise,
     texture: std::ptr::null(),
 };
 
@@ -198,6 +200,10 @@ extern "C" fn perlin2(x: f64, y: f64) -> f64 {
 }
 extern "C" fn perlin3(x: f64, y: f64, z: f64) -> f64 {
     guard(|| perlin::noise3(x as f32, y as f32, z as f32))
+}
+/// The CENG795 lecture's noise, so a script can reproduce the `perlin` texture.
+extern "C" fn course_noise(x: f64, y: f64, z: f64) -> f64 {
+    guard(|| course::noise(x as f32, y as f32, z as f32))
 }
 extern "C" fn perlin4(x: f64, y: f64, z: f64, w: f64) -> f64 {
     guard(|| perlin::noise4(x as f32, y as f32, z as f32, w as f32))

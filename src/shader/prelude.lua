@@ -36,6 +36,7 @@ typedef struct {
   void (*voronoi3)(double, double, double, uint32_t, double, luster_cell *);
   void (*voronoi2)(double, double, uint32_t, double, luster_cell *);
   int32_t (*clock_check)(luster_clock *);
+  double (*course_noise)(double, double, double);
   const void *texture;
 } luster_builtins;
 ]]
@@ -128,6 +129,7 @@ local function perlin1(x) return B.perlin1(x) end
 local function perlin2(x, y) return B.perlin2(x, y) end
 local function perlin3(x, y, z) return B.perlin3(x, y, z) end
 local function perlin4(x, y, z, w) return B.perlin4(x, y, z, w) end
+local function course_noise(x, y, z) return B.course_noise(x, y, z) end
 local function perlin3_grad(x, y, z)
   local v = B.perlin3_grad(x, y, z, grad)
   return v, grad.x, grad.y, grad.z
@@ -299,7 +301,7 @@ local real_globals = _G
 local BUILTINS = {
   vec3 = vec3, dot = dot, cross = cross, length = length, normalize = normalize,
   perlin1 = perlin1, perlin2 = perlin2, perlin3 = perlin3, perlin4 = perlin4,
-  perlin3_grad = perlin3_grad, pperlin3 = pperlin3,
+  perlin3_grad = perlin3_grad, pperlin3 = pperlin3, course_noise = course_noise,
   simplex2 = simplex2, simplex3 = simplex3, simplex4 = simplex4, simplex3_grad = simplex3_grad,
   fbm = fbm, fbm_grad = fbm_grad, turbulence = turbulence, ridged = ridged,
   voronoi = voronoi, voronoi2 = voronoi2, texture = texture,
