@@ -182,12 +182,14 @@ fn texture_map(
         "" => {
             return Err(r.err(el, "<TextureMap> has no type (expected image, perlin, checkerboard or shader)"))
         }
-        other => return Err(r.err(
-            el,
-            format!(
+        other => {
+            return Err(r.err(
+                el,
+                format!(
                 "<TextureMap> type \"{other}\" is unknown (expected image, perlin, checkerboard or shader)"
             ),
-        )),
+            ))
+        }
     };
     Ok(TextureMapDesc {
         id: id_of(el),
