@@ -184,3 +184,113 @@ impl Textures {
         Ok(None)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Loc;
+    use crate::shader::ParamValue;
+    use crate::texture::Texture;
+
+    fn map(code: &str, decal: DecalMode, params: &[(&str, f64)]) -> TextureMapDesc {
+        TextureMapDesc {
+            id: "m".into(),
+            source: TextureSource::Shader {
+                path: "dir/s.lua".into(),
+                code: code.into(),
+                params: params.iter().map(|(k, v)| (k.to_string(), ParamValue::Number(*v))).collect(),
+            },
+            decal,
+            bump_factor: 1.0,
+            loc: Loc::default(),
+        }
+    }
+
+    fn frame() -> TexFrame {
+        TexFrame {
+            uv: Vec2::new(0.25, 0.75),
+            p_object: Vec3::new(0.5, 0.0, 0.0),
+            p_world: Vec3::new(1.5, 0.0, 0.0),
+            time: 0.5,
+            p_rest: Vec3::new(1.5, 0.0, 0.0),
+            dpdu: Vec3::X,
+            dpdv: Vec3::Y,
+            n: Vec3::Z,
+            to_world: None,
+            footprint: 0.0,
+        }
+    }
+
+    const GREY: &str = "local g = param.g\nassert(g < 1, 'g too big')\nfunction color(s) return g, g, g end";
+
+    #[test]
+    fn one_script_serves_maps_with_different_parameters() {
+        let descs =
+            [map(GREY, DecalMode::ReplaceKd, &[("g", 0.2)]), map(GREY, DecalMode::ReplaceKd, &[("g", 0.6)])];
+        let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT).unwrap());
+        let lists = [tex.maps[0], tex.maps[1]];
+        let diffuse: Vec<Vec3> = lists
+            .iter()
+            .map(|m| {
+                let Texture::Shader { id } = m.texture else { panic!("a shader map") };
+                let mut mat = Material::default();
+                let mut n = Vec3::Z;
+                assert_eq!(tex.apply_shader(id, m, &frame(), &mut mat, &mut n).unwrap(), None);
+                mat.diffuse
+            })
+            .collect();
+        assert_eq!(diffuse, [Vec3::splat(0.2), Vec3::splat(0.6)]);
+    }
+
+    #[test]
+    fn the_failing_map_is_found_even_when_its_script_is_shared() {
+        let descs =
+            [map(GREY, DecalMode::ReplaceKd, &[("g", 0.2)]), map(GREY, DecalMode::ReplaceKd, &[("g", 3.0)])];
+        let e = compile(&descs, DEFAULT).unwrap_err();
+        assert_eq!(e.map, 1);
+        assert!(e.message.contains("s.lua:2") && e.message.contains("g too big"), "{}", e.message);
+    }
+
+    #[test]
+    fn decal_modes_need_their_entry_points() {
+        let bg = [map(GREY, DecalMode::ReplaceBackground, &[("g", 0.1)])];
+        assert!(compile(&bg, DEFAULT)
+            .unwrap_err()
+            .message
+            .contains("cannot drive DecalMode replace_background"));
+        let km = [map(GREY, DecalMode::ReplaceKm, &[("g", 0.1)])];
+        assert!(compile(&km, DEFAULT).unwrap_err().message.contains("no reflect(s)"));
+        assert!(compile(&[], DEFAULT).unwrap().is_none());
+    }
+
+    #[test]
+    fn the_script_sees_the_frame_and_reflect_makes_a_mirror() {
+        let code = "function reflect(s) return s.P.x, s.Pw.x, s.uv.v + s.time end\n\
+                    function color(s) return s.N.x, s.N.y, s.N.z end";
+        let descs = [map(code, DecalMode::ReplaceKm, &[]), map(code, DecalMode::ReplaceAll, &[])];
+        let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT).unwrap());
+        let mut mat = Material::default();
+        let mut n = Vec3::Y;
+        assert_eq!(tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut n).unwrap(), None);
+        assert_eq!(mat.mirror, Vec3::new(0.5, 1.5, 1.25));
+        assert_eq!(mat.kind, Specular::Mirror);
+        assert_eq!(tex.apply_shader(1, &tex.maps[1], &frame(), &mut mat, &mut n).unwrap(), Some(Vec3::Y));
+    }
+
+    #[test]
+    fn a_height_shader_bumps_and_its_errors_come_back() {
+        let code = "function height(s)\n  if s.P.y > 1 then error('bad') end\n  return 0.5 * s.P.x\nend";
+        let descs = [map(code, DecalMode::BumpNormal, &[])];
+        let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT).unwrap());
+        let mut mat = Material::default();
+        let mut n = Vec3::Z;
+        tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut n).unwrap();
+        // Slope 0.5 along x tilts the normal towards -x: n ∝ (-0.5, 0, 1).
+        assert!((n - Vec3::new(-0.5, 0.0, 1.0).normalize()).length() < 1e-3, "{n}");
+        let high = TexFrame { p_object: Vec3::new(0.0, 2.0, 0.0), ..frame() };
+        let e = tex.apply_shader(0, &tex.maps[0], &high, &mut mat, &mut n).unwrap_err();
+        assert!(e.message.contains("s.lua:2: bad"), "{}", e.message);
+    }
+
+    const DEFAULT: Duration = crate::shader::DEFAULT_TIMEOUT;
+}
