@@ -4,7 +4,7 @@
 //! the output folder (no image, no temporary file).
 //!
 //! To add a case, drop the scene in `tests/bad_input/` (PLY files it needs go
-//! in `tests/bad_input/ply/`) and add one line to [`CASES`]. A file in the
+//! in `tests/bad_input/ply/`, images in `tests/bad_input/textures/`) and add one line to [`CASES`]. A file in the
 //! folder without a line in the table fails the test, so a scene that loads
 //! fine cannot pass unnoticed.
 
@@ -59,6 +59,17 @@ const CASES: &[(&str, &[&str])] = &[
     ("ply_absurd_counts.xml", &["absurd_counts.ply", "4000000000 'vertex'", "only 74 bytes"]),
     ("ply_face_index_out_of_range.xml", &["face_index_out_of_range.ply", "vertex 7", "3 vertices"]),
     ("ply_huge_face_list.xml", &["huge_face_list.ply", "face 0"]),
+    // Textures.
+    ("texture_image_missing.xml", &["Image[id=1]", "no_such_image.png", "no such file"]),
+    ("texture_image_corrupt.xml", &["Image[id=1]", "corrupt.png", "cannot decode image"]),
+    ("texture_unknown_decal.xml", &["<DecalMode>", "\"replace_colour\"", "unknown"]),
+    ("texture_unknown_image_id.xml", &["TextureMap[id=1]/ImageId", "image \"9\"", "not defined"]),
+    ("texture_unknown_type.xml", &["TextureMap[id=1]", "type \"marble\"", "unknown"]),
+    ("texture_octaves_huge.xml", &["<NumOctaves>", "1000000"]),
+    ("texture_unknown_map.xml", &["Sphere[id=1]/Textures", "texture map \"4\"", "not defined"]),
+    ("texture_two_backgrounds.xml", &["TextureMap[id=2]", "second texture map replaces the background"]),
+    ("texcoords_odd_count.xml", &["<TexCoordData>", "3 numbers", "multiple of 2"]),
+    ("faces_bad_vertex_offset.xml", &["<Faces>", "vertexOffset=\"one\"", "not an integer"]),
     // Cameras and images.
     ("resolution_zero.xml", &["<ImageResolution>", "positive", "0 0"]),
     ("resolution_negative.json", &["<ImageResolution>", "positive", "-5 100"]),
@@ -242,7 +253,7 @@ fn table_covers_the_corpus() {
         .expect("the corpus folder")
         .flatten()
         .map(|e| e.file_name().to_string_lossy().into_owned())
-        .filter(|n| n != "ply" && n != "shaders" && !n.starts_with('.'))
+        .filter(|n| !["ply", "textures", "shaders"].contains(&n.as_str()) && !n.starts_with('.'))
         .collect();
     let in_table: BTreeSet<String> = CASES
         .iter()
@@ -262,7 +273,7 @@ fn table_covers_the_corpus() {
         .filter_map(|n| std::fs::read(dir.join(n)).ok())
         .map(|b| String::from_utf8_lossy(&b).into_owned())
         .collect();
-    for folder in ["ply", "shaders"] {
+    for folder in ["ply", "textures", "shaders"] {
         for file in std::fs::read_dir(dir.join(folder)).expect("the asset folder").flatten() {
             let name = format!("{folder}/{}", file.file_name().to_string_lossy());
             assert!(texts.iter().any(|t| t.contains(&name)), "{name} is used by no scene");

@@ -151,6 +151,8 @@ pub struct ImageResult {
     /// PSNR of the means of 8×8-pixel blocks against the expected image
     /// (where noise averages out), when the bar tests it.
     pub coarse_psnr: Option<f64>,
+    /// Luma statistics of ours and the expected image, when the bar tests them.
+    pub stats: Option<thresholds::StatsPair>,
     /// Samples per pixel it was rendered with.
     pub spp: u32,
     /// Render seconds for this camera (both renders of a pair).
@@ -279,6 +281,7 @@ fn run_case_into(case: &Case, outdir: &Path, opts: &RenderOptions, result: &mut 
             bar: threshold.bar(None),
             pair: None,
             coarse_psnr: None,
+            stats: None,
             spp: opts.spp.unwrap_or(cam.num_samples).max(1),
             seconds,
             pass: false,
@@ -302,16 +305,17 @@ fn run_case_into(case: &Case, outdir: &Path, opts: &RenderOptions, result: &mut 
             let _ = crate::image::output::write_rgb8(&pair_png, img.width, img.height, second);
         }
         if let Some(exp) = expected {
-            match compare_with(&exp, img.width, img.height, &rgb, r.bar.tests_coarse()) {
-                Ok((c, coarse)) => {
+            match compare_with(&exp, img.width, img.height, &rgb, r.bar.tests_coarse(), r.bar.tests_stats()) {
+                Ok((c, coarse, stats)) => {
                     r.coarse_psnr = coarse;
+                    r.stats = stats;
                     let heat = png.with_file_name(format!("{}__heatmap.png", file_stem(&png)));
                     if let Ok(h) = crate::image::comparison_heatmap(&c, crate::image::HeatmapSource::Flip) {
                         if crate::image::write_heatmap(&h, &heat).is_ok() {
                             r.heatmap = Some(heat);
                         }
                     }
-                    r.pass = r.error.is_none() && r.bar.accepts(&c, r.coarse_psnr);
+                    r.pass = r.error.is_none() && r.bar.accepts(&c, r.coarse_psnr, r.stats.as_ref());
                     r.comparison = Some(c);
                 }
                 Err(e) => r.error = Some(e),
@@ -325,19 +329,27 @@ fn file_stem(p: &Path) -> String {
     p.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default()
 }
 
+/// What [`compare_with`] measures: the comparison, the PSNR of block means
+/// and the luma statistics (the last two only when asked for).
+type Measured = (Comparison, Option<f64>, Option<thresholds::StatsPair>);
+
 /// Compares an 8-bit render with the expected image file; with `coarse`,
-/// also the means of 8×8 blocks (see [`thresholds::coarse_psnr`]).
+/// also the means of 8×8 blocks (see [`thresholds::coarse_psnr`]); with
+/// `stats`, the luma statistics of both.
 fn compare_with(
     expected: &Path,
     w: u32,
     h: u32,
     rgb: &[u8],
     coarse: bool,
-) -> Result<(Comparison, Option<f64>), String> {
+    stats: bool,
+) -> Result<Measured, String> {
     let reference = Rgb32Image::load(expected).map_err(|e| e.to_string())?;
     let test = rgb8_image(w, h, rgb).ok_or("render buffer has the wrong size")?;
     let c = compare(&reference, &test, &CompareOptions::default()).map_err(|e| e.to_string())?;
-    Ok((c, if coarse { thresholds::coarse_psnr(&reference, &test) } else { None }))
+    let coarse = if coarse { thresholds::coarse_psnr(&reference, &test) } else { None };
+    let stats = stats.then(|| thresholds::StatsPair::of(&test, &reference));
+    Ok((c, coarse, stats))
 }
 
 /// Compares two 8-bit renders of the same camera (so of the same size).

@@ -9,7 +9,7 @@
 //!
 //! | function | range, with B ≈ 1.04 the bound of `noise3` and S = Σ\|gain\|ⁱ |
 //! |---|---|
-//! | [`fbm3`] | [-B·S, B·S]; about ±0.7·S in practice |
+//! | [`fbm3`] | [-B·S, B·S] |
 //! | [`turbulence3`] | [0, B·S] |
 //! | [`ridged3`] | [0, 1] for gain ≥ 0 (normalised, see there); [-1, 1] otherwise |
 

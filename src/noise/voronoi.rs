@@ -10,9 +10,9 @@
 //! The result, [`Cell`], holds F1 and F2 (the nearest and second-nearest
 //! distances, so `f2 − f1` draws cell borders), an `id` hashed from the
 //! nearest point's cell (for a per-cell random colour) and that point, `p1`.
-//! The search is exact: it scans the 3³ (3²) nearest cells and, in the rare
-//! case that F2 exceeds the distance to the cells beyond them (at least 1 in
-//! every metric), the 5³ (5²) block.
+//! The search is exact: it scans the 3³ (3²) nearest cells and, when F2
+//! exceeds the distance to the cells beyond them (at least 1 in every metric),
+//! those cells of the 5³ (5²) shell that could still hold a nearer point.
 //!
 //! | | Euclidean | Manhattan | Chebyshev |
 //! |---|---|---|---|
@@ -61,37 +61,25 @@ pub struct Cell {
     pub p1: [f32; 3],
 }
 
-/// Murmur3's finaliser: every input bit flips about half the output bits.
-#[inline(always)]
-fn fmix32(mut h: u32) -> u32 {
-    h ^= h >> 16;
-    h = h.wrapping_mul(0x85eb_ca6b);
-    h ^= h >> 13;
-    h = h.wrapping_mul(0xc2b2_ae35);
-    h ^ (h >> 16)
-}
-
-/// Hashes cell coordinates; the odd multipliers keep axes from cancelling.
-#[inline(always)]
-fn hash_cell<const N: usize>(c: [i32; N]) -> u32 {
-    const MUL: [u32; 3] = [0x8da6_b343, 0xd816_3841, 0xcb1a_b31f];
-    let mut h = 0u32;
-    for k in 0..N {
-        h ^= (c[k] as u32).wrapping_mul(MUL[k]);
-    }
-    fmix32(h)
-}
-
-/// A cell's id and its feature point, relative to the cell's lower corner.
+/// A cell's id and its feature point relative to the cell's lower corner,
+/// from one 64-bit hash: 21 bits per coordinate, the high half as the id.
 #[inline(always)]
 fn feature<const N: usize>(cell: [i32; N], jitter: f32) -> (u32, [f32; N]) {
-    let h = hash_cell(cell);
-    // A fresh mix per axis gives independent coordinates from one hash.
+    // Distinct odd multipliers: two cells collide only if Σ Δcₖ·Mₖ ≡ 0 mod 2⁶⁴.
+    const MUL: [u64; 3] = [0x9e37_79b9_7f4a_7c15, 0xc2b2_ae3d_27d4_eb4f, 0x1656_67b1_9e37_79f9];
+    let mut h = 0u64;
+    for k in 0..N {
+        h = h.wrapping_add((cell[k] as u32 as u64).wrapping_mul(MUL[k]));
+    }
+    // SplitMix64's finaliser spreads every input bit over the whole word.
+    h = (h ^ (h >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    h = (h ^ (h >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    h ^= h >> 31;
     let local = core::array::from_fn(|k| {
-        let u = (fmix32(h ^ (k as u32 + 1).wrapping_mul(0x9e37_79b9)) >> 8) as f32 / (1u32 << 24) as f32;
+        let u = ((h >> (21 * k)) & 0x1f_ffff) as f32 * (1.0 / (1u32 << 21) as f32);
         0.5 + jitter * (u - 0.5)
     });
-    (h, local)
+    ((h >> 32) as u32, local)
 }
 
 /// The nearest and second-nearest points found so far, in the metric's own
@@ -104,12 +92,18 @@ struct Best<const N: usize> {
 }
 
 /// Scans the cells within `radius` of the query's cell, updating `best`.
+///
+/// With `shell_only`, the inner cells (already scanned) are skipped, and so
+/// is any cell whose whole range of possible feature points
+/// (`centre ± jitter/2` per axis) is no nearer than the current F2; the
+/// metrics are all monotone in each axis distance, so `dist` of the per-axis
+/// gaps is a lower bound.
 #[inline(always)]
 fn scan<const N: usize>(
     cell: [i32; N],
     frac: [f32; N],
     jitter: f32,
-    radius: i32,
+    (radius, shell_only): (i32, bool),
     dist: impl Fn([f32; N]) -> f32,
     best: &mut Best<N>,
 ) {
@@ -121,12 +115,24 @@ fn scan<const N: usize>(
             *s = rest % side - radius;
             rest /= side;
         }
-        let (h, local) = feature::<N>(core::array::from_fn(|k| cell[k].wrapping_add(step[k])), jitter);
+        if shell_only {
+            if step.iter().all(|s| s.abs() < radius) {
+                continue;
+            }
+            let gap = core::array::from_fn(|k| {
+                let centre = step[k] as f32 + 0.5;
+                ((frac[k] - centre).abs() - 0.5 * jitter).max(0.0)
+            });
+            if dist(gap) >= best.d2 {
+                continue;
+            }
+        }
+        let (id, local) = feature::<N>(core::array::from_fn(|k| cell[k].wrapping_add(step[k])), jitter);
         let offset: [f32; N] = core::array::from_fn(|k| step[k] as f32 + local[k]);
         let d = dist(core::array::from_fn(|k| offset[k] - frac[k]));
         if d < best.d1 {
             best.d2 = best.d1;
-            *best = Best { d1: d, id: h, offset, ..*best };
+            *best = Best { d1: d, id, offset, ..*best };
         } else if d < best.d2 {
             best.d2 = d;
         }
@@ -140,25 +146,25 @@ fn search<const N: usize>(p: [f32; N], metric: Metric, jitter: f32) -> ([f32; N]
     let cell = base.map(|b| b as i32);
     let frac: [f32; N] = core::array::from_fn(|k| p[k] - base[k]);
     let jitter = if jitter >= 0.0 { jitter.min(1.0) } else { 0.0 };
-    let run = |radius: i32, best: &mut Best<N>| match metric {
-        Metric::Euclidean => scan(cell, frac, jitter, radius, |d| d.iter().map(|v| v * v).sum(), best),
-        Metric::Manhattan => scan(cell, frac, jitter, radius, |d| d.iter().map(|v| v.abs()).sum(), best),
+    let run = |pass: (i32, bool), best: &mut Best<N>| match metric {
+        Metric::Euclidean => scan(cell, frac, jitter, pass, |d| d.iter().map(|v| v * v).sum(), best),
+        Metric::Manhattan => scan(cell, frac, jitter, pass, |d| d.iter().map(|v| v.abs()).sum(), best),
         Metric::Chebyshev => {
-            scan(cell, frac, jitter, radius, |d| d.iter().fold(0.0, |m, v| v.abs().max(m)), best)
+            scan(cell, frac, jitter, pass, |d| d.iter().fold(0.0, |m, v| v.abs().max(m)), best)
         }
     };
     let mut best = Best { d1: f32::INFINITY, d2: f32::INFINITY, id: 0, offset: [0.0; N] };
-    run(1, &mut best);
+    run((1, false), &mut best);
     // A point two cells away along axis k lies at least 2.5 − j/2 − f (above)
     // or 1.5 − j/2 + f (below) from the query along that axis alone, so at
     // least that far in every metric: if F2 is within that gap, the 3ⁿ block
-    // was enough. With jitter 1 the gap is 1 to 1.5.
+    // was enough. With jitter 1 the gap is 1 to 1.5; Manhattan's F2 passes it
+    // most often, which is why the shell scan prunes cell by cell.
     let half = 0.5 * jitter;
     let gap = frac.iter().fold(f32::INFINITY, |g, &f| g.min(2.5 - half - f).min(1.5 - half + f));
     let gap = if metric == Metric::Euclidean { gap * gap } else { gap };
     if best.d2 > gap {
-        best = Best { d1: f32::INFINITY, d2: f32::INFINITY, id: 0, offset: [0.0; N] };
-        run(2, &mut best);
+        run((2, true), &mut best);
     }
     if best.d1 == f32::INFINITY {
         // Only a NaN coordinate leaves nothing compared: report NaN, not ∞.

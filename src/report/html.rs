@@ -453,6 +453,27 @@ fn image_cells(h: &mut String, scene: &SceneEntry, img: &ImageEntry) {
         ),
         _ => String::new(),
     };
+    if t.kind == "statistical" {
+        // Perlin images: mean and contrast of luma, ours / expected.
+        let stats = match img.metrics.as_ref().and_then(|m| Some((m, m.mean_luma?, m.contrast?))) {
+            Some((m, mean, contrast)) => format!(
+                "<span class=\"sub{}\">mean {:.3} / {:.3}<br>contrast {:.3} / {:.3}</span>",
+                if m.stats_ok { "" } else { " bad" },
+                mean[0],
+                mean[1],
+                contrast[0],
+                contrast[1]
+            ),
+            None => String::new(),
+        };
+        let _ = write!(
+            h,
+            "<td><span class=\"thr\" title=\"{}\">statistical<br>FLIP ≤ {:.4}</span>{stats}</td>",
+            escape(&t.reason),
+            t.max_flip
+        );
+        return;
+    }
     let _ = write!(
         h,
         "<td><span class=\"thr\" title=\"{}\">PSNR ≥ {:.2}<br>FLIP ≤ {:.4}</span>{pair}{coarse}</td>",

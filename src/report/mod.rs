@@ -28,6 +28,7 @@ mod assets;
 pub mod html;
 pub mod json;
 
+use crate::conformance::thresholds::StatsPair;
 use crate::conformance::{Bar, CaseResult, ImageResult, Rule};
 use crate::image::{Comparison, MetricSpace};
 use serde::Serialize;
@@ -226,6 +227,12 @@ pub struct Metrics {
     pub coarse_psnr: Option<f64>,
     /// Whether that part of the threshold was met (true when not tested).
     pub coarse_ok: bool,
+    /// Statistical rule: mean luma of ours and of the expected image.
+    pub mean_luma: Option<[f64; 2]>,
+    /// Statistical rule: luma contrast (standard deviation) of ours and of the expected image.
+    pub contrast: Option<[f64; 2]>,
+    /// Whether the statistics agreed (true when not tested).
+    pub stats_ok: bool,
 }
 
 /// The bar an image was judged by.
@@ -390,11 +397,12 @@ fn image_entry(i: &ImageResult, root: &Path, outdir: &Path) -> ImageEntry {
         expected_source: i.expected.as_ref().map(|p| p.display().to_string()),
         heatmap,
         thumbs,
-        metrics: i.comparison.as_ref().map(|c| metrics(c, t, i.coarse_psnr)),
+        metrics: i.comparison.as_ref().map(|c| metrics(c, t, i.coarse_psnr, i.stats.as_ref())),
         threshold: ThresholdEntry {
             kind: match i.threshold.rule {
                 Rule::Fixed { .. } => "fixed",
                 Rule::NoiseAware { .. } => "noise-aware",
+                Rule::Statistical { .. } => "statistical",
             },
             min_psnr: t.min_psnr,
             max_flip: t.max_flip,
@@ -409,7 +417,7 @@ fn image_entry(i: &ImageResult, root: &Path, outdir: &Path) -> ImageEntry {
     }
 }
 
-fn metrics(c: &Comparison, t: &Bar, coarse_psnr: Option<f64>) -> Metrics {
+fn metrics(c: &Comparison, t: &Bar, coarse_psnr: Option<f64>, stats: Option<&StatsPair>) -> Metrics {
     Metrics {
         width: c.width,
         height: c.height,
@@ -428,5 +436,8 @@ fn metrics(c: &Comparison, t: &Bar, coarse_psnr: Option<f64>) -> Metrics {
         flip_ok: t.flip_ok(c),
         coarse_psnr: coarse_psnr.filter(|p| p.is_finite()),
         coarse_ok: t.coarse_ok(coarse_psnr),
+        mean_luma: stats.map(|s| [s.ours.mean, s.reference.mean]),
+        contrast: stats.map(|s| [s.ours.contrast, s.reference.contrast]),
+        stats_ok: t.stats_ok(stats),
     }
 }

@@ -20,7 +20,7 @@
 //! | `replace_all` | the point's colour is `c`, no lighting |
 //! | `replace_normal` | `n = normalize(T x + B y + N z)` with `(x, y, z) = 2 texel/255 - 1` |
 //! | `bump_normal` | see [`bump`] |
-//! | `replace_background` | camera rays that miss take `c` at their image position |
+//! | `replace_background` | rays that miss take `255 c` at their camera sample's image position |
 //!
 //! Shader maps (a Lua script, [`shader`]) call the script's entry point that
 //! the decal mode needs; a script's runtime error comes back from
@@ -214,8 +214,22 @@ impl Textures {
             .map(|&m| &self.maps[m as usize])
     }
 
-    /// A map's raw value at a point: texel (not yet normalized), Perlin grey,
-    /// or checkerboard colour.
+    /// A map's raw value at a frame: texel (not yet normalized), Perlin grey,
+    /// or checkerboard colour. The references pin down where each pattern
+    /// lives: Perlin noise at the position at rest (hw4 `ellipsoids_texture`:
+    /// the noise on a squashed sphere is not squashed), the checkerboard in
+    /// object space (hw4 `VeachAjar`, whose floor is scaled by 1.8 along x:
+    /// 41.6 dB this way, 16.4 dB in world space).
+    pub fn at(&self, texture: &Texture, f: &TexFrame, lod: f32) -> Vec3 {
+        let p = match texture {
+            Texture::Checkerboard(_) => f.p_object,
+            _ => f.p_rest,
+        };
+        self.raw(texture, f.uv, p, lod)
+    }
+
+    /// A map's raw value at texture coordinates `uv` or position `p`:
+    /// texel (not yet normalized), Perlin grey, or checkerboard colour.
     pub fn raw(&self, texture: &Texture, uv: Vec2, p: Vec3, lod: f32) -> Vec3 {
         match *texture {
             Texture::Image { image, interpolation, .. } => {
@@ -233,13 +247,17 @@ impl Textures {
         }
     }
 
-    /// A map's colour value `c` (see the module table).
-    pub fn value(&self, texture: &Texture, uv: Vec2, p: Vec3, lod: f32) -> Vec3 {
-        let raw = self.raw(texture, uv, p, lod);
+    /// A map's colour value `c` (see the module table) from its raw value.
+    fn normalized(texture: &Texture, raw: Vec3) -> Vec3 {
         match *texture {
             Texture::Image { scale, .. } => raw * scale,
             _ => raw,
         }
+    }
+
+    /// A map's colour value `c` at a frame.
+    pub fn value(&self, texture: &Texture, f: &TexFrame, lod: f32) -> Vec3 {
+        Self::normalized(texture, self.at(texture, f, lod))
     }
 
     /// Mipmap level for an image map at a frame: the log2 of texels per
@@ -282,22 +300,18 @@ impl Textures {
             }
             let lod = self.lod(&map.texture, f);
             match map.decal {
-                DecalMode::ReplaceKd => m.diffuse = self.value(&map.texture, f.uv, f.p_rest, lod),
-                DecalMode::BlendKd => {
-                    m.diffuse = (m.diffuse + self.value(&map.texture, f.uv, f.p_rest, lod)) * 0.5
-                }
-                DecalMode::ReplaceKs => m.specular = self.value(&map.texture, f.uv, f.p_rest, lod),
+                DecalMode::ReplaceKd => m.diffuse = self.value(&map.texture, f, lod),
+                DecalMode::BlendKd => m.diffuse = (m.diffuse + self.value(&map.texture, f, lod)) * 0.5,
+                DecalMode::ReplaceKs => m.specular = self.value(&map.texture, f, lod),
                 DecalMode::ReplaceKm => {
-                    m.mirror = self.value(&map.texture, f.uv, f.p_rest, lod);
+                    m.mirror = self.value(&map.texture, f, lod);
                     if m.kind == crate::shading::material::Specular::None {
                         m.kind = crate::shading::material::Specular::Mirror;
                     }
                 }
-                DecalMode::ReplaceAll => {
-                    return Ok(Applied::Unlit(self.value(&map.texture, f.uv, f.p_rest, lod)))
-                }
+                DecalMode::ReplaceAll => return Ok(Applied::Unlit(self.value(&map.texture, f, lod))),
                 DecalMode::ReplaceNormal => {
-                    let c = self.raw(&map.texture, f.uv, f.p_rest, lod) / 255.0;
+                    let c = self.at(&map.texture, f, lod) / 255.0;
                     *n = f.normal_to_world(bump::normal_map(f, c * 2.0 - Vec3::ONE));
                 }
                 DecalMode::BumpNormal => *n = bump::bump(self, map, f),
@@ -308,10 +322,12 @@ impl Textures {
     }
 
     /// The background at image position `uv` (0–1 across and down), if a map
-    /// replaces it.
+    /// replaces it. Like `BackgroundColor`, it is in output units (0–255
+    /// is black to white), so the value is scaled by 255: with the default
+    /// `Normalizer` a texel shows as itself (hw4 `galactica_dynamic`).
     pub fn background(&self, uv: Vec2) -> Option<Vec3> {
         let map = &self.maps[self.background? as usize];
-        Some(self.value(&map.texture, uv, uv.extend(0.0), 0.0))
+        Some(Self::normalized(&map.texture, self.raw(&map.texture, uv, uv.extend(0.0), 0.0)) * 255.0)
     }
 }
 
