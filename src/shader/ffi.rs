@@ -307,6 +307,8 @@ extern "C" fn clock_check(c: *mut Clock) -> i32 {
 /// pointers stay valid).
 pub(crate) struct IoBlock {
     shade: *mut Shade,
+    /// The three points of a bump evaluation (`luster_shade[3]`).
+    shade3: *mut [Shade; 3],
     out: *mut Out,
     clock: *mut Clock,
 }
@@ -315,14 +317,25 @@ impl IoBlock {
     /// Takes the addresses the prelude reported. They are checked for null
     /// and alignment; the prelude allocated them with `ffi.new` of the
     /// matching C types.
-    pub(crate) fn new(shade: usize, out: usize, clock: usize, timeout_ns: u64) -> Option<IoBlock> {
+    pub(crate) fn new(
+        shade: usize,
+        shade3: usize,
+        out: usize,
+        clock: usize,
+        timeout_ns: u64,
+    ) -> Option<IoBlock> {
         fn ok<T>(a: usize) -> bool {
             a != 0 && a % std::mem::align_of::<T>() == 0
         }
-        if !(ok::<Shade>(shade) && ok::<Out>(out) && ok::<Clock>(clock)) {
+        if !(ok::<Shade>(shade) && ok::<[Shade; 3]>(shade3) && ok::<Out>(out) && ok::<Clock>(clock)) {
             return None;
         }
-        let block = IoBlock { shade: shade as *mut Shade, out: out as *mut Out, clock: clock as *mut Clock };
+        let block = IoBlock {
+            shade: shade as *mut Shade,
+            shade3: shade3 as *mut [Shade; 3],
+            out: out as *mut Out,
+            clock: clock as *mut Clock,
+        };
         // SAFETY: see the module doc; no Lua code runs during this write.
         unsafe { (*block.clock).timeout_ns = timeout_ns }
         Some(block)
@@ -333,6 +346,18 @@ impl IoBlock {
         // SAFETY: see the module doc; no Lua code runs during these writes.
         unsafe {
             *self.shade = *shade;
+            *self.out = Out::default();
+            (*self.clock).start_ns = 0;
+            (*self.clock).expired = 0;
+        }
+    }
+
+    /// Writes the three points of a bump evaluation and arms the clock: the
+    /// time limit covers the three `height` calls together.
+    pub(crate) fn begin3(&self, shades: &[Shade; 3]) {
+        // SAFETY: see the module doc; no Lua code runs during these writes.
+        unsafe {
+            *self.shade3 = *shades;
             *self.out = Out::default();
             (*self.clock).start_ns = 0;
             (*self.clock).expired = 0;

@@ -81,9 +81,10 @@ pub fn bump(tex: &Textures, map: &TextureMap, f: &TexFrame) -> Vec3 {
     }
 }
 
-/// Bump mapping from a height function `h(P, uv)` of object-space points (a
-/// shader's `height`), scaled by `k`: the object-space normal of the
-/// displaced surface `p + k h(p) n`.
+/// Bump mapping from a height function of object-space points (a shader's
+/// `height`), scaled by `k`: the object-space normal of the displaced surface
+/// `p + k h(p) n`. `h3` gets three (point, texture coordinates) pairs and
+/// returns the three heights, so a shader can evaluate them in one call.
 ///
 /// The method: forward differences along the surface's own tangents. With
 /// steps `a = δu ∂p/∂u` and `b = δv ∂p/∂v` (texture coordinates moved by
@@ -107,7 +108,7 @@ pub fn height_bump<E>(
     f: &TexFrame,
     k: f32,
     eps: f32,
-    mut h: impl FnMut(Vec3, Vec2) -> Result<f32, E>,
+    h3: impl FnOnce([(Vec3, Vec2); 3]) -> Result<[f32; 3], E>,
 ) -> Result<Vec3, E> {
     let (lu, lv) = (f.dpdu.length(), f.dpdv.length());
     let usable = lu > 1e-12 && lv > 1e-12 && f.dpdu.cross(f.dpdv).length() > 1e-6 * lu * lv;
@@ -118,9 +119,7 @@ pub fn height_bump<E>(
         let (t, s) = crate::math::orthonormal_basis(f.n);
         (t * eps, Vec2::ZERO, s * eps, Vec2::ZERO)
     };
-    let h0 = h(f.p_object, f.uv)?;
-    let ha = h(f.p_object + a, f.uv + ua)?;
-    let hb = h(f.p_object + b, f.uv + ub)?;
+    let [h0, ha, hb] = h3([(f.p_object, f.uv), (f.p_object + a, f.uv + ua), (f.p_object + b, f.uv + ub)])?;
     let pa = a + f.n * (k * (ha - h0));
     let pb = b + f.n * (k * (hb - h0));
     let n = pa.cross(pb);

@@ -58,7 +58,7 @@ fn tetrahedral(f: &TexFrame, k: f32, e: f32) -> Vec3 {
 }
 
 fn forward(f: &TexFrame, k: f32, e: f32) -> Vec3 {
-    height_bump(f, k, e, |p, _| Ok::<f32, ()>(h(p))).unwrap_or(Vec3::ZERO)
+    height_bump(f, k, e, |pts| Ok::<_, ()>(pts.map(|(p, _)| h(p)))).unwrap_or(Vec3::ZERO)
 }
 
 /// The angle between unit vectors; atan2 keeps its precision near 0, where
@@ -108,15 +108,15 @@ fn forward_differences_match_central_differences() {
 #[test]
 fn a_flat_height_keeps_the_normal_and_the_poles_fall_back_to_any_frame() {
     let f = frame(Vec3::new(0.1, 0.2, 0.3));
-    let n = height_bump(&f, 2.0, 1e-3, |_, _| Ok::<f32, ()>(0.25)).unwrap();
+    let n = height_bump(&f, 2.0, 1e-3, |_| Ok::<_, ()>([0.25; 3])).unwrap();
     assert!(degrees(n, f.n) < 1e-3);
     // Degenerate ∂p/∂u (a sphere's pole): still a sensible tilt towards −x.
     let pole = TexFrame { dpdu: Vec3::ZERO, ..f };
-    let n = height_bump(&pole, 1.0, 1e-3, |p, _| Ok::<f32, ()>(0.1 * p.x)).unwrap();
+    let n = height_bump(&pole, 1.0, 1e-3, |pts| Ok::<_, ()>(pts.map(|(p, _)| 0.1 * p.x))).unwrap();
     let expected = tilt(&pole, 1.0, Vec3::new(0.1, 0.0, 0.0));
     assert!(degrees(n, expected) < 0.01, "{n} vs {expected}");
     // Errors pass through.
-    assert_eq!(height_bump(&f, 1.0, 1e-3, |_, _| Err::<f32, &str>("boom")), Err("boom"));
+    assert_eq!(height_bump(&f, 1.0, 1e-3, |_| Err::<[f32; 3], &str>("boom")), Err("boom"));
 }
 
 #[test]

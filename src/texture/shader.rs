@@ -173,8 +173,8 @@ impl Textures {
             DecalMode::BumpNormal => {
                 if map.bump_factor != 0.0 {
                     let world_n = *n;
-                    let local = bump::height_bump(f, map.bump_factor, bump::bump_step(f), |p, uv| {
-                        set.height(id, &input(f, p, uv, world_n)).map_err(Box::new)
+                    let local = bump::height_bump(f, map.bump_factor, bump::bump_step(f), |pts| {
+                        set.heights3(id, &pts.map(|(p, uv)| input(f, p, uv, world_n))).map_err(Box::new)
                     })?;
                     *n = f.normal_to_world(local);
                 }
