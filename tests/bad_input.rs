@@ -81,6 +81,12 @@ const CASES: &[(&str, &[&str])] = &[
     ("image_name_parent.xml", &["<ImageName>", "\"../x.png\"", "output folder"]),
     ("image_name_absolute.json", &["<ImageName>", "\"/tmp/x.png\"", "absolute"]),
     ("image_name_bad_extension.xml", &["<ImageName>", "\"second.bmp\"", ".png"]),
+    // Shader maps (luster's extension).
+    ("shader_missing_script.xml", &["TextureMap[id=5]/Shader", "no_such_shader.lua", "no such file"]),
+    ("shader_syntax_error.xml", &["TextureMap[id=5]", "syntax_error.lua:3", "'then' expected"]),
+    ("shader_parameter_two_numbers.xml", &["Parameter", "\"tint\"", "2 numbers", "three (a vec3)"]),
+    ("shader_missing_entry_point.xml", &["TextureMap[id=5]", "height_only.lua", "no color(s)", "replace_kd"]),
+    ("shader_bump_without_height.xml", &["TextureMap[id=5]", "no height(s)", "bump_normal"]),
 ];
 
 /// A scene path that must not exist.
@@ -239,7 +245,7 @@ fn accepted_quirks_render_with_a_warning() {
 }
 
 /// Every scene in the corpus has a line in the table (and every line a scene),
-/// and every PLY file is used by some scene.
+/// and every PLY file and shader script is used by some scene.
 #[test]
 fn table_covers_the_corpus() {
     let dir = corpus();
@@ -247,7 +253,7 @@ fn table_covers_the_corpus() {
         .expect("the corpus folder")
         .flatten()
         .map(|e| e.file_name().to_string_lossy().into_owned())
-        .filter(|n| n != "ply" && n != "textures" && !n.starts_with('.'))
+        .filter(|n| !["ply", "textures", "shaders"].contains(&n.as_str()) && !n.starts_with('.'))
         .collect();
     let in_table: BTreeSet<String> = CASES
         .iter()
@@ -267,8 +273,10 @@ fn table_covers_the_corpus() {
         .filter_map(|n| std::fs::read(dir.join(n)).ok())
         .map(|b| String::from_utf8_lossy(&b).into_owned())
         .collect();
-    for ply in std::fs::read_dir(dir.join("ply")).expect("the PLY folder").flatten() {
-        let name = format!("ply/{}", ply.file_name().to_string_lossy());
-        assert!(texts.iter().any(|t| t.contains(&name)), "{name} is used by no scene");
+    for folder in ["ply", "textures", "shaders"] {
+        for file in std::fs::read_dir(dir.join(folder)).expect("the asset folder").flatten() {
+            let name = format!("{folder}/{}", file.file_name().to_string_lossy());
+            assert!(texts.iter().any(|t| t.contains(&name)), "{name} is used by no scene");
+        }
     }
 }

@@ -54,6 +54,11 @@ enum Command {
         /// Reconstruction filter: box (plain average) or gaussian (σ = 1/3 pixel).
         #[arg(long, value_enum, default_value_t = FilterArg::Box)]
         filter: FilterArg,
+        /// Time limit of one shader call, in seconds; a call that runs past it
+        /// stops the render with an error naming the shader.
+        #[arg(long, value_name = "SECONDS", value_parser = parse_timeout,
+              default_value_t = luster::shader::DEFAULT_TIMEOUT.as_secs_f64())]
+        shader_timeout: f64,
     },
     /// Benchmark the BVH on PLY meshes (build time, memory, Mrays/s).
     ///
@@ -142,13 +147,16 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Render { scenes, outdir, threads, quiet, spp, seed, filter } => {
+        Command::Render { scenes, outdir, threads, quiet, spp, seed, filter, shader_timeout } => {
             let filter = match filter {
                 FilterArg::Box => luster::render::Filter::Box,
                 FilterArg::Gaussian => luster::render::Filter::Gaussian,
             };
             let opts = luster::render::RenderOptions { spp, seed, filter };
-            render::run(&scenes, &outdir, threads, quiet, &opts)
+            let build = luster::render::BuildOptions {
+                shader_timeout: std::time::Duration::from_secs_f64(shader_timeout),
+            };
+            render::run(&scenes, &outdir, threads, quiet, &opts, &build)
         }
         Command::Bench { plys, threads, reps } => match luster::bench::run(&plys, &threads, reps) {
             Ok(()) => ExitCode::SUCCESS,
@@ -177,6 +185,15 @@ fn main() -> ExitCode {
             strict,
             spp,
         }),
+    }
+}
+
+/// A `--shader-timeout`: positive seconds, at most a day.
+fn parse_timeout(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(t) if t > 0.0 && t <= 86_400.0 => Ok(t),
+        Ok(t) => Err(format!("{t} is not a time limit (expected seconds, more than 0 and at most 86400)")),
+        Err(_) => Err(format!("\"{s}\" is not a number of seconds")),
     }
 }
 

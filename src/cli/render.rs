@@ -2,7 +2,7 @@
 
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
-use luster::render::{self, RenderOptions, Scene};
+use luster::render::{self, BuildOptions, RenderOptions, Scene};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -14,6 +14,7 @@ pub fn run(
     threads: Option<usize>,
     quiet: bool,
     opts: &RenderOptions,
+    build: &BuildOptions,
 ) -> ExitCode {
     let pool = match super::pool(threads) {
         Ok(p) => p,
@@ -21,7 +22,7 @@ pub fn run(
     };
     let mut failed = 0;
     for s in scenes {
-        if let Err(e) = pool.install(|| render_scene(s, outdir, quiet, opts)) {
+        if let Err(e) = pool.install(|| render_scene(s, outdir, quiet, opts, build)) {
             eprintln!("error: {e:#}");
             failed += 1;
         }
@@ -35,17 +36,26 @@ pub fn run(
     ExitCode::SUCCESS
 }
 
-fn render_scene(path: &Path, outdir: &Path, quiet: bool, opts: &RenderOptions) -> anyhow::Result<()> {
+/// Renders every camera of one scene, then writes the images: a shader that
+/// fails in any camera leaves no image of the scene behind.
+fn render_scene(
+    path: &Path,
+    outdir: &Path,
+    quiet: bool,
+    opts: &RenderOptions,
+    build: &BuildOptions,
+) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let desc = luster::scene::load(path)?;
     for w in &desc.warnings {
         eprintln!("warning: {}: {w}", path.display());
     }
-    let scene = Scene::build(&desc)?;
+    let scene = Scene::build_with(&desc, build)?;
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", path.display());
     }
     let setup = t0.elapsed().as_secs_f64();
+    let mut done = Vec::with_capacity(scene.cameras.len());
     for (i, cam) in scene.cameras.iter().enumerate() {
         let pixels = u64::from(cam.width) * u64::from(cam.height);
         let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(pixels) };
@@ -56,10 +66,12 @@ fn render_scene(path: &Path, outdir: &Path, quiet: bool, opts: &RenderOptions) -
         );
         bar.set_message(cam.image_name.clone());
         let t = Instant::now();
-        let img = render::render_with(&scene, i, opts, &|n| bar.inc(n));
-        let secs = t.elapsed().as_secs_f64();
+        let img = render::try_render_with(&scene, i, opts, &|n| bar.inc(n));
         bar.finish_and_clear();
-        let out = outdir.join(&cam.image_name);
+        let img = img.map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+        done.push((outdir.join(&cam.image_name), img, t.elapsed().as_secs_f64()));
+    }
+    for (out, img, secs) in done {
         luster::image::output::write_rgb8(&out, img.width, img.height, &img.to_rgb8())
             .with_context(|| format!("rendering {}", path.display()))?;
         if !quiet {

@@ -42,7 +42,7 @@ pub const SECONDARY_BUDGET: u32 = 4096;
 
 /// Per-camera-ray state: the counts for the summary, what is left of the
 /// budget, the shutter time and the sampler for the rest of the path.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct PathState {
     /// Rays traced so far.
     pub stats: RayStats,
@@ -58,6 +58,9 @@ pub struct PathState {
     pub spread: f32,
     /// Distance the path has covered before the current ray.
     travelled: f32,
+    /// The first shader failure on this path, naming the object. The path
+    /// then contributes black and the render loop stops (see `render_tiles`).
+    pub error: Option<Box<ShaderError>>,
 }
 
 impl PathState {
@@ -71,6 +74,7 @@ impl PathState {
             screen: Vec2::ZERO,
             spread: 0.0,
             travelled: 0.0,
+            error: None,
         }
     }
 
@@ -94,6 +98,7 @@ impl PathState {
 use crate::math::{orthonormal_basis, Ray, Vec2, Vec3};
 use crate::render::sampler::PixelSampler;
 use crate::render::scene::{Hit, Scene};
+use crate::shader::ShaderError;
 use crate::shading::fresnel;
 use crate::shading::material::Specular;
 use crate::shading::Material;
@@ -147,8 +152,15 @@ fn shade(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, weight: f32, st: &mut 
         let cos = ray.d.dot(hit.ns).abs().max(0.05);
         let footprint = st.spread * st.travelled / cos;
         let frame = scene.tex_frame(hit, ray, st.time, footprint);
-        if let Applied::Unlit(c) = scene.textures.apply(hit.textures, &frame, &mut material, &mut ns) {
-            return c;
+        match scene.textures.apply(hit.textures, &frame, &mut material, &mut ns) {
+            Ok(Applied::Lit) => {}
+            Ok(Applied::Unlit(c)) => return c,
+            Err(e) => {
+                if st.error.is_none() {
+                    st.error = Some(Box::new((*e).with_object(scene.object_label(hit))));
+                }
+                return Vec3::ZERO;
+            }
         }
         if ns.dot(hit.ng) < 0.0 {
             ns = -ns;

@@ -6,12 +6,14 @@ pub mod integrator;
 pub mod sampler;
 pub mod scene;
 
-pub use scene::Scene;
+pub use scene::{BuildOptions, Scene};
 
 use crate::math::{Vec2, Vec3};
+use crate::shader::ShaderError;
 use integrator::{radiance, PathState, RayStats};
 use rayon::prelude::*;
 use sampler::PixelSampler;
+use std::sync::OnceLock;
 
 /// Tile edge in pixels: small enough to balance two to sixty-four threads on
 /// an 800×800 image, large enough that per-tile overhead vanishes.
@@ -85,18 +87,52 @@ pub fn render(scene: &Scene, cam: usize, on_tile: &(dyn Fn(u64) + Sync)) -> Rend
     render_with(scene, cam, &RenderOptions::default(), on_tile)
 }
 
-/// Renders camera `cam` of `scene` on the current rayon pool.
+/// Renders camera `cam` of `scene` on the current rayon pool, ignoring shader
+/// failures: a point whose shader fails is black, and the tiles not yet
+/// started when it happened stay black. Use [`try_render_with`] to learn of
+/// the failure; scenes without shaders cannot fail.
+pub fn render_with(
+    scene: &Scene,
+    cam: usize,
+    opts: &RenderOptions,
+    on_tile: &(dyn Fn(u64) + Sync),
+) -> RenderedImage {
+    render_tiles(scene, cam, opts, on_tile, &OnceLock::new())
+}
+
+/// Renders camera `cam` of `scene` on the current rayon pool, or reports the
+/// first shader failure (naming the shader, the script's `file:line` and the
+/// object). After a failure the workers stop taking new tiles, so an error
+/// ends the render within a tile's time.
 ///
 /// One sample per pixel goes through the pixel centre (as the course's
 /// single-sample images do); more are spread by the [`PixelSampler`]'s
 /// stratified pattern. Every sample has its own lens position and shutter
 /// time. The image depends only on the scene, the options and the sample
 /// count, not on the number of threads.
-pub fn render_with(
+pub fn try_render_with(
     scene: &Scene,
     cam: usize,
     opts: &RenderOptions,
     on_tile: &(dyn Fn(u64) + Sync),
+) -> Result<RenderedImage, Box<ShaderError>> {
+    let failed = OnceLock::new();
+    let img = render_tiles(scene, cam, opts, on_tile, &failed);
+    match failed.into_inner() {
+        Some(e) => Err(e),
+        None => Ok(img),
+    }
+}
+
+/// The tiled render loop; the first shader failure goes into `failed`, and
+/// from then on tiles are skipped. Checking it costs one atomic load per tile
+/// and per row, and nothing per sample unless a path failed.
+fn render_tiles(
+    scene: &Scene,
+    cam: usize,
+    opts: &RenderOptions,
+    on_tile: &(dyn Fn(u64) + Sync),
+    failed: &OnceLock<Box<ShaderError>>,
 ) -> RenderedImage {
     let camera = &scene.cameras[cam];
     let spp = opts.spp.unwrap_or(camera.num_samples).max(1);
@@ -110,8 +146,12 @@ pub fn render_with(
         .map(|&(x0, y0)| {
             let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
             let mut stats = RayStats::default();
-            let mut px = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
-            for y in y0..y1 {
+            let mut px = vec![Vec3::ZERO; ((x1 - x0) * (y1 - y0)) as usize];
+            let mut i = 0;
+            'rows: for y in y0..y1 {
+                if failed.get().is_some() {
+                    break;
+                }
                 for x in x0..x1 {
                     let mut sum = Vec3::ZERO;
                     let mut wsum = 0.0;
@@ -128,8 +168,13 @@ pub fn render_with(
                         sum += radiance(scene, &ray, 0, 1.0, &mut st) * w;
                         wsum += w;
                         stats = st.stats;
+                        if let Some(e) = st.error {
+                            let _ = failed.set(e);
+                            break 'rows;
+                        }
                     }
-                    px.push(sum / wsum);
+                    px[i] = sum / wsum;
+                    i += 1;
                 }
             }
             on_tile(px.len() as u64);

@@ -21,6 +21,7 @@ use crate::shading::{AreaLight, Material, PointLight};
 use crate::texture::{Image, TexFrame, TexList, Textures};
 use rayon::prelude::*;
 use std::collections::HashMap;
+use std::time::Duration;
 
 /// What a top-level primitive is.
 #[derive(Clone, Copy, Debug)]
@@ -40,6 +41,8 @@ struct Prim {
     xf: Option<Box<Transform>>,
     /// The object's texture maps.
     textures: TexList,
+    /// Index of the object in the description (for [`Scene::object_label`]).
+    object: u32,
 }
 
 impl Prim {
@@ -107,7 +110,10 @@ pub struct Scene {
     meshes: Vec<Mesh>,
     prims: Vec<Prim>,
     tlas: Bvh,
-    planes: Vec<(Plane, u32, TexList)>,
+    /// Infinite planes: the plane, its material, its maps and its object index.
+    planes: Vec<(Plane, u32, TexList, u32)>,
+    /// Every object's name for messages, `Sphere[id=2]`, by description index.
+    object_labels: Vec<String>,
     /// Images and texture maps.
     pub textures: Textures,
     /// Materials.
@@ -132,9 +138,28 @@ pub struct Scene {
     pub warnings: Vec<Warning>,
 }
 
+/// Settings of building a scene beyond what its file says.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BuildOptions {
+    /// Time limit of one shader call.
+    pub shader_timeout: Duration,
+}
+
+impl Default for BuildOptions {
+    fn default() -> BuildOptions {
+        BuildOptions { shader_timeout: crate::shader::DEFAULT_TIMEOUT }
+    }
+}
+
 impl Scene {
-    /// Builds the render scene: loads PLY files and builds every BVH, meshes in parallel.
+    /// Builds the render scene with the default [`BuildOptions`].
     pub fn build(desc: &Description) -> Result<Scene, SceneError> {
+        Scene::build_with(desc, &BuildOptions::default())
+    }
+
+    /// Builds the render scene: loads PLY files and builds every BVH, meshes
+    /// in parallel, and compiles the shader scripts.
+    pub fn build_with(desc: &Description, opts: &BuildOptions) -> Result<Scene, SceneError> {
         // Meshes: one per Mesh or Triangle object; instances share their base's.
         let mesh_objects: Vec<usize> = desc
             .objects
@@ -155,7 +180,7 @@ impl Scene {
             meshes.push(m);
         }
 
-        let mut textures = build_textures(desc)?;
+        let mut textures = build_textures(desc, opts)?;
         let mut prims = Vec::new();
         let mut planes = Vec::new();
         for (i, o) in desc.objects.iter().enumerate() {
@@ -176,7 +201,7 @@ impl Scene {
                         point: o.transform.point(*point),
                         normal: o.transform.normal_to_world(*normal).normalize(),
                     };
-                    planes.push((p, material, tex));
+                    planes.push((p, material, tex, i as u32));
                     continue;
                 }
             };
@@ -185,7 +210,7 @@ impl Scene {
                     continue;
                 }
             }
-            prims.push(Prim { geom, material, motion: o.motion, xf, textures: tex });
+            prims.push(Prim { geom, material, motion: o.motion, xf, textures: tex, object: i as u32 });
         }
         let bounds: Vec<Aabb> = prims.iter().map(|p| prim_bounds(p, &meshes)).collect();
         let tlas = Bvh::build(&bounds);
@@ -198,6 +223,7 @@ impl Scene {
             prims,
             tlas,
             planes,
+            object_labels: desc.objects.iter().map(|o| object_label(&o.loc.path)).collect(),
             textures,
             materials: desc.materials.iter().map(Material::from_desc).collect(),
             lights: desc
@@ -216,6 +242,17 @@ impl Scene {
         })
     }
 
+    /// The object a hit is on, as messages name it: `Sphere[id=2]`.
+    pub fn object_label(&self, hit: &Hit) -> &str {
+        let object = match hit.geom {
+            HitGeom::Plane(i) => self.planes.get(i as usize).map(|p| p.3),
+            HitGeom::Triangle { prim, .. } | HitGeom::Sphere { prim } => {
+                self.prims.get(prim as usize).map(|p| p.object)
+            }
+        };
+        object.and_then(|o| self.object_labels.get(o as usize)).map_or("an object", String::as_str)
+    }
+
     /// Total triangles over all meshes (instances not counted again).
     pub fn triangle_count(&self) -> usize {
         self.meshes.iter().map(Mesh::triangle_count).sum()
@@ -229,7 +266,7 @@ impl Scene {
         let t_min = self.intersection_epsilon;
         let mut best_t = f32::INFINITY;
         let mut best = None;
-        for (i, (pl, _, _)) in self.planes.iter().enumerate() {
+        for (i, (pl, _, _, _)) in self.planes.iter().enumerate() {
             if let Some(t) = pl.intersect(ray, t_min, best_t) {
                 best_t = t;
                 best = Some(Closest::Plane(i));
@@ -265,7 +302,7 @@ impl Scene {
         });
         let (pi, ng, ns, geom) = match best? {
             Closest::Plane(i) => {
-                let (pl, material, textures) = self.planes[i];
+                let (pl, material, textures, _) = self.planes[i];
                 return Some(Hit {
                     t: best_t,
                     p: ray.at(best_t),
@@ -308,7 +345,7 @@ impl Scene {
     pub fn tex_frame(&self, hit: &Hit, ray: &Ray, time: f32, footprint: f32) -> TexFrame {
         let (uv, p_object, dpdu, dpdv, n, prim) = match hit.geom {
             HitGeom::Plane(i) => {
-                let (pl, _, _) = &self.planes[i as usize];
+                let (pl, _, _, _) = &self.planes[i as usize];
                 let (s, t) = crate::math::orthonormal_basis(pl.normal);
                 let d = hit.p - pl.point;
                 (Vec2::new(d.dot(s), d.dot(t)), hit.p, s, t, pl.normal, None)
@@ -335,14 +372,14 @@ impl Scene {
             Some(xf) => xf.point(p_object),
             None => p_object,
         };
-        TexFrame { uv, p_object, p_rest, dpdu, dpdv, n, to_world, footprint }
+        TexFrame { uv, p_object, p_world: hit.p, time, p_rest, dpdu, dpdv, n, to_world, footprint }
     }
 
     /// Whether anything lies on `ray` at `time` between the intersection
     /// epsilon and `t_max`.
     pub fn occluded(&self, ray: &Ray, t_max: f32, time: f32) -> bool {
         let t_min = self.intersection_epsilon;
-        if self.planes.iter().any(|(pl, _, _)| pl.intersect(ray, t_min, t_max).is_some()) {
+        if self.planes.iter().any(|(pl, _, _, _)| pl.intersect(ray, t_min, t_max).is_some()) {
             return true;
         }
         self.tlas.any(ray, t_max, |range, t_max| {
@@ -364,6 +401,8 @@ fn flat_frame(hit: &Hit, footprint: f32) -> TexFrame {
     TexFrame {
         uv: Vec2::ZERO,
         p_object: hit.p,
+        p_world: hit.p,
+        time: 0.0,
         p_rest: hit.p,
         dpdu,
         dpdv,
@@ -373,9 +412,15 @@ fn flat_frame(hit: &Hit, footprint: f32) -> TexFrame {
     }
 }
 
-/// Decodes the scene's images (in parallel) and builds its texture maps.
-/// Images a trilinear map reads get mipmaps.
-fn build_textures(desc: &Description) -> Result<Textures, SceneError> {
+/// The last segment of an element path: `Scene/Objects/Sphere[id=2]` gives
+/// `Sphere[id=2]`.
+fn object_label(path: &str) -> String {
+    path.rsplit('/').next().unwrap_or(path).to_string()
+}
+
+/// Decodes the scene's images (in parallel), compiles its shader scripts and
+/// builds its texture maps. Images a trilinear map reads get mipmaps.
+fn build_textures(desc: &Description, opts: &BuildOptions) -> Result<Textures, SceneError> {
     use crate::scene::description::{Interpolation, TextureSource};
     let trilinear: Vec<bool> = (0..desc.images.len())
         .map(|i| {
@@ -408,7 +453,9 @@ fn build_textures(desc: &Description) -> Result<Textures, SceneError> {
             Ok(img)
         })
         .collect::<Result<_, _>>()?;
-    Ok(Textures::new(images, &desc.texture_maps, desc.background_texture))
+    let shaders = crate::texture::shader::compile(&desc.texture_maps, opts.shader_timeout)
+        .map_err(|e| SceneError::at(&desc.file, &desc.texture_maps[e.map].loc, e.message))?;
+    Ok(Textures::new(images, &desc.texture_maps, desc.background_texture, shaders))
 }
 
 /// World bounds over the whole shutter interval: a translation sweeps the box

@@ -4,6 +4,7 @@
 
 use super::error::{Loc, Warning};
 use crate::math::{Transform, Vec2, Vec3};
+use crate::shader::ParamValue;
 use std::path::PathBuf;
 
 /// A whole scene as the file describes it.
@@ -277,6 +278,10 @@ pub enum DecalMode {
     BumpNormal,
     /// The value is the surface's colour, unlit.
     ReplaceAll,
+    /// The value is the mirror reflectance (`MirrorReflectance`, the course's
+    /// `km`); a luster extension, mainly for shaders' `reflect`. A point of a
+    /// material with no mirror part becomes a mirror.
+    ReplaceKm,
 }
 
 /// How Perlin noise in [-1, 1] becomes a texture value in [0, 1].
@@ -320,6 +325,15 @@ pub enum TextureSource {
         black: Vec3,
         /// Colour of the "white" squares.
         white: Vec3,
+    },
+    /// A Lua shader script (a luster extension; see `docs/shaders.md`).
+    Shader {
+        /// The script's path (relative ones resolved against the scene's folder).
+        path: PathBuf,
+        /// The script's text, read when the scene loads.
+        code: String,
+        /// `Parameter` elements, in order: what the script reads as `param.NAME`.
+        params: Vec<(String, ParamValue)>,
     },
 }
 

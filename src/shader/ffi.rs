@@ -33,7 +33,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::OnceLock;
 use std::time::Instant;
 
-use crate::noise::{fractal, perlin, simplex, voronoi};
+use crate::noise::{course, fractal, perlin, simplex, voronoi};
 
 /// A 3-vector as Lua sees it (`luster_vec3`).
 #[repr(C)]
@@ -119,6 +119,7 @@ pub(crate) struct Builtins {
     voronoi3: extern "C" fn(f64, f64, f64, u32, f64, *mut CellOut),
     voronoi2: extern "C" fn(f64, f64, u32, f64, *mut CellOut),
     clock_check: extern "C" fn(*mut Clock) -> i32,
+    course_noise: extern "C" fn(f64, f64, f64) -> f64,
     /// The slot for `texture(name, u, v)` (image sampling from the scene): null
     /// until it is implemented; the prelude's `texture` reports that.
     texture: *const std::ffi::c_void,
@@ -147,6 +148,7 @@ pub(crate) static BUILTINS: Builtins = Builtins {
     voronoi3,
     voronoi2,
     clock_check,
+    course_noise,
     texture: std::ptr::null(),
 };
 
@@ -198,6 +200,10 @@ extern "C" fn perlin2(x: f64, y: f64) -> f64 {
 }
 extern "C" fn perlin3(x: f64, y: f64, z: f64) -> f64 {
     guard(|| perlin::noise3(x as f32, y as f32, z as f32))
+}
+/// The CENG795 lecture's noise, so a script can reproduce the `perlin` texture.
+extern "C" fn course_noise(x: f64, y: f64, z: f64) -> f64 {
+    guard(|| course::noise(x as f32, y as f32, z as f32))
 }
 extern "C" fn perlin4(x: f64, y: f64, z: f64, w: f64) -> f64 {
     guard(|| perlin::noise4(x as f32, y as f32, z as f32, w as f32))
@@ -301,6 +307,8 @@ extern "C" fn clock_check(c: *mut Clock) -> i32 {
 /// pointers stay valid).
 pub(crate) struct IoBlock {
     shade: *mut Shade,
+    /// The three points of a bump evaluation (`luster_shade[3]`).
+    shade3: *mut [Shade; 3],
     out: *mut Out,
     clock: *mut Clock,
 }
@@ -309,14 +317,25 @@ impl IoBlock {
     /// Takes the addresses the prelude reported. They are checked for null
     /// and alignment; the prelude allocated them with `ffi.new` of the
     /// matching C types.
-    pub(crate) fn new(shade: usize, out: usize, clock: usize, timeout_ns: u64) -> Option<IoBlock> {
+    pub(crate) fn new(
+        shade: usize,
+        shade3: usize,
+        out: usize,
+        clock: usize,
+        timeout_ns: u64,
+    ) -> Option<IoBlock> {
         fn ok<T>(a: usize) -> bool {
             a != 0 && a % std::mem::align_of::<T>() == 0
         }
-        if !(ok::<Shade>(shade) && ok::<Out>(out) && ok::<Clock>(clock)) {
+        if !(ok::<Shade>(shade) && ok::<[Shade; 3]>(shade3) && ok::<Out>(out) && ok::<Clock>(clock)) {
             return None;
         }
-        let block = IoBlock { shade: shade as *mut Shade, out: out as *mut Out, clock: clock as *mut Clock };
+        let block = IoBlock {
+            shade: shade as *mut Shade,
+            shade3: shade3 as *mut [Shade; 3],
+            out: out as *mut Out,
+            clock: clock as *mut Clock,
+        };
         // SAFETY: see the module doc; no Lua code runs during this write.
         unsafe { (*block.clock).timeout_ns = timeout_ns }
         Some(block)
@@ -327,6 +346,18 @@ impl IoBlock {
         // SAFETY: see the module doc; no Lua code runs during these writes.
         unsafe {
             *self.shade = *shade;
+            *self.out = Out::default();
+            (*self.clock).start_ns = 0;
+            (*self.clock).expired = 0;
+        }
+    }
+
+    /// Writes the three points of a bump evaluation and arms the clock: the
+    /// time limit covers the three `height` calls together.
+    pub(crate) fn begin3(&self, shades: &[Shade; 3]) {
+        // SAFETY: see the module doc; no Lua code runs during these writes.
+        unsafe {
+            *self.shade3 = *shades;
             *self.out = Out::default();
             (*self.clock).start_ns = 0;
             (*self.clock).expired = 0;

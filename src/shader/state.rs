@@ -22,6 +22,8 @@ pub(crate) const MEMORY_LIMIT: usize = 256 * 1024 * 1024;
 struct Compiled {
     name: String,
     entries: [Option<Function>; 3],
+    /// `height` at three points in one call, for bump mapping.
+    height3: Option<Function>,
 }
 
 /// A Lua state and the compiled shaders of one set.
@@ -64,6 +66,7 @@ impl ThreadState {
         let sizes: Table = api.get("sizes").map_err(internal)?;
         for (k, size) in [
             ("shade", std::mem::size_of::<Shade>()),
+            ("shade3", std::mem::size_of::<[Shade; 3]>()),
             ("out", std::mem::size_of::<ffi::Out>()),
             ("clock", std::mem::size_of::<ffi::Clock>()),
             ("cell", std::mem::size_of::<ffi::CellOut>()),
@@ -75,16 +78,22 @@ impl ThreadState {
         }
         let addr = |k: &str| api.get::<f64>(k).map(|a| a as usize).map_err(internal);
         let timeout_ns = u64::try_from(timeout.as_nanos()).unwrap_or(u64::MAX);
-        let io = IoBlock::new(addr("shade")?, addr("out")?, addr("clock")?, timeout_ns).ok_or_else(|| {
-            ShaderError::new(ShaderErrorKind::Internal, "(prelude)", "shader runtime: bad record addresses")
-        })?;
+        let io = IoBlock::new(addr("shade")?, addr("shade3")?, addr("out")?, addr("clock")?, timeout_ns)
+            .ok_or_else(|| {
+                ShaderError::new(
+                    ShaderErrorKind::Internal,
+                    "(prelude)",
+                    "shader runtime: bad record addresses",
+                )
+            })?;
 
         let mut state = ThreadState { io, shaders: Vec::with_capacity(sources.len()), timeout, lua };
         let make_env: Function = api.get("make_env").map_err(internal)?;
         let make_entry: Function = api.get("make_entry").map_err(internal)?;
+        let make_height3: Function = api.get("make_height3").map_err(internal)?;
         let tick: Function = api.get("tick").map_err(internal)?;
         for src in sources {
-            let compiled = state.compile(src, &make_env, &make_entry, &tick)?;
+            let compiled = state.compile(src, &make_env, &[&make_entry, &make_height3], &tick)?;
             state.shaders.push(compiled);
         }
         Ok(state)
@@ -94,7 +103,7 @@ impl ThreadState {
         &self,
         src: &ShaderSource,
         make_env: &Function,
-        make_entry: &Function,
+        [make_entry, make_height3]: &[&Function; 2],
         tick: &Function,
     ) -> Result<Compiled, ShaderError> {
         let name = src.name.as_str();
@@ -140,7 +149,8 @@ impl ThreadState {
                 format!("{file}: defines none of the functions color, height or reflect"),
             ));
         }
-        Ok(Compiled { name: name.to_string(), entries })
+        let height3 = make_height3.call((env, name)).map_err(lua_err)?;
+        Ok(Compiled { name: name.to_string(), entries, height3 })
     }
 
     fn error(&self, shader: &str, e: &mlua::Error) -> ShaderError {
@@ -169,6 +179,37 @@ impl ThreadState {
             ));
         };
         self.io.begin(&shade_of(input));
+        match f.call::<()>(()) {
+            Ok(()) => {
+                let o = self.io.out();
+                Ok([o.r, o.g, o.b])
+            }
+            Err(e) => Err(self.error(&shader.name, &e)),
+        }
+    }
+
+    /// The shader `id` of this state, or a usage error.
+    fn shader(&self, id: usize) -> Result<&Compiled, ShaderError> {
+        self.shaders.get(id).ok_or_else(|| {
+            ShaderError::new(
+                ShaderErrorKind::Usage,
+                &format!("#{id}"),
+                format!("no shader with id {id} (the set has {})", self.shaders.len()),
+            )
+        })
+    }
+
+    /// Calls `height` at three points in one Lua call (bump mapping).
+    pub(crate) fn call_height3(&self, id: usize, inputs: &[ShadeInput; 3]) -> Result<[f64; 3], ShaderError> {
+        let shader = self.shader(id)?;
+        let Some(f) = &shader.height3 else {
+            return Err(ShaderError::new(
+                ShaderErrorKind::Usage,
+                &shader.name,
+                "the script defines no height() function",
+            ));
+        };
+        self.io.begin3(&[shade_of(&inputs[0]), shade_of(&inputs[1]), shade_of(&inputs[2])]);
         match f.call::<()>(()) {
             Ok(()) => {
                 let o = self.io.out();

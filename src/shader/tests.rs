@@ -329,3 +329,19 @@ fn shader_set_is_send_and_sync() {
     fn check<T: Send + Sync>() {}
     check::<ShaderSet>();
 }
+
+#[test]
+fn heights3_matches_three_height_calls_and_isolates_them() {
+    // The script scribbles on s; the next point must not see it.
+    let set =
+        set_of("function height(s) local h = s.P.x + 2 * s.uv.u; s.P = vec3(9, 9, 9); return h end").unwrap();
+    let pts = [input([0.1, 0.0, 0.0]), input([0.2, 0.0, 0.0]), input([0.3, 0.0, 0.0])];
+    let one = pts.map(|p| set.height(0, &p).unwrap());
+    assert_eq!(set.heights3(0, &pts).unwrap(), one);
+    let bad = set_of("function height(s) if s.P.x > 0.25 then return 'x' end return 1 end").unwrap();
+    let e = bad.heights3(0, &pts).unwrap_err();
+    assert_eq!(e.kind, ShaderErrorKind::BadResult, "{e}");
+    assert!(e.message.contains("height"), "{e}");
+    let none = set_of("function color(s) return 1, 1, 1 end").unwrap();
+    assert_eq!(none.heights3(0, &pts).unwrap_err().kind, ShaderErrorKind::Usage);
+}

@@ -16,20 +16,27 @@
 //! | `replace_kd` | `kd = c` |
 //! | `blend_kd` | `kd = (kd + c) / 2` |
 //! | `replace_ks` | `ks = c` |
+//! | `replace_km` | `km = c` (mirror reflectance; luster's extension; a non-mirror material becomes a mirror) |
 //! | `replace_all` | the point's colour is `c`, no lighting |
 //! | `replace_normal` | `n = normalize(T x + B y + N z)` with `(x, y, z) = 2 texel/255 - 1` |
 //! | `bump_normal` | see [`bump`] |
 //! | `replace_background` | rays that miss take `255 c` at their camera sample's image position |
+//!
+//! Shader maps (a Lua script, [`shader`]) call the script's entry point that
+//! the decal mode needs; a script's runtime error comes back from
+//! [`Textures::apply`] for the renderer to report.
 
 pub mod bump;
 pub mod image;
 pub mod procedural;
+pub mod shader;
 
 pub use image::Image;
 pub use procedural::{Checkerboard, Perlin};
 
 use crate::math::{Transform, Vec2, Vec3};
 use crate::scene::description::{DecalMode, Interpolation, TextureMapDesc, TextureSource};
+use crate::shader::{ShaderError, ShaderSet};
 use crate::shading::Material;
 
 /// Where a map's value comes from.
@@ -48,6 +55,11 @@ pub enum Texture {
     Perlin(Perlin),
     /// The 3D checkerboard.
     Checkerboard(Checkerboard),
+    /// A Lua shader: shader `id` of [`Textures::shaders`].
+    Shader {
+        /// Index in the set.
+        id: u32,
+    },
 }
 
 /// A texture map.
@@ -85,6 +97,10 @@ pub struct TexFrame {
     pub uv: Vec2,
     /// Object-space position (before the object's transform and motion).
     pub p_object: Vec3,
+    /// World-space position, where the ray hit (with motion).
+    pub p_world: Vec3,
+    /// The ray's shutter time, 0 to 1.
+    pub time: f32,
     /// The position at rest: in world space, but without the motion blur
     /// translation, so procedural patterns move with their object. The
     /// course evaluates Perlin noise and checkerboards here (hw4
@@ -139,12 +155,21 @@ pub struct Textures {
     pub lists: Vec<u32>,
     /// The map that replaces the background.
     pub background: Option<u32>,
+    /// The compiled scripts of the shader maps, if any.
+    pub shaders: Option<ShaderSet>,
 }
 
 impl Textures {
     /// Builds the maps from their descriptions; `images` are already decoded
-    /// (mipmapped where a trilinear map reads them).
-    pub fn new(images: Vec<Image>, descs: &[TextureMapDesc], background: Option<usize>) -> Textures {
+    /// (mipmapped where a trilinear map reads them). `shaders` holds the
+    /// shader maps' scripts, in map order ([`shader::compile`]).
+    pub fn new(
+        images: Vec<Image>,
+        descs: &[TextureMapDesc],
+        background: Option<usize>,
+        shaders: Option<ShaderSet>,
+    ) -> Textures {
+        let mut next_shader = 0u32;
         let maps = descs
             .iter()
             .map(|d| {
@@ -163,11 +188,15 @@ impl Textures {
                     &TextureSource::Checkerboard { scale, offset, black, white } => {
                         Texture::Checkerboard(Checkerboard { scale, offset, black, white })
                     }
+                    TextureSource::Shader { .. } => {
+                        next_shader += 1;
+                        Texture::Shader { id: next_shader - 1 }
+                    }
                 };
                 TextureMap { texture, decal: d.decal, bump_factor: d.bump_factor }
             })
             .collect();
-        Textures { images, maps, lists: Vec::new(), background: background.map(|b| b as u32) }
+        Textures { images, maps, lists: Vec::new(), background: background.map(|b| b as u32), shaders }
     }
 
     /// Records an object's maps; returns its list.
@@ -213,6 +242,8 @@ impl Textures {
             }
             Texture::Perlin(t) => Vec3::splat(t.value(p)),
             Texture::Checkerboard(c) => c.value(p),
+            // Shader maps are evaluated by `apply_shader`, never here.
+            Texture::Shader { .. } => Vec3::ZERO,
         }
     }
 
@@ -250,14 +281,35 @@ impl Textures {
     /// the result is carried to the world like any normal: the course's
     /// references show a bump's strength does not change when the object is
     /// scaled (hw4 `bump_mapping_transformed`).
-    pub fn apply(&self, list: TexList, f: &TexFrame, m: &mut Material, n: &mut Vec3) -> Applied {
+    ///
+    /// Fails only when a shader map's script fails (an error, a bad result,
+    /// its time limit).
+    pub fn apply(
+        &self,
+        list: TexList,
+        f: &TexFrame,
+        m: &mut Material,
+        n: &mut Vec3,
+    ) -> Result<Applied, Box<ShaderError>> {
         for map in self.maps_of(list) {
+            if let Texture::Shader { id } = map.texture {
+                if let Some(c) = self.apply_shader(id, map, f, m, n)? {
+                    return Ok(Applied::Unlit(c));
+                }
+                continue;
+            }
             let lod = self.lod(&map.texture, f);
             match map.decal {
                 DecalMode::ReplaceKd => m.diffuse = self.value(&map.texture, f, lod),
                 DecalMode::BlendKd => m.diffuse = (m.diffuse + self.value(&map.texture, f, lod)) * 0.5,
                 DecalMode::ReplaceKs => m.specular = self.value(&map.texture, f, lod),
-                DecalMode::ReplaceAll => return Applied::Unlit(self.value(&map.texture, f, lod)),
+                DecalMode::ReplaceKm => {
+                    m.mirror = self.value(&map.texture, f, lod);
+                    if m.kind == crate::shading::material::Specular::None {
+                        m.kind = crate::shading::material::Specular::Mirror;
+                    }
+                }
+                DecalMode::ReplaceAll => return Ok(Applied::Unlit(self.value(&map.texture, f, lod))),
                 DecalMode::ReplaceNormal => {
                     let c = self.at(&map.texture, f, lod) / 255.0;
                     *n = f.normal_to_world(bump::normal_map(f, c * 2.0 - Vec3::ONE));
@@ -266,7 +318,7 @@ impl Textures {
                 DecalMode::ReplaceBackground => {}
             }
         }
-        Applied::Lit
+        Ok(Applied::Lit)
     }
 
     /// The background at image position `uv` (0–1 across and down), if a map

@@ -9,6 +9,8 @@ fn frame(n: Vec3, dpdu: Vec3, dpdv: Vec3, uv: Vec2) -> TexFrame {
     TexFrame {
         uv,
         p_object: Vec3::new(0.3, 0.2, 0.1),
+        p_world: Vec3::new(0.3, 0.2, 0.1),
+        time: 0.0,
         p_rest: Vec3::new(0.3, 0.2, 0.1),
         dpdu,
         dpdv,
@@ -127,7 +129,7 @@ fn flat_normal_map_texel_leaves_the_normal_unchanged() {
     assert!((out - n).length() < 1e-6, "{out}");
     // Through the whole map pipeline too, with a uniform image of (128, 128, 255).
     let img = Image::from_rgb8(1, 1, vec![[128, 128, 255]]).unwrap();
-    let mut tex = Textures::new(vec![img], &[], None);
+    let mut tex = Textures::new(vec![img], &[], None, None);
     tex.maps.push(TextureMap {
         texture: Texture::Image { image: 0, interpolation: Interpolation::Bilinear, scale: 1.0 / 255.0 },
         decal: DecalMode::ReplaceNormal,
@@ -136,7 +138,7 @@ fn flat_normal_map_texel_leaves_the_normal_unchanged() {
     let list = tex.add_list(&[0]);
     let mut m = crate::shading::Material::default();
     let mut out = n;
-    assert!(matches!(tex.apply(list, &f, &mut m, &mut out), Applied::Lit));
+    assert!(matches!(tex.apply(list, &f, &mut m, &mut out), Ok(Applied::Lit)));
     assert!((out - n).length() < 0.01, "{out}");
 }
 
@@ -145,7 +147,7 @@ fn zero_bump_factor_leaves_the_normal_unchanged() {
     let n = Vec3::new(0.0, 1.0, 0.0);
     let f = frame(n, Vec3::X, Vec3::Z, Vec2::new(0.4, 0.6));
     let img = Image::from_rgb8(2, 2, vec![[0, 0, 0], [255, 255, 255], [90, 10, 30], [7, 200, 100]]).unwrap();
-    let tex = Textures::new(vec![img], &[], None);
+    let tex = Textures::new(vec![img], &[], None, None);
     for (texture, k) in [
         (Texture::Image { image: 0, interpolation: Interpolation::Bilinear, scale: 1.0 / 255.0 }, 0.0),
         (Texture::Perlin(Perlin { scale: 3.0, conversion: NoiseConversion::AbsVal, octaves: 2 }), 0.0),
@@ -162,7 +164,7 @@ fn zero_bump_factor_leaves_the_normal_unchanged() {
 #[test]
 fn decal_modes_change_the_right_component() {
     let img = Image::from_rgb8(1, 1, vec![[51, 102, 255]]).unwrap();
-    let mut tex = Textures::new(vec![img], &[], None);
+    let mut tex = Textures::new(vec![img], &[], None, None);
     let c = Vec3::new(0.2, 0.4, 1.0);
     for decal in [DecalMode::ReplaceKd, DecalMode::BlendKd, DecalMode::ReplaceKs, DecalMode::ReplaceAll] {
         tex.maps.push(TextureMap {
@@ -181,7 +183,7 @@ fn decal_modes_change_the_right_component() {
     let apply = |i: u32| {
         let mut m = base;
         let mut n = Vec3::Z;
-        let r = tex.apply(TexList { start: i, len: 1 }, &f, &mut m, &mut n);
+        let r = tex.apply(TexList { start: i, len: 1 }, &f, &mut m, &mut n).unwrap();
         (r, m)
     };
     let (_, m) = apply(0);

@@ -22,6 +22,7 @@ pub mod camera;
 pub mod lights;
 pub mod material;
 pub mod objects;
+pub mod shader_map;
 pub mod textures;
 pub mod transforms;
 

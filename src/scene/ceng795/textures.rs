@@ -3,8 +3,8 @@
 //! | element | reads | default |
 //! |---|---|---|
 //! | `Images/Image id` | a path relative to the scene file | required |
-//! | `TextureMap id type` | `type` is `image`, `perlin` or `checkerboard` | required |
-//! | `DecalMode` | `replace_kd`, `blend_kd`, `replace_ks`, `replace_background`, `replace_normal`, `bump_normal`, `replace_all` | required |
+//! | `TextureMap id type` | `type` is `image`, `perlin`, `checkerboard` or `shader` (luster's extension, see [`super::shader_map`]) | required |
+//! | `DecalMode` | `replace_kd`, `blend_kd`, `replace_ks`, `replace_background`, `replace_normal`, `bump_normal`, `replace_all`, and luster's `replace_km` (mirror reflectance) | required |
 //! | `ImageId` | (image) the `Image` read | required |
 //! | `Interpolation` | (image) `nearest`, `bilinear` or `trilinear` | nearest (as the references show) |
 //! | `Normalizer` | (image) texel values are divided by it | 255 (1 for EXR/HDR) |
@@ -66,7 +66,7 @@ pub fn read_all(
         images.iter().enumerate().rev().map(|(i, im)| (im.id.as_str(), i)).collect();
     let mut maps: Vec<TextureMapDesc> = Vec::new();
     for tm in el.children_named("TextureMap") {
-        let m = texture_map(r, tm, &image_ids, w)?;
+        let m = texture_map(r, tm, &image_ids, base_dir, w)?;
         if m.decal == DecalMode::ReplaceBackground && maps.iter().any(|o| o.decal == m.decal) {
             return Err(r.err(tm, "a second texture map replaces the background; only one may"));
         }
@@ -83,6 +83,7 @@ fn texture_map(
     r: &Reader,
     el: &Element,
     image_ids: &HashMap<&str, usize>,
+    base_dir: &Path,
     w: &mut Warnings,
 ) -> Result<TextureMapDesc, SceneError> {
     let decal_el = r.required(el, "DecalMode")?;
@@ -94,12 +95,13 @@ fn texture_map(
         "replace_normal" => DecalMode::ReplaceNormal,
         "bump_normal" => DecalMode::BumpNormal,
         "replace_all" => DecalMode::ReplaceAll,
+        "replace_km" => DecalMode::ReplaceKm,
         other => {
             return Err(r.err(
                 decal_el,
                 format!(
                     "<DecalMode> \"{other}\" is unknown (expected replace_kd, blend_kd, replace_ks, \
-                     replace_background, replace_normal, bump_normal or replace_all)"
+                     replace_km, replace_background, replace_normal, bump_normal or replace_all)"
                 ),
             ))
         }
@@ -173,11 +175,19 @@ fn texture_map(
                 white: r.vec3_or(el, "WhiteColor", Vec3::ONE)?,
             }
         }
-        "" => return Err(r.err(el, "<TextureMap> has no type (expected image, perlin or checkerboard)")),
+        "shader" => {
+            w.unknown_children(el, &[&common[..], &super::shader_map::CHILDREN[..]].concat());
+            super::shader_map::read(r, el, base_dir)?
+        }
+        "" => {
+            return Err(r.err(el, "<TextureMap> has no type (expected image, perlin, checkerboard or shader)"))
+        }
         other => {
             return Err(r.err(
                 el,
-                format!("<TextureMap> type \"{other}\" is unknown (expected image, perlin or checkerboard)"),
+                format!(
+                "<TextureMap> type \"{other}\" is unknown (expected image, perlin, checkerboard or shader)"
+            ),
             ))
         }
     };

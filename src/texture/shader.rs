@@ -1,0 +1,296 @@
+//! Shader texture maps: compiling the scene's scripts into one
+//! [`ShaderSet`], checking each map's decal mode against the entry points its
+//! script defines, and evaluating a map at a surface point.
+//!
+//! Which entry point a decal mode calls:
+//!
+//! | mode | calls | effect |
+//! |---|---|---|
+//! | `replace_kd`, `blend_kd`, `replace_ks` | `color` | as for any map |
+//! | `replace_all` | `color` | the point's colour, unlit |
+//! | `replace_km` | `reflect` | the mirror reflectance |
+//! | `bump_normal` | `height` | [`bump::height_bump`], scaled by `BumpFactor` |
+//!
+//! `replace_normal` and `replace_background` take no shader: a tangent-space
+//! normal is what `height` already expresses better, and the background has
+//! no surface point to give a script.
+
+use std::time::Duration;
+
+use super::{bump, TexFrame, TextureMap, Textures};
+use crate::math::{Vec2, Vec3};
+use crate::scene::description::{DecalMode, TextureMapDesc, TextureSource};
+use crate::shader::{ShadeInput, ShaderError, ShaderSet, ShaderSource};
+use crate::shading::material::Specular;
+use crate::shading::Material;
+
+/// A shader map the scene cannot use: which map and why.
+#[derive(Debug)]
+pub struct MapError {
+    /// Index of the map in the description.
+    pub map: usize,
+    /// The reason, a sentence fragment.
+    pub message: String,
+}
+
+/// The entry point a decal mode calls, or `None` for modes shaders cannot drive.
+fn entry_for(decal: DecalMode) -> Option<&'static str> {
+    match decal {
+        DecalMode::ReplaceKd | DecalMode::BlendKd | DecalMode::ReplaceKs | DecalMode::ReplaceAll => {
+            Some("color")
+        }
+        DecalMode::ReplaceKm => Some("reflect"),
+        DecalMode::BumpNormal => Some("height"),
+        DecalMode::ReplaceNormal | DecalMode::ReplaceBackground => None,
+    }
+}
+
+/// The name errors give a shader: its script's file name without extension.
+fn shader_name(path: &std::path::Path) -> String {
+    path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned())
+}
+
+/// Compiles the scripts of every shader map (the k-th shader map becomes
+/// shader k of the set), or `None` when the scene has none. Every map gets
+/// its own source, so one script may serve several maps with different
+/// parameters.
+pub fn compile(descs: &[TextureMapDesc], timeout: Duration) -> Result<Option<ShaderSet>, MapError> {
+    let mut maps = Vec::new();
+    let mut sources = Vec::new();
+    for (i, d) in descs.iter().enumerate() {
+        if let TextureSource::Shader { path, code, params } = &d.source {
+            let mut src = ShaderSource::new(shader_name(path), path.clone(), code.clone());
+            src.params = params.clone();
+            maps.push(i);
+            sources.push(src);
+        }
+    }
+    if sources.is_empty() {
+        return Ok(None);
+    }
+    let set = match ShaderSet::new(sources.clone(), timeout) {
+        Ok(set) => set,
+        // The set reports the first script that fails; compile them one by
+        // one to find its map (a script used twice may fail with one map's
+        // parameters only). Only the error path pays for this.
+        Err(e) => {
+            let map = sources
+                .iter()
+                .zip(&maps)
+                .find(|(s, _)| ShaderSet::new(vec![(*s).clone()], timeout).is_err())
+                .map_or(maps[0], |(_, &m)| m);
+            return Err(MapError { map, message: e.to_string() });
+        }
+    };
+    for (id, &m) in maps.iter().enumerate() {
+        let decal = descs[m].decal;
+        let Some(entry) = entry_for(decal) else {
+            return Err(MapError {
+                map: m,
+                message: format!(
+                    "a shader cannot drive DecalMode {} (shaders take replace_kd, blend_kd, replace_ks, \
+                     replace_all, replace_km or bump_normal)",
+                    decal_name(decal)
+                ),
+            });
+        };
+        let has = match entry {
+            "color" => set.has_color(id),
+            "reflect" => set.has_reflect(id),
+            _ => set.has_height(id),
+        };
+        if !has {
+            let name = set.name(id).unwrap_or("?");
+            let TextureSource::Shader { path, .. } = &descs[m].source else { continue };
+            return Err(MapError {
+                map: m,
+                message: format!(
+                    "shader '{name}': {} defines no {entry}(s) function, which DecalMode {} calls",
+                    path.display(),
+                    decal_name(decal)
+                ),
+            });
+        }
+    }
+    Ok(Some(set))
+}
+
+fn decal_name(d: DecalMode) -> &'static str {
+    match d {
+        DecalMode::ReplaceKd => "replace_kd",
+        DecalMode::BlendKd => "blend_kd",
+        DecalMode::ReplaceKs => "replace_ks",
+        DecalMode::ReplaceAll => "replace_all",
+        DecalMode::ReplaceKm => "replace_km",
+        DecalMode::BumpNormal => "bump_normal",
+        DecalMode::ReplaceNormal => "replace_normal",
+        DecalMode::ReplaceBackground => "replace_background",
+    }
+}
+
+/// The shading point a script sees at object-space `p` with texture
+/// coordinates `uv`, in frame `f` whose world shading normal is now `n`.
+fn input(f: &TexFrame, p: Vec3, uv: Vec2, n: Vec3) -> ShadeInput {
+    let pw = if p == f.p_object {
+        f.p_world
+    } else {
+        match &f.to_world {
+            // The world point of an offset lies as far from the hit as its object point.
+            Some(xf) => f.p_world + xf.vector(p - f.p_object),
+            None => f.p_world + (p - f.p_object),
+        }
+    };
+    ShadeInput { p: p.to_array(), pw: pw.to_array(), n: n.to_array(), uv: uv.to_array(), time: f.time }
+}
+
+impl Textures {
+    /// Applies shader map `map` (shader `id`) at `f`: like the other maps, it
+    /// may change `m` and the world normal `n`, or make the point unlit.
+    pub(super) fn apply_shader(
+        &self,
+        id: u32,
+        map: &TextureMap,
+        f: &TexFrame,
+        m: &mut Material,
+        n: &mut Vec3,
+    ) -> Result<Option<Vec3>, Box<ShaderError>> {
+        let Some(set) = &self.shaders else { return Ok(None) };
+        let id = id as usize;
+        let color = |n: Vec3| -> Result<Vec3, Box<ShaderError>> {
+            Ok(Vec3::from_array(set.color(id, &input(f, f.p_object, f.uv, n))?))
+        };
+        match map.decal {
+            DecalMode::ReplaceKd => m.diffuse = color(*n)?,
+            DecalMode::BlendKd => m.diffuse = (m.diffuse + color(*n)?) * 0.5,
+            DecalMode::ReplaceKs => m.specular = color(*n)?,
+            DecalMode::ReplaceAll => return Ok(Some(color(*n)?)),
+            DecalMode::ReplaceKm => {
+                m.mirror = Vec3::from_array(set.reflect(id, &input(f, f.p_object, f.uv, *n))?);
+                if m.kind == Specular::None {
+                    m.kind = Specular::Mirror;
+                }
+            }
+            DecalMode::BumpNormal => {
+                if map.bump_factor != 0.0 {
+                    let world_n = *n;
+                    let local = bump::height_bump(f, map.bump_factor, bump::bump_step(f), |pts| {
+                        set.heights3(id, &pts.map(|(p, uv)| input(f, p, uv, world_n))).map_err(Box::new)
+                    })?;
+                    *n = f.normal_to_world(local);
+                }
+            }
+            DecalMode::ReplaceNormal | DecalMode::ReplaceBackground => {}
+        }
+        Ok(None)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Loc;
+    use crate::shader::ParamValue;
+    use crate::texture::Texture;
+
+    fn map(code: &str, decal: DecalMode, params: &[(&str, f64)]) -> TextureMapDesc {
+        TextureMapDesc {
+            id: "m".into(),
+            source: TextureSource::Shader {
+                path: "dir/s.lua".into(),
+                code: code.into(),
+                params: params.iter().map(|(k, v)| (k.to_string(), ParamValue::Number(*v))).collect(),
+            },
+            decal,
+            bump_factor: 1.0,
+            loc: Loc::default(),
+        }
+    }
+
+    fn frame() -> TexFrame {
+        TexFrame {
+            uv: Vec2::new(0.25, 0.75),
+            p_object: Vec3::new(0.5, 0.0, 0.0),
+            p_world: Vec3::new(1.5, 0.0, 0.0),
+            time: 0.5,
+            p_rest: Vec3::new(1.5, 0.0, 0.0),
+            dpdu: Vec3::X,
+            dpdv: Vec3::Y,
+            n: Vec3::Z,
+            to_world: None,
+            footprint: 0.0,
+        }
+    }
+
+    const GREY: &str = "local g = param.g\nassert(g < 1, 'g too big')\nfunction color(s) return g, g, g end";
+
+    #[test]
+    fn one_script_serves_maps_with_different_parameters() {
+        let descs =
+            [map(GREY, DecalMode::ReplaceKd, &[("g", 0.2)]), map(GREY, DecalMode::ReplaceKd, &[("g", 0.6)])];
+        let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT).unwrap());
+        let lists = [tex.maps[0], tex.maps[1]];
+        let diffuse: Vec<Vec3> = lists
+            .iter()
+            .map(|m| {
+                let Texture::Shader { id } = m.texture else { panic!("a shader map") };
+                let mut mat = Material::default();
+                let mut n = Vec3::Z;
+                assert_eq!(tex.apply_shader(id, m, &frame(), &mut mat, &mut n).unwrap(), None);
+                mat.diffuse
+            })
+            .collect();
+        assert_eq!(diffuse, [Vec3::splat(0.2), Vec3::splat(0.6)]);
+    }
+
+    #[test]
+    fn the_failing_map_is_found_even_when_its_script_is_shared() {
+        let descs =
+            [map(GREY, DecalMode::ReplaceKd, &[("g", 0.2)]), map(GREY, DecalMode::ReplaceKd, &[("g", 3.0)])];
+        let e = compile(&descs, DEFAULT).unwrap_err();
+        assert_eq!(e.map, 1);
+        assert!(e.message.contains("s.lua:2") && e.message.contains("g too big"), "{}", e.message);
+    }
+
+    #[test]
+    fn decal_modes_need_their_entry_points() {
+        let bg = [map(GREY, DecalMode::ReplaceBackground, &[("g", 0.1)])];
+        assert!(compile(&bg, DEFAULT)
+            .unwrap_err()
+            .message
+            .contains("cannot drive DecalMode replace_background"));
+        let km = [map(GREY, DecalMode::ReplaceKm, &[("g", 0.1)])];
+        assert!(compile(&km, DEFAULT).unwrap_err().message.contains("no reflect(s)"));
+        assert!(compile(&[], DEFAULT).unwrap().is_none());
+    }
+
+    #[test]
+    fn the_script_sees_the_frame_and_reflect_makes_a_mirror() {
+        let code = "function reflect(s) return s.P.x, s.Pw.x, s.uv.v + s.time end\n\
+                    function color(s) return s.N.x, s.N.y, s.N.z end";
+        let descs = [map(code, DecalMode::ReplaceKm, &[]), map(code, DecalMode::ReplaceAll, &[])];
+        let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT).unwrap());
+        let mut mat = Material::default();
+        let mut n = Vec3::Y;
+        assert_eq!(tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut n).unwrap(), None);
+        assert_eq!(mat.mirror, Vec3::new(0.5, 1.5, 1.25));
+        assert_eq!(mat.kind, Specular::Mirror);
+        assert_eq!(tex.apply_shader(1, &tex.maps[1], &frame(), &mut mat, &mut n).unwrap(), Some(Vec3::Y));
+    }
+
+    #[test]
+    fn a_height_shader_bumps_and_its_errors_come_back() {
+        let code = "function height(s)\n  if s.P.y > 1 then error('bad') end\n  return 0.5 * s.P.x\nend";
+        let descs = [map(code, DecalMode::BumpNormal, &[])];
+        let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT).unwrap());
+        let mut mat = Material::default();
+        let mut n = Vec3::Z;
+        tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut n).unwrap();
+        // Slope 0.5 along x tilts the normal towards -x: n ∝ (-0.5, 0, 1).
+        assert!((n - Vec3::new(-0.5, 0.0, 1.0).normalize()).length() < 1e-3, "{n}");
+        let high = TexFrame { p_object: Vec3::new(0.0, 2.0, 0.0), ..frame() };
+        let e = tex.apply_shader(0, &tex.maps[0], &high, &mut mat, &mut n).unwrap_err();
+        assert!(e.message.contains("s.lua:2: bad"), "{}", e.message);
+    }
+
+    const DEFAULT: Duration = crate::shader::DEFAULT_TIMEOUT;
+}
