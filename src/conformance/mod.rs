@@ -260,7 +260,14 @@ fn run_case_into(case: &Case, outdir: &Path, opts: &RenderOptions, result: &mut 
     let stem = case.label().replace(['/', '.'], "_");
     for (i, cam) in scene.cameras.iter().enumerate() {
         let t = Instant::now();
-        let img = render::render_with(&scene, i, opts, &|_| {});
+        // A shader that fails makes the scene an error row, not a black image.
+        let img = match render::try_render_with(&scene, i, opts, &|_| {}) {
+            Ok(img) => img,
+            Err(e) => {
+                result.error = Some(format!("{}: {e}", case.scene.display()));
+                return;
+            }
+        };
         let threshold = threshold(case, &cam.image_name, cam.num_samples);
         let expected = case.expected_image(&cam.image_name);
         // The second render is only worth its time when there is a
