@@ -10,13 +10,10 @@
 //! The course folder is read from `../shared/scenes/ceng795`; without it the
 //! tests say they skipped.
 
+mod common;
+use common::course_root;
 use luster::conformance::{discover, run_case, CaseResult};
 use std::path::PathBuf;
-
-fn course_root() -> Option<PathBuf> {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes/ceng795");
-    root.is_dir().then_some(root)
-}
 
 fn check_homework(hw: &str) {
     let Some(root) = course_root() else {

@@ -17,6 +17,8 @@
 //! `target/tmp/golden/hw3/`. Without `../shared/scenes/ceng795` the test says
 //! it skipped.
 
+mod common;
+use common::course_root;
 use luster::conformance::{discover, run_case_with, CaseResult};
 use luster::render::RenderOptions;
 use std::path::PathBuf;
@@ -48,11 +50,6 @@ const KNOWN_BIAS: &[(&str, &str)] = &[(
      course's: the 8×8 block means differ by up to 36 levels there (PSNR 43.4 dB against 50.1 between our \
      two seeds), a structure that does not average out as noise does",
 )];
-
-fn course_root() -> Option<PathBuf> {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes/ceng795");
-    root.is_dir().then_some(root)
-}
 
 #[test]
 fn hw3_scenes_match_expected_images_within_their_noise() {

@@ -14,6 +14,8 @@
 //! Renders and heatmaps are written under `target/tmp/golden/hw4/`. Without
 //! `../shared/scenes/ceng795` the test says it skipped.
 
+mod common;
+use common::course_root;
 use luster::conformance::{discover, run_case_with, CaseResult};
 use luster::render::RenderOptions;
 use std::path::PathBuf;
@@ -25,11 +27,6 @@ const SPP: &[(&str, u32, &str)] = &[
     ("sphere_normal", 4, "100 spp of a normal-mapped sphere: antialiasing only"),
     ("scene", 4, "VeachAjar at 16 spp: 4 keeps the whole room to seconds"),
 ];
-
-fn course_root() -> Option<PathBuf> {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes/ceng795");
-    root.is_dir().then_some(root)
-}
 
 #[test]
 fn hw4_scenes_match_expected_images() {

@@ -30,23 +30,15 @@ use crate::math::{Vec2, Vec3};
 /// in [-1, 1]) gives.
 pub fn normal_map(f: &TexFrame, t: Vec3) -> Vec3 {
     let (tu, tv) = tangents(f);
-    let n = (tu * t.x + tv * t.y + f.n * t.z).normalize_or_zero();
-    if n == Vec3::ZERO {
-        f.n
-    } else {
-        n
-    }
+    (tu * t.x + tv * t.y + f.n * t.z).try_normalize().unwrap_or(f.n)
 }
 
 /// Unit tangents along u and v, falling back to any frame around the normal
 /// when the parameterization degenerates.
 fn tangents(f: &TexFrame) -> (Vec3, Vec3) {
-    let tu = f.dpdu.normalize_or_zero();
-    let tv = f.dpdv.normalize_or_zero();
-    if tu == Vec3::ZERO || tv == Vec3::ZERO {
-        crate::math::orthonormal_basis(f.n)
-    } else {
-        (tu, tv)
+    match (f.dpdu.try_normalize(), f.dpdv.try_normalize()) {
+        (Some(tu), Some(tv)) => (tu, tv),
+        _ => crate::math::orthonormal_basis(f.n),
     }
 }
 
@@ -61,7 +53,7 @@ pub fn bump(tex: &Textures, map: &TextureMap, f: &TexFrame) -> Vec3 {
             let (_, g) = p.value_grad(f.p_rest, true);
             let n = f.normal_to_world(f.n);
             let along = g - n * g.dot(n);
-            (n - along * k).try_into_unit().unwrap_or(n)
+            (n - along * k).try_normalize().unwrap_or(n)
         }
         Texture::Image { image, .. } => {
             let img = &tex.images[image as usize];
@@ -124,7 +116,7 @@ pub fn height_bump<E>(
     let pb = b + f.n * (k * (hb - h0));
     let n = pa.cross(pb);
     let n = if n.dot(f.n) < 0.0 { -n } else { n };
-    Ok(n.try_into_unit().unwrap_or(f.n))
+    Ok(n.try_normalize().unwrap_or(f.n))
 }
 
 /// The object-space step of [`height_bump`] at a frame: half the pixel's
@@ -153,20 +145,7 @@ fn displaced_normal(f: &TexFrame, hu: f32, hv: f32) -> Vec3 {
     let pv = f.dpdv + f.n * hv;
     let n = pu.cross(pv);
     let n = if n.dot(f.n) < 0.0 { -n } else { n };
-    n.try_into_unit().unwrap_or(f.n)
-}
-
-/// Normalizing that refuses zero and non-finite vectors.
-trait TryUnit: Sized {
-    fn try_into_unit(self) -> Option<Self>;
-}
-
-impl TryUnit for Vec3 {
-    #[inline]
-    fn try_into_unit(self) -> Option<Vec3> {
-        let n = self.normalize_or_zero();
-        (n != Vec3::ZERO).then_some(n)
-    }
+    n.try_normalize().unwrap_or(f.n)
 }
 
 #[cfg(test)]
