@@ -1,4 +1,5 @@
-//! The render scene: immutable, `Sync`, built once from a [`Description`].
+//! The render scene: immutable, `Sync`, built once from a
+//! [`Description`](crate::scene::description::Description).
 //!
 //! Geometry is two-level. Every mesh (inline, PLY, or a single `Triangle`) is
 //! built once in its own object space with its own BVH; objects — meshes,
@@ -10,18 +11,15 @@
 //! BVH serves every ray time.
 
 use crate::accel::{Bvh, TriHit};
-use crate::geometry::mesh::vertex_normals;
 use crate::geometry::{Mesh, Plane, Sphere};
-use crate::math::{Aabb, Ray, Transform, Vec2, Vec3};
+use crate::math::{Ray, Transform, Vec2, Vec3};
 use crate::render::camera::Camera;
-use crate::scene::description::{Description, MeshSource, Shape};
-use crate::scene::ply::read_ply;
-use crate::scene::{SceneError, Warning};
+use crate::scene::Warning;
 use crate::shading::{AreaLight, Material, PointLight};
-use crate::texture::{Image, TexFrame, TexList, Textures};
-use rayon::prelude::*;
-use std::collections::HashMap;
-use std::time::Duration;
+use crate::texture::{TexFrame, TexList, Textures};
+
+mod build;
+pub use build::BuildOptions;
 
 /// What a top-level primitive is.
 #[derive(Clone, Copy, Debug)]
@@ -138,110 +136,7 @@ pub struct Scene {
     pub warnings: Vec<Warning>,
 }
 
-/// Settings of building a scene beyond what its file says.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct BuildOptions {
-    /// Time limit of one shader call.
-    pub shader_timeout: Duration,
-}
-
-impl Default for BuildOptions {
-    fn default() -> BuildOptions {
-        BuildOptions { shader_timeout: crate::shader::DEFAULT_TIMEOUT }
-    }
-}
-
 impl Scene {
-    /// Builds the render scene with the default [`BuildOptions`].
-    pub fn build(desc: &Description) -> Result<Scene, SceneError> {
-        Scene::build_with(desc, &BuildOptions::default())
-    }
-
-    /// Builds the render scene: loads PLY files and builds every BVH, meshes
-    /// in parallel, and compiles the shader scripts.
-    pub fn build_with(desc: &Description, opts: &BuildOptions) -> Result<Scene, SceneError> {
-        // Meshes: one per Mesh or Triangle object; instances share their base's.
-        let mesh_objects: Vec<usize> = desc
-            .objects
-            .iter()
-            .enumerate()
-            .filter(|(_, o)| matches!(o.shape, Shape::Mesh { .. } | Shape::Triangle { .. }))
-            .map(|(i, _)| i)
-            .collect();
-        let built: Vec<Result<(Mesh, Option<Warning>), SceneError>> =
-            mesh_objects.par_iter().map(|&i| build_mesh(desc, i)).collect();
-        let mut meshes = Vec::with_capacity(built.len());
-        let mut warnings = Vec::new();
-        let mut mesh_of_object = HashMap::new();
-        for (&obj, b) in mesh_objects.iter().zip(built) {
-            let (m, w) = b?;
-            warnings.extend(w);
-            mesh_of_object.insert(obj, meshes.len() as u32);
-            meshes.push(m);
-        }
-
-        let mut textures = build_textures(desc, opts)?;
-        let mut prims = Vec::new();
-        let mut planes = Vec::new();
-        for (i, o) in desc.objects.iter().enumerate() {
-            let xf = (!o.transform.is_identity()).then(|| Box::new(o.transform));
-            let material = o.material as u32;
-            let tex = textures.add_list(&o.textures);
-            let geom = match &o.shape {
-                Shape::Mesh { .. } | Shape::Triangle { .. } => Geom::Mesh(mesh_of_object[&i]),
-                Shape::Instance { mesh } => match mesh_of_object.get(mesh) {
-                    Some(&m) => Geom::Mesh(m),
-                    None => {
-                        return Err(SceneError::at(&desc.file, &o.loc, "the instance's base is not a mesh"))
-                    }
-                },
-                Shape::Sphere { center, radius } => Geom::Sphere(Sphere { center: *center, radius: *radius }),
-                Shape::Plane { point, normal } => {
-                    let p = Plane {
-                        point: o.transform.point(*point),
-                        normal: o.transform.normal_to_world(*normal).normalize(),
-                    };
-                    planes.push((p, material, tex, i as u32));
-                    continue;
-                }
-            };
-            if let Geom::Mesh(m) = geom {
-                if meshes[m as usize].triangle_count() == 0 {
-                    continue;
-                }
-            }
-            prims.push(Prim { geom, material, motion: o.motion, xf, textures: tex, object: i as u32 });
-        }
-        let bounds: Vec<Aabb> = prims.iter().map(|p| prim_bounds(p, &meshes)).collect();
-        let tlas = Bvh::build(&bounds);
-        // Put primitives in the BVH's leaf order so a leaf is a contiguous range.
-        let mut slots: Vec<Option<Prim>> = prims.into_iter().map(Some).collect();
-        let prims = tlas.prim_order().iter().filter_map(|&i| slots[i as usize].take()).collect();
-
-        Ok(Scene {
-            meshes,
-            prims,
-            tlas,
-            planes,
-            object_labels: desc.objects.iter().map(|o| object_label(&o.loc.path)).collect(),
-            textures,
-            materials: desc.materials.iter().map(Material::from_desc).collect(),
-            lights: desc
-                .point_lights
-                .iter()
-                .map(|l| PointLight { position: l.position, intensity: l.intensity })
-                .collect(),
-            area_lights: desc.area_lights.iter().map(AreaLight::from_desc).collect(),
-            ambient: desc.ambient_light,
-            background: desc.background,
-            shadow_epsilon: desc.shadow_ray_epsilon,
-            intersection_epsilon: desc.intersection_test_epsilon,
-            max_depth: desc.max_recursion_depth,
-            cameras: desc.cameras.iter().map(Camera::from_desc).collect(),
-            warnings,
-        })
-    }
-
     /// The object a hit is on, as messages name it: `Sphere[id=2]`.
     pub fn object_label(&self, hit: &Hit) -> &str {
         let object = match hit.geom {
@@ -409,119 +304,5 @@ fn flat_frame(hit: &Hit, footprint: f32) -> TexFrame {
         n: hit.ns,
         to_world: None,
         footprint,
-    }
-}
-
-/// The last segment of an element path: `Scene/Objects/Sphere[id=2]` gives
-/// `Sphere[id=2]`.
-fn object_label(path: &str) -> String {
-    path.rsplit('/').next().unwrap_or(path).to_string()
-}
-
-/// Decodes the scene's images (in parallel), compiles its shader scripts and
-/// builds its texture maps. Images a trilinear map reads get mipmaps.
-fn build_textures(desc: &Description, opts: &BuildOptions) -> Result<Textures, SceneError> {
-    use crate::scene::description::{Interpolation, TextureSource};
-    let trilinear: Vec<bool> = (0..desc.images.len())
-        .map(|i| {
-            desc.texture_maps.iter().any(|m| {
-                matches!(m.source, TextureSource::Image { image, interpolation: Interpolation::Trilinear, .. } if image == i)
-            })
-        })
-        .collect();
-    let used: Vec<bool> = (0..desc.images.len())
-        .map(|i| {
-            desc.texture_maps
-                .iter()
-                .any(|m| matches!(m.source, TextureSource::Image { image, .. } if image == i))
-        })
-        .collect();
-    let images: Vec<Image> = desc
-        .images
-        .par_iter()
-        .enumerate()
-        .map(|(i, d)| {
-            if !used[i] {
-                // A listed image no map reads is not decoded (nor required to exist).
-                return Image::from_rgb8(1, 1, vec![[0, 0, 0]])
-                    .ok_or_else(|| SceneError::at(&desc.file, &d.loc, "internal error"));
-            }
-            let mut img = Image::load(&d.path).map_err(|e| SceneError::at(&desc.file, &d.loc, e))?;
-            if trilinear[i] {
-                img.build_mipmaps();
-            }
-            Ok(img)
-        })
-        .collect::<Result<_, _>>()?;
-    let shaders = crate::texture::shader::compile(&desc.texture_maps, opts.shader_timeout)
-        .map_err(|e| SceneError::at(&desc.file, &desc.texture_maps[e.map].loc, e.message))?;
-    Ok(Textures::new(images, &desc.texture_maps, desc.background_texture, shaders))
-}
-
-/// World bounds over the whole shutter interval: a translation sweeps the box
-/// from its place at time 0 to its place at time 1.
-fn prim_bounds(p: &Prim, meshes: &[Mesh]) -> Aabb {
-    let b = match p.geom {
-        Geom::Mesh(m) => meshes[m as usize].bounds(),
-        Geom::Sphere(s) => s.bounds(),
-    };
-    let b = match &p.xf {
-        Some(xf) => xf.aabb(&b),
-        None => b,
-    };
-    b.union(Aabb::new(b.min + p.motion, b.max + p.motion))
-}
-
-/// Builds the mesh of object `i` (a Mesh or a Triangle), in object space.
-fn build_mesh(desc: &Description, i: usize) -> Result<(Mesh, Option<Warning>), SceneError> {
-    let o = &desc.objects[i];
-    match &o.shape {
-        Shape::Triangle { vertices, uvs } => {
-            Ok((Mesh::new(vertices.to_vec(), vec![[0, 1, 2]], None).with_uvs(uvs.map(|u| u.to_vec())), None))
-        }
-        Shape::Mesh { source: MeshSource::Inline { triangles: tris, tex_shift }, smooth } => {
-            // Keep only the vertices this mesh uses, renumbered.
-            let mut remap: HashMap<u32, u32> = HashMap::new();
-            let mut positions = Vec::new();
-            let local: Vec<[u32; 3]> = tris
-                .iter()
-                .map(|t| {
-                    t.map(|g| {
-                        *remap.entry(g).or_insert_with(|| {
-                            positions.push(desc.vertices[g as usize]);
-                            positions.len() as u32 - 1
-                        })
-                    })
-                })
-                .collect();
-            let normals = smooth.then(|| vertex_normals(&positions, &local));
-            // Texture coordinate of vertex g is number g + tex_shift; all or none.
-            let mut globals = vec![0u32; positions.len()];
-            for (&g, &l) in &remap {
-                globals[l as usize] = g;
-            }
-            let uvs: Option<Vec<Vec2>> = globals
-                .iter()
-                .map(|&g| {
-                    let k = g as i64 + tex_shift;
-                    usize::try_from(k).ok().and_then(|k| desc.tex_coords.get(k).copied())
-                })
-                .collect();
-            Ok((Mesh::new(positions, local, normals).with_uvs(uvs), None))
-        }
-        Shape::Mesh { source: MeshSource::Ply(path), smooth } => {
-            let ply = read_ply(path).map_err(|e| SceneError::at(&desc.file, &o.loc, e.to_string()))?;
-            let warning = (ply.skipped_degenerate > 0).then(|| Warning {
-                loc: o.loc.clone(),
-                message: format!(
-                    "{}: {} degenerate triangle(s) skipped",
-                    path.display(),
-                    ply.skipped_degenerate
-                ),
-            });
-            let normals = smooth.then(|| vertex_normals(&ply.positions, &ply.triangles));
-            Ok((Mesh::new(ply.positions, ply.triangles, normals).with_uvs(ply.uvs), warning))
-        }
-        _ => Err(SceneError::at(&desc.file, &o.loc, "internal error: not a mesh")),
     }
 }
