@@ -202,6 +202,88 @@ fn json_encoding_of_a_shader_map() {
     assert_eq!(diff(&a, &b), (0, 0));
 }
 
+/// Writes a 12×7 PNG of distinct colours (odd sizes, so rows and columns
+/// cannot be confused) as `name` in `dir`.
+fn write_test_png(dir: &Path, name: &str) {
+    let img = image::RgbImage::from_fn(12, 7, |x, y| {
+        image::Rgb([(x * 21) as u8, (y * 36) as u8, ((x * 7 + y * 13) % 256) as u8 ^ 0x5a])
+    });
+    img.save(dir.join(name)).expect("the test image is written");
+}
+
+/// `texture(name, u, v)` in a shader samples the scene's image exactly as an
+/// image map does: bilinear like a `bilinear` map, `"nearest"` like a nearest
+/// one, by the image's id or its file name. The images must be identical.
+#[test]
+fn lua_texture_matches_image_maps() {
+    let image = r#"<Images><Image id="wall">grid.png</Image></Images>"#;
+    let map = |interp: &str| {
+        format!(
+            r#"{image}<TextureMap id="1" type="image"><ImageId>wall</ImageId>
+            <DecalMode>replace_kd</DecalMode><Interpolation>{interp}</Interpolation></TextureMap>"#
+        )
+    };
+    let shader = |file: &str| {
+        format!(
+            r#"{image}<TextureMap id="1" type="shader"><Shader>{file}</Shader>
+            <DecalMode>replace_kd</DecalMode></TextureMap>"#
+        )
+    };
+    let dir = folder(&[
+        ("bilinear.xml", &scene_xml(&map("bilinear"), 96)),
+        ("nearest.xml", &scene_xml(&map("nearest"), 96)),
+        ("lua_bilinear.xml", &scene_xml(&shader("bilinear.lua"), 96)),
+        ("lua_nearest.xml", &scene_xml(&shader("nearest.lua"), 96)),
+        ("bilinear.lua", "function color(s) return texture('wall', s.uv.u, s.uv.v) end"),
+        ("nearest.lua", "function color(s) return texture('grid.png', s.uv.u, s.uv.v, 'nearest') end"),
+    ]);
+    write_test_png(dir.path(), "grid.png");
+    let render = |f: &str| render_rgb(&dir.path().join(f));
+    let (bilinear, nearest) = (render("bilinear.xml"), render("nearest.xml"));
+    assert_ne!(bilinear, nearest, "the two filters should differ on this image");
+    assert_eq!(diff(&render("lua_bilinear.xml"), &bilinear), (0, 0));
+    assert_eq!(diff(&render("lua_nearest.xml"), &nearest), (0, 0));
+}
+
+/// Sampling an image the scene does not have, or with an unknown filter, is
+/// an error naming the shader and line and listing the scene's images.
+#[test]
+fn lua_texture_errors_are_clear() {
+    let image = r#"<Images><Image id="1">grid.png</Image></Images>"#;
+    let map = format!(
+        r#"{image}<TextureMap id="1" type="shader"><Shader>t.lua</Shader>
+        <DecalMode>replace_kd</DecalMode></TextureMap>"#
+    );
+    for (script, words) in [
+        (
+            "function color(s)\n  local r, g, b = texture('nope', 0, 0)\n  return r, g, b\nend",
+            &["t.lua:2", "no image nope", "\"1\", \"grid.png\""][..],
+        ),
+        // A tail call leaves Lua no line to report; the message says so.
+        ("function color(s)\n  return texture('nope', 0, 0)\nend", &["no image nope", "tail call"][..]),
+        (
+            "function color(s)\n  local c = {texture(1, 0, 0, 'cubic')}\n  return c[1], c[2], c[3]\nend",
+            &["t.lua:2", "unknown filter cubic"][..],
+        ),
+        (
+            "function color(s)\n  local r = texture(1, 'a', 0)\n  return r, r, r\nend",
+            &["t.lua:2", "must be numbers"][..],
+        ),
+    ] {
+        let dir = folder(&[("s.xml", &scene_xml(&map, 16)), ("t.lua", script)]);
+        write_test_png(dir.path(), "grid.png");
+        let desc = luster::scene::load(&dir.path().join("s.xml")).expect("loads");
+        let scene = Scene::build(&desc).expect("builds");
+        let e = match try_render_with(&scene, 0, &RenderOptions::default(), &|_| {}) {
+            Ok(_) => panic!("{script} rendered"),
+            Err(e) => e.to_string(),
+        };
+        for w in words {
+            assert!(e.contains(w), "{w:?} missing from {e:?}");
+        }
+    }
+}
+
 /// `replace_km` makes a plain material a mirror with the script's reflectance.
 #[test]
 fn reflect_drives_the_mirror_reflectance() {

@@ -85,7 +85,7 @@ impl ShaderError {
                 let prefix = format!("shader '{shader}': ");
                 (ShaderErrorKind::BadResult, text.strip_prefix(&prefix).unwrap_or(&text).to_string())
             }
-            _ => (ShaderErrorKind::Runtime, text),
+            _ => (ShaderErrorKind::Runtime, without_prelude_location(text)),
         };
         ShaderError::new(kind, shader, message)
     }
@@ -97,6 +97,21 @@ fn root_cause(err: &mlua::Error) -> &mlua::Error {
         mlua::Error::CallbackError { cause, .. } => root_cause(cause),
         mlua::Error::WithContext { cause, .. } => root_cause(cause),
         other => other,
+    }
+}
+
+/// A built-in's error names its caller's line, but a built-in called as
+/// `return f(...)` is a tail call, whose caller frame Lua has already
+/// dropped: the location is then the runtime's own entry wrapper, which would
+/// only mislead. Say that the line is unknown, and why.
+fn without_prelude_location(text: String) -> String {
+    const PRELUDE: &str = "luster/prelude.lua:";
+    let Some(rest) = text.strip_prefix(PRELUDE) else { return text };
+    match rest.split_once(": ") {
+        Some((line, msg)) if line.bytes().all(|b| b.is_ascii_digit()) => format!(
+            "{msg} (in a built-in called as `return f(...)`, a tail call, after which Lua keeps no line number)"
+        ),
+        _ => text,
     }
 }
 

@@ -24,15 +24,20 @@
 //!   owned by the same `ThreadState` as the `Lua` it points into, which is dropped
 //!   only with it. Rust touches the records only between Lua calls, on the thread
 //!   that owns the state, so there is no concurrent access.
+//! * `texture` receives the address of the state's image sampler, which the
+//!   state owns for as long as its Lua lives (`state.rs`).
 //! * The built-ins are called by LuaJIT with arguments the trusted prelude
 //!   passes; the only pointers they receive are scratch records the prelude
 //!   allocated (user scripts never see the raw function pointers). Each built-in
 //!   catches panics so none unwinds into C.
 
+use std::ffi::c_void;
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::Arc;
 use std::sync::OnceLock;
 use std::time::Instant;
 
+use super::{ImageSampler, SampleFilter};
 use crate::noise::{course, fractal, perlin, simplex, voronoi};
 
 /// A 3-vector as Lua sees it (`luster_vec3`).
@@ -120,13 +125,11 @@ pub(crate) struct Builtins {
     voronoi2: extern "C" fn(f64, f64, u32, f64, *mut CellOut),
     clock_check: extern "C" fn(*mut Clock) -> i32,
     course_noise: extern "C" fn(f64, f64, f64) -> f64,
-    /// The slot for `texture(name, u, v)` (image sampling from the scene): null
-    /// until it is implemented; the prelude's `texture` reports that.
-    texture: *const std::ffi::c_void,
+    texture: extern "C" fn(*const c_void, i32, f64, f64, i32, *mut Vec3) -> i32,
 }
 
 // SAFETY: the record is immutable after construction and holds only function
-// pointers and a null pointer, which are fine to share between threads.
+// pointers, which are fine to share between threads.
 unsafe impl Sync for Builtins {}
 
 /// The one process-wide built-in table; its address is handed to every state.
@@ -149,7 +152,7 @@ pub(crate) static BUILTINS: Builtins = Builtins {
     voronoi2,
     clock_check,
     course_noise,
-    texture: std::ptr::null(),
+    texture,
 };
 
 /// The address of [`BUILTINS`], as the prelude's light userdata wants it.
@@ -272,6 +275,30 @@ extern "C" fn voronoi3(x: f64, y: f64, z: f64, m: u32, jitter: f64, out: *mut Ce
 extern "C" fn voronoi2(x: f64, y: f64, m: u32, jitter: f64, out: *mut CellOut) {
     let c = catch_unwind(|| voronoi::voronoi2(x as f32, y as f32, metric(m), jitter as f32));
     put_cell(out, c.ok());
+}
+
+/// `texture(name, u, v, filter)`: samples image `index` of the state's images
+/// into `out`. 0 on success; 1 when the state has no images or no such image
+/// (the prelude resolved the name, so that means a stale index), 2 on a panic.
+extern "C" fn texture(ctx: *const c_void, index: i32, u: f64, v: f64, filter: i32, out: *mut Vec3) -> i32 {
+    if ctx.is_null() || out.is_null() {
+        return 1;
+    }
+    // SAFETY: `ctx` is the address of the `Box<Arc<dyn ImageSampler>>` the
+    // state owns (`state.rs`), which lives as long as the Lua state that calls
+    // this; the prelude passes it unchanged and user code cannot reach it.
+    let sampler = unsafe { &*ctx.cast::<Arc<dyn ImageSampler>>() };
+    let filter = if filter == 0 { SampleFilter::Nearest } else { SampleFilter::Bilinear };
+    let Ok(index) = usize::try_from(index) else { return 1 };
+    match catch_unwind(AssertUnwindSafe(|| sampler.sample(index, u as f32, v as f32, filter))) {
+        Ok(Some(c)) => {
+            // SAFETY: `out` is the prelude's scratch `luster_vec3`.
+            unsafe { *out = Vec3 { x: c[0].into(), y: c[1].into(), z: c[2].into() } };
+            0
+        }
+        Ok(None) => 1,
+        Err(_) => 2,
+    }
 }
 
 /// Nanoseconds since the first call in this process, never 0 (0 is "unset").

@@ -147,11 +147,48 @@ impl Entry {
     }
 }
 
+/// How `texture(name, u, v, filter)` filters an image.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SampleFilter {
+    /// The texel the point falls in.
+    Nearest,
+    /// The four texels around the point, weighted by distance.
+    Bilinear,
+}
+
+/// The scene's images as shaders sample them. A trait, so the shader runtime
+/// does not depend on how the renderer stores textures.
+pub trait ImageSampler: Send + Sync {
+    /// The colour of image `index` (an index [`ShaderImages::names`] gives)
+    /// at texture coordinates `(u, v)`, with values in 0–1 for 8-bit images
+    /// and as stored for floating-point ones. `None` when there is no such
+    /// image.
+    fn sample(&self, index: usize, u: f32, v: f32, filter: SampleFilter) -> Option<[f32; 3]>;
+}
+
+/// The images a set's scripts may sample: the names a script uses and the
+/// images behind them.
+#[derive(Clone)]
+pub struct ShaderImages {
+    /// Name to image index; an image may have several names (its scene id,
+    /// its file name).
+    pub names: Vec<(String, usize)>,
+    /// The images.
+    pub sampler: Arc<dyn ImageSampler>,
+}
+
+impl std::fmt::Debug for ShaderImages {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ShaderImages").field("names", &self.names).finish_non_exhaustive()
+    }
+}
+
 /// What every thread's state is built from.
 pub(crate) struct Shared {
     id: u64,
     sources: Vec<ShaderSource>,
     timeout: Duration,
+    images: Option<ShaderImages>,
 }
 
 /// A compiled set of shaders, addressed by their index in the list given to
@@ -166,9 +203,28 @@ impl ShaderSet {
     /// one's top level, and checks that each defines at least one entry point.
     /// `timeout` bounds every later call (and each top level).
     pub fn new(sources: Vec<ShaderSource>, timeout: Duration) -> Result<ShaderSet, ShaderError> {
+        ShaderSet::build(sources, timeout, None)
+    }
+
+    /// Like [`ShaderSet::new`], with images the scripts sample with
+    /// `texture(name, u, v)`.
+    pub fn with_images(
+        sources: Vec<ShaderSource>,
+        timeout: Duration,
+        images: ShaderImages,
+    ) -> Result<ShaderSet, ShaderError> {
+        ShaderSet::build(sources, timeout, Some(images))
+    }
+
+    fn build(
+        sources: Vec<ShaderSource>,
+        timeout: Duration,
+        images: Option<ShaderImages>,
+    ) -> Result<ShaderSet, ShaderError> {
         static NEXT_ID: AtomicU64 = AtomicU64::new(1);
-        let shared = Arc::new(Shared { id: NEXT_ID.fetch_add(1, Ordering::Relaxed), sources, timeout });
-        let state = state::ThreadState::new(&shared.sources, timeout)?;
+        let shared =
+            Arc::new(Shared { id: NEXT_ID.fetch_add(1, Ordering::Relaxed), sources, timeout, images });
+        let state = state::ThreadState::new(&shared)?;
         let entries = (0..shared.sources.len()).map(|id| state.entries(id)).collect();
         threads::adopt(&shared, state);
         Ok(ShaderSet { shared, entries })

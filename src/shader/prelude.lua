@@ -5,7 +5,7 @@
 -- to build sandboxes and entry wrappers. Its locals (ffi, the built-in table,
 -- the scratch records) are reachable from user code only through the wrapper
 -- functions: user scripts get no debug library, no getfenv and no ffi.
-local builtins_address, log = ...
+local builtins_address, log, images_ctx, image_names = ...
 local ffi = ffi
 local error, type, tostring, select, pairs, ipairs = error, type, tostring, select, pairs, ipairs
 local floor, sqrt, format = math.floor, math.sqrt, string.format
@@ -37,7 +37,7 @@ typedef struct {
   void (*voronoi2)(double, double, uint32_t, double, luster_cell *);
   int32_t (*clock_check)(luster_clock *);
   double (*course_noise)(double, double, double);
-  const void *texture;
+  int32_t (*texture)(const void *, int32_t, double, double, int32_t, luster_vec3 *);
 } luster_builtins;
 ]]
 
@@ -177,10 +177,32 @@ local function voronoi2(x, y, metric, jitter)
   B.voronoi2(x, y, m, jitter or 1, cell)
   return cell.f1, cell.f2, cell.id, cell.px, cell.py
 end
--- The slot for image textures from the scene: Rust's table has a `texture`
--- pointer reserved for it, null until it is implemented.
-local function texture()
-  error("texture(name, u, v) is not available yet", 2)
+-- The scene's images, by id or file name: bilinear by default, "nearest" on
+-- request. Names resolve through a table Rust filled, so a call costs a hash
+-- lookup and one native call.
+local FILTERS = { nearest = 0, bilinear = 1 }
+local texel = ffi.new("luster_vec3")
+local function texture(name, u, v, filter)
+  local index = image_names[name]
+  if index == nil and type(name) == "number" then index = image_names[tostring(name)] end
+  if index == nil then
+    local known = {}
+    for k in pairs(image_names) do known[#known + 1] = format("%q", k) end
+    table.sort(known)
+    local list = #known > 0 and table.concat(known, ", ") or "none"
+    error(format("texture: the scene has no image %s (its images: %s)", tostring(name), list), 2)
+  end
+  if type(u) ~= "number" or type(v) ~= "number" then
+    error(format("texture: u and v must be numbers, got %s and %s", type(u), type(v)), 2)
+  end
+  local f = FILTERS[filter or "bilinear"]
+  if f == nil then
+    error(format("texture: unknown filter %s (use \"nearest\" or \"bilinear\")", tostring(filter)), 2)
+  end
+  if B.texture(images_ctx, index, u, v, f, texel) ~= 0 then
+    error(format("texture: image %s could not be sampled", tostring(name)), 2)
+  end
+  return texel.x, texel.y, texel.z
 end
 
 ---------------------------------------------------------------------------

@@ -9,7 +9,8 @@ use mlua::{Function, LightUserData, Lua, LuaOptions, StdLib, Table, Value};
 use super::error::{ShaderError, ShaderErrorKind};
 use super::ffi::{self, IoBlock, Shade};
 use super::instrument::instrument;
-use super::{Entry, ParamValue, ShadeInput, ShaderSource};
+use super::{Entry, ImageSampler, ParamValue, ShadeInput, ShaderSource, Shared};
+use std::sync::Arc;
 
 /// The trusted prelude (see its header comment).
 const PRELUDE: &str = include_str!("prelude.lua");
@@ -32,12 +33,17 @@ pub(crate) struct ThreadState {
     shaders: Vec<Compiled>,
     timeout: Duration,
     lua: Lua,
+    /// The images `texture()` samples. Boxed so the prelude can hold its
+    /// address (a thin pointer) for the life of the state; declared after
+    /// `lua` so it outlives every Lua value that refers to it.
+    _images: Option<Box<Arc<dyn ImageSampler>>>,
 }
 
 impl ThreadState {
     /// Creates the state, runs the prelude, and compiles and runs every
     /// script's top level (each under the per-call timeout).
-    pub(crate) fn new(sources: &[ShaderSource], timeout: Duration) -> Result<ThreadState, ShaderError> {
+    pub(crate) fn new(shared: &Shared) -> Result<ThreadState, ShaderError> {
+        let (sources, timeout) = (&shared.sources, shared.timeout);
         let internal = |e: mlua::Error| {
             ShaderError::new(ShaderErrorKind::Internal, "(prelude)", format!("shader runtime: {e}"))
         };
@@ -57,10 +63,19 @@ impl ThreadState {
                 Ok(())
             })
             .map_err(internal)?;
+        let images: Option<Box<Arc<dyn ImageSampler>>> =
+            shared.images.as_ref().map(|i| Box::new(Arc::clone(&i.sampler)));
+        let images_ctx = images.as_ref().map_or(std::ptr::null_mut(), |b| {
+            std::ptr::from_ref::<Arc<dyn ImageSampler>>(b).cast_mut().cast::<std::ffi::c_void>()
+        });
+        let image_names = lua.create_table().map_err(internal)?;
+        for (name, index) in shared.images.iter().flat_map(|i| i.names.iter()) {
+            image_names.set(name.as_str(), *index).map_err(internal)?;
+        }
         let api: Table = lua
             .load(PRELUDE)
             .set_name("@luster/prelude.lua")
-            .call((LightUserData(ffi::builtins_address()), log))
+            .call((LightUserData(ffi::builtins_address()), log, LightUserData(images_ctx), image_names))
             .map_err(internal)?;
         // The C declarations in the prelude must describe Rust's records.
         let sizes: Table = api.get("sizes").map_err(internal)?;
@@ -87,7 +102,8 @@ impl ThreadState {
                 )
             })?;
 
-        let mut state = ThreadState { io, shaders: Vec::with_capacity(sources.len()), timeout, lua };
+        let mut state =
+            ThreadState { io, shaders: Vec::with_capacity(sources.len()), timeout, lua, _images: images };
         let make_env: Function = api.get("make_env").map_err(internal)?;
         let make_entry: Function = api.get("make_entry").map_err(internal)?;
         let make_height3: Function = api.get("make_height3").map_err(internal)?;

@@ -345,3 +345,41 @@ fn heights3_matches_three_height_calls_and_isolates_them() {
     let none = set_of("function color(s) return 1, 1, 1 end").unwrap();
     assert_eq!(none.heights3(0, &pts).unwrap_err().kind, ShaderErrorKind::Usage);
 }
+
+/// A sampler whose colour is the coordinates it was asked for, so the test
+/// sees what reached Rust.
+struct EchoSampler;
+
+impl ImageSampler for EchoSampler {
+    fn sample(&self, index: usize, u: f32, v: f32, filter: SampleFilter) -> Option<[f32; 3]> {
+        (index < 2)
+            .then(|| [u + index as f32 * 10.0, v, if filter == SampleFilter::Nearest { 0.0 } else { 1.0 }])
+    }
+}
+
+#[test]
+fn texture_reaches_the_sampler_by_name_and_filter() {
+    let images = ShaderImages {
+        names: vec![("1".into(), 0), ("bricks".into(), 1), ("bricks.png".into(), 1)],
+        sampler: Arc::new(EchoSampler),
+    };
+    let src = ShaderSource::new(
+        "t",
+        "t.lua",
+        "function color(s)
+           local a = texture(1, s.uv.u, s.uv.v)
+           local b, v = texture('bricks', 0.5, 0.125)
+           local _, _, f = texture('bricks.png', 0, 0, 'nearest')
+           return a, b + v, f
+         end",
+    );
+    let set = ShaderSet::with_images(vec![src], DEFAULT_TIMEOUT, images).unwrap();
+    assert_eq!(set.color(0, &input([0.0; 3])).unwrap(), [0.25, 10.625, 0.0]);
+}
+
+#[test]
+fn texture_without_images_is_an_error_naming_none() {
+    let e = color_err("function color(s)\n  local r = texture('x', 0, 0)\n  return r, r, r\nend");
+    assert_eq!(e.kind, ShaderErrorKind::Runtime);
+    assert!(e.message.contains("test.lua:2") && e.message.contains("(its images: none)"), "{e}");
+}

@@ -53,7 +53,7 @@ pub(crate) fn with_state<R>(
                     if slots.len() >= MAX_SETS_PER_THREAD {
                         slots.remove(0);
                     }
-                    let state = ThreadState::new(&shared.sources, shared.timeout)?;
+                    let state = ThreadState::new(shared)?;
                     slots.push(Slot { id: shared.id, owner: Arc::downgrade(shared), state });
                     slots.len() - 1
                 }

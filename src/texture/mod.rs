@@ -38,6 +38,7 @@ use crate::math::{Transform, Vec2, Vec3};
 use crate::scene::description::{DecalMode, Interpolation, TextureMapDesc, TextureSource};
 use crate::shader::{ShaderError, ShaderSet};
 use crate::shading::Material;
+use std::sync::Arc;
 
 /// Where a map's value comes from.
 #[derive(Clone, Copy, Debug)]
@@ -147,8 +148,8 @@ pub enum Applied {
 /// The scene's images and texture maps.
 #[derive(Default)]
 pub struct Textures {
-    /// Decoded images.
-    pub images: Vec<Image>,
+    /// Decoded images, shared with the shaders' `texture()`.
+    pub images: Arc<[Image]>,
     /// Texture maps.
     pub maps: Vec<TextureMap>,
     /// Every object's maps, one run per object.
@@ -164,11 +165,12 @@ impl Textures {
     /// (mipmapped where a trilinear map reads them). `shaders` holds the
     /// shader maps' scripts, in map order ([`shader::compile`]).
     pub fn new(
-        images: Vec<Image>,
+        images: impl Into<Arc<[Image]>>,
         descs: &[TextureMapDesc],
         background: Option<usize>,
         shaders: Option<ShaderSet>,
     ) -> Textures {
+        let images = images.into();
         let mut next_shader = 0u32;
         let maps = descs
             .iter()

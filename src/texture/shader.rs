@@ -17,12 +17,15 @@
 
 use std::time::Duration;
 
-use super::{bump, TexFrame, TextureMap, Textures};
+use super::{bump, Image, TexFrame, TextureMap, Textures};
 use crate::math::{Vec2, Vec3};
-use crate::scene::description::{DecalMode, TextureMapDesc, TextureSource};
-use crate::shader::{ShadeInput, ShaderError, ShaderSet, ShaderSource};
+use crate::scene::description::{DecalMode, ImageDesc, TextureMapDesc, TextureSource};
+use crate::shader::{
+    ImageSampler, SampleFilter, ShadeInput, ShaderError, ShaderImages, ShaderSet, ShaderSource,
+};
 use crate::shading::material::Specular;
 use crate::shading::Material;
+use std::sync::Arc;
 
 /// A shader map the scene cannot use: which map and why.
 #[derive(Debug)]
@@ -54,7 +57,11 @@ fn shader_name(path: &std::path::Path) -> String {
 /// shader k of the set), or `None` when the scene has none. Every map gets
 /// its own source, so one script may serve several maps with different
 /// parameters.
-pub fn compile(descs: &[TextureMapDesc], timeout: Duration) -> Result<Option<ShaderSet>, MapError> {
+pub fn compile(
+    descs: &[TextureMapDesc],
+    timeout: Duration,
+    images: Option<ShaderImages>,
+) -> Result<Option<ShaderSet>, MapError> {
     let mut maps = Vec::new();
     let mut sources = Vec::new();
     for (i, d) in descs.iter().enumerate() {
@@ -68,7 +75,11 @@ pub fn compile(descs: &[TextureMapDesc], timeout: Duration) -> Result<Option<Sha
     if sources.is_empty() {
         return Ok(None);
     }
-    let set = match ShaderSet::new(sources.clone(), timeout) {
+    let make = |sources: Vec<ShaderSource>| match &images {
+        Some(images) => ShaderSet::with_images(sources, timeout, images.clone()),
+        None => ShaderSet::new(sources, timeout),
+    };
+    let set = match make(sources.clone()) {
         Ok(set) => set,
         // The set reports the first script that fails; compile them one by
         // one to find its map (a script used twice may fail with one map's
@@ -77,7 +88,7 @@ pub fn compile(descs: &[TextureMapDesc], timeout: Duration) -> Result<Option<Sha
             let map = sources
                 .iter()
                 .zip(&maps)
-                .find(|(s, _)| ShaderSet::new(vec![(*s).clone()], timeout).is_err())
+                .find(|(s, _)| make(vec![(*s).clone()]).is_err())
                 .map_or(maps[0], |(_, &m)| m);
             return Err(MapError { map, message: e.to_string() });
         }
@@ -126,6 +137,40 @@ fn decal_name(d: DecalMode) -> &'static str {
         DecalMode::ReplaceNormal => "replace_normal",
         DecalMode::ReplaceBackground => "replace_background",
     }
+}
+
+/// The scene's images as `texture(name, u, v)` samples them: with the scene
+/// format's conventions (uv repeat; texel centres at integer multiples of
+/// 1/W, as the image maps use), values normalized like an image map's with
+/// the default `Normalizer`.
+pub struct SceneImages(pub Arc<[Image]>);
+
+impl ImageSampler for SceneImages {
+    fn sample(&self, index: usize, u: f32, v: f32, filter: SampleFilter) -> Option<[f32; 3]> {
+        let img = self.0.get(index)?;
+        let uv = Vec2::new(u, v);
+        let c = match filter {
+            SampleFilter::Nearest => img.nearest(uv),
+            SampleFilter::Bilinear => img.bilinear(uv),
+        };
+        let scale = if img.is_hdr() { 1.0 } else { 1.0 / 255.0 };
+        Some((c * scale).to_array())
+    }
+}
+
+/// The names scripts give the scene's images: each image's id and, where no
+/// other image shares it, its file name.
+pub fn image_names(descs: &[ImageDesc]) -> Vec<(String, usize)> {
+    let mut names: Vec<(String, usize)> = descs.iter().enumerate().map(|(i, d)| (d.id.clone(), i)).collect();
+    let file = |d: &ImageDesc| d.path.file_name().map(|f| f.to_string_lossy().into_owned());
+    for (i, d) in descs.iter().enumerate() {
+        let Some(f) = file(d) else { continue };
+        let shared = descs.iter().filter(|e| file(e).as_deref() == Some(f.as_str())).count() > 1;
+        if !shared && !names.iter().any(|(n, _)| *n == f) {
+            names.push((f, i));
+        }
+    }
+    names
 }
 
 /// The shading point a script sees at object-space `p` with texture
@@ -227,7 +272,7 @@ mod tests {
     fn one_script_serves_maps_with_different_parameters() {
         let descs =
             [map(GREY, DecalMode::ReplaceKd, &[("g", 0.2)]), map(GREY, DecalMode::ReplaceKd, &[("g", 0.6)])];
-        let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT).unwrap());
+        let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
         let lists = [tex.maps[0], tex.maps[1]];
         let diffuse: Vec<Vec3> = lists
             .iter()
@@ -246,7 +291,7 @@ mod tests {
     fn the_failing_map_is_found_even_when_its_script_is_shared() {
         let descs =
             [map(GREY, DecalMode::ReplaceKd, &[("g", 0.2)]), map(GREY, DecalMode::ReplaceKd, &[("g", 3.0)])];
-        let e = compile(&descs, DEFAULT).unwrap_err();
+        let e = compile(&descs, DEFAULT, None).unwrap_err();
         assert_eq!(e.map, 1);
         assert!(e.message.contains("s.lua:2") && e.message.contains("g too big"), "{}", e.message);
     }
@@ -254,13 +299,13 @@ mod tests {
     #[test]
     fn decal_modes_need_their_entry_points() {
         let bg = [map(GREY, DecalMode::ReplaceBackground, &[("g", 0.1)])];
-        assert!(compile(&bg, DEFAULT)
+        assert!(compile(&bg, DEFAULT, None)
             .unwrap_err()
             .message
             .contains("cannot drive DecalMode replace_background"));
         let km = [map(GREY, DecalMode::ReplaceKm, &[("g", 0.1)])];
-        assert!(compile(&km, DEFAULT).unwrap_err().message.contains("no reflect(s)"));
-        assert!(compile(&[], DEFAULT).unwrap().is_none());
+        assert!(compile(&km, DEFAULT, None).unwrap_err().message.contains("no reflect(s)"));
+        assert!(compile(&[], DEFAULT, None).unwrap().is_none());
     }
 
     #[test]
@@ -268,7 +313,7 @@ mod tests {
         let code = "function reflect(s) return s.P.x, s.Pw.x, s.uv.v + s.time end\n\
                     function color(s) return s.N.x, s.N.y, s.N.z end";
         let descs = [map(code, DecalMode::ReplaceKm, &[]), map(code, DecalMode::ReplaceAll, &[])];
-        let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT).unwrap());
+        let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
         let mut mat = Material::default();
         let mut n = Vec3::Y;
         assert_eq!(tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut n).unwrap(), None);
@@ -281,7 +326,7 @@ mod tests {
     fn a_height_shader_bumps_and_its_errors_come_back() {
         let code = "function height(s)\n  if s.P.y > 1 then error('bad') end\n  return 0.5 * s.P.x\nend";
         let descs = [map(code, DecalMode::BumpNormal, &[])];
-        let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT).unwrap());
+        let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
         let mut mat = Material::default();
         let mut n = Vec3::Z;
         tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut n).unwrap();

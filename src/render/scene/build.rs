@@ -10,10 +10,12 @@ use crate::render::camera::Camera;
 use crate::scene::description::{Description, MeshSource, Shape};
 use crate::scene::ply::read_ply;
 use crate::scene::{SceneError, Warning};
+use crate::shader::ShaderImages;
 use crate::shading::{AreaLight, Material, PointLight};
-use crate::texture::{Image, Textures};
+use crate::texture::{shader, Image, Textures};
 use rayon::prelude::*;
 use std::collections::HashMap;
+use std::sync::Arc;
 use std::time::Duration;
 
 /// Settings of building a scene beyond what its file says.
@@ -138,14 +140,19 @@ fn build_textures(desc: &Description, opts: &BuildOptions) -> Result<Textures, S
             })
         })
         .collect();
+    // A shader may sample any image with texture(), so with shaders every
+    // listed image is decoded.
+    let any_shader = desc.texture_maps.iter().any(|m| matches!(m.source, TextureSource::Shader { .. }));
     let used: Vec<bool> = (0..desc.images.len())
         .map(|i| {
-            desc.texture_maps
-                .iter()
-                .any(|m| matches!(m.source, TextureSource::Image { image, .. } if image == i))
+            any_shader
+                || desc
+                    .texture_maps
+                    .iter()
+                    .any(|m| matches!(m.source, TextureSource::Image { image, .. } if image == i))
         })
         .collect();
-    let images: Vec<Image> = desc
+    let images: Arc<[Image]> = desc
         .images
         .par_iter()
         .enumerate()
@@ -162,7 +169,11 @@ fn build_textures(desc: &Description, opts: &BuildOptions) -> Result<Textures, S
             Ok(img)
         })
         .collect::<Result<_, _>>()?;
-    let shaders = crate::texture::shader::compile(&desc.texture_maps, opts.shader_timeout)
+    let shader_images = ShaderImages {
+        names: shader::image_names(&desc.images),
+        sampler: Arc::new(shader::SceneImages(Arc::clone(&images))),
+    };
+    let shaders = shader::compile(&desc.texture_maps, opts.shader_timeout, Some(shader_images))
         .map_err(|e| SceneError::at(&desc.file, &desc.texture_maps[e.map].loc, e.message))?;
     Ok(Textures::new(images, &desc.texture_maps, desc.background_texture, shaders))
 }
