@@ -25,3 +25,4 @@ pub mod scene;
 pub mod shader;
 pub mod shading;
 pub mod texture;
+pub mod volume;

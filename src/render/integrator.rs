@@ -84,6 +84,14 @@ impl PathState {
         PathState { screen, spread, ..self }
     }
 
+    /// Records a shader failure (the first one counts); the path then
+    /// contributes black and the render stops.
+    pub fn fail(&mut self, e: ShaderError) {
+        if self.error.is_none() {
+            self.error = Some(Box::new(e));
+        }
+    }
+
     /// Whether a secondary ray of `weight` may be traced; counts it if so.
     fn spawn(&mut self, weight: f32) -> bool {
         if weight < MIN_WEIGHT || self.budget == 0 {
@@ -98,6 +106,7 @@ impl PathState {
 use crate::math::{orthonormal_basis, Ray, Vec2, Vec3};
 use crate::render::sampler::PixelSampler;
 use crate::render::scene::{Hit, Scene};
+use crate::render::volumes;
 use crate::shader::ShaderError;
 use crate::shading::fresnel;
 use crate::shading::material::Specular;
@@ -132,16 +141,18 @@ impl RayStats {
 /// Radiance arriving along `ray`, which is at recursion `depth` (0 for camera rays).
 /// `weight` is the path's accumulated weight so far (1 for camera rays).
 pub fn radiance(scene: &Scene, ray: &Ray, depth: u32, weight: f32, st: &mut PathState) -> Vec3 {
-    match scene.intersect(ray, st.time, depth == 0) {
+    let hit = volumes::trace(scene, ray, depth == 0, st);
+    let (t, color) = match hit {
         Some(hit) => {
             let before = st.travelled;
             st.travelled += hit.t;
             let c = shade(scene, ray, &hit, depth, weight, st);
             st.travelled = before;
-            c
+            (hit.t, c)
         }
-        None => scene.textures.background(st.screen).unwrap_or(scene.background),
-    }
+        None => (f32::INFINITY, scene.textures.background(st.screen).unwrap_or(scene.background)),
+    };
+    volumes::through_media(scene, ray, t, color, st)
 }
 
 fn shade(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, weight: f32, st: &mut PathState) -> Vec3 {
@@ -245,14 +256,14 @@ fn direct(scene: &Scene, m: &Material, hit: &Hit, ns: Vec3, ray: &Ray, st: &mut 
         if cos <= 0.0 {
             continue;
         }
-        st.stats.shadow += 1;
         // The shadow ray reaches a little past the light, so a light lying exactly
         // on a surface (hw2 mirror_room puts one in the ceiling plane) is blocked
         // by it consistently, as in the references, not by per-pixel rounding.
-        if scene.occluded(&Ray::new(origin, l), dist + eps, st.time) {
+        let tr = volumes::shadow(scene, &Ray::new(origin, l), dist + eps, st);
+        if tr == Vec3::ZERO {
             continue;
         }
-        let e = light.intensity / (light.position - hit.p).length_squared();
+        let e = tr * light.intensity / (light.position - hit.p).length_squared();
         color += blinn_phong(m, n, l, ray.d, cos) * e;
     }
     for light in &scene.area_lights {
@@ -266,13 +277,13 @@ fn direct(scene: &Scene, m: &Material, hit: &Hit, ns: Vec3, ray: &Ray, st: &mut 
         if cos <= 0.0 || cos_light == 0.0 {
             continue;
         }
-        st.stats.shadow += 1;
         // Stopping short of the light's own plane: it is an imaginary square,
         // not geometry, and a surface it lies on must not shadow it.
-        if scene.occluded(&Ray::new(origin, l), dist - eps, st.time) {
+        let tr = volumes::shadow(scene, &Ray::new(origin, l), dist - eps, st);
+        if tr == Vec3::ZERO {
             continue;
         }
-        let e = light.radiance * (light.area * cos_light / (q - hit.p).length_squared());
+        let e = tr * light.radiance * (light.area * cos_light / (q - hit.p).length_squared());
         color += blinn_phong(m, n, l, ray.d, cos) * e;
     }
     color

@@ -5,6 +5,7 @@ pub mod camera;
 pub mod integrator;
 pub mod sampler;
 pub mod scene;
+pub mod volumes;
 
 pub use scene::{BuildOptions, Scene};
 

@@ -127,22 +127,31 @@ pub struct ShadeInput {
     pub time: f32,
 }
 
-/// The three entry points a script may define.
+/// The entry points a script may define: three for surfaces, two for
+/// volumes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Entry {
     Color = 0,
     Height = 1,
     Reflect = 2,
+    Density = 3,
+    Emission = 4,
 }
 
+/// How many entry points there are.
+pub(crate) const ENTRIES: usize = 5;
+
 impl Entry {
-    pub(crate) const ALL: [Entry; 3] = [Entry::Color, Entry::Height, Entry::Reflect];
+    pub(crate) const ALL: [Entry; ENTRIES] =
+        [Entry::Color, Entry::Height, Entry::Reflect, Entry::Density, Entry::Emission];
 
     pub(crate) fn name(self) -> &'static str {
         match self {
             Entry::Color => "color",
             Entry::Height => "height",
             Entry::Reflect => "reflect",
+            Entry::Density => "density",
+            Entry::Emission => "emission",
         }
     }
 }
@@ -195,7 +204,7 @@ pub(crate) struct Shared {
 /// [`ShaderSet::new`]. `Send + Sync`; see the module doc.
 pub struct ShaderSet {
     shared: Arc<Shared>,
-    entries: Vec<[bool; 3]>,
+    entries: Vec<[bool; ENTRIES]>,
 }
 
 impl ShaderSet {
@@ -262,6 +271,27 @@ impl ShaderSet {
     /// Whether shader `id` defines `reflect(s)`.
     pub fn has_reflect(&self, id: usize) -> bool {
         self.has(id, Entry::Reflect)
+    }
+
+    /// Whether shader `id` defines `density(s)`.
+    pub fn has_density(&self, id: usize) -> bool {
+        self.has(id, Entry::Density)
+    }
+
+    /// Whether shader `id` defines `emission(s)`.
+    pub fn has_emission(&self, id: usize) -> bool {
+        self.has(id, Entry::Emission)
+    }
+
+    /// The density of volume shader `id` at `input` (a number; the caller
+    /// treats negative values as empty space).
+    pub fn density(&self, id: usize, input: &ShadeInput) -> Result<f32, ShaderError> {
+        self.call(id, Entry::Density, input).map(|c| c[0] as f32)
+    }
+
+    /// The emitted radiance per unit length of volume shader `id` at `input`.
+    pub fn emission(&self, id: usize, input: &ShadeInput) -> Result<[f32; 3], ShaderError> {
+        self.call(id, Entry::Emission, input).map(|c| c.map(|x| x as f32))
     }
 
     fn call(&self, id: usize, entry: Entry, input: &ShadeInput) -> Result<[f64; 3], ShaderError> {

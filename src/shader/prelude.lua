@@ -395,14 +395,15 @@ local function color_entry(f, shader_name, entry)
     end
   end
 end
-local function height_entry(f, shader_name)
+-- Entry points that return one number: height, density.
+local function scalar_entry(f, shader_name, entry)
   return function()
     local h = f(shade)
     if type(h) == "number" and h == h then
       out.r = h
       return
     end
-    bad(shader_name, "height", describe(h) .. " (expected a number)")
+    bad(shader_name, entry, describe(h) .. " (expected a number)")
   end
 end
 -- The bump wrapper: height() at the three points of shade3, into out.r, g, b.
@@ -429,7 +430,7 @@ end
 local function make_entry(env, entry, shader_name)
   local f = env[entry]
   if type(f) ~= "function" then return nil end
-  if entry == "height" then return height_entry(f, shader_name) end
+  if entry == "height" or entry == "density" then return scalar_entry(f, shader_name, entry) end
   return color_entry(f, shader_name, entry)
 end
 

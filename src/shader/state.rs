@@ -9,7 +9,7 @@ use mlua::{Function, LightUserData, Lua, LuaOptions, StdLib, Table, Value};
 use super::error::{ShaderError, ShaderErrorKind};
 use super::ffi::{self, IoBlock, Shade};
 use super::instrument::instrument;
-use super::{Entry, ImageSampler, ParamValue, ShadeInput, ShaderSource, Shared};
+use super::{Entry, ImageSampler, ParamValue, ShadeInput, ShaderSource, Shared, ENTRIES};
 use std::sync::Arc;
 
 /// The trusted prelude (see its header comment).
@@ -22,7 +22,7 @@ pub(crate) const MEMORY_LIMIT: usize = 256 * 1024 * 1024;
 /// The entry wrappers of one compiled shader.
 struct Compiled {
     name: String,
-    entries: [Option<Function>; 3],
+    entries: [Option<Function>; ENTRIES],
     /// `height` at three points in one call, for bump mapping.
     height3: Option<Function>,
 }
@@ -154,7 +154,7 @@ impl ThreadState {
         self.io.begin(&Shade::default());
         chunk.call::<()>(tick.clone()).map_err(lua_err)?;
 
-        let mut entries: [Option<Function>; 3] = [None, None, None];
+        let mut entries: [Option<Function>; ENTRIES] = Default::default();
         for entry in Entry::ALL {
             entries[entry as usize] = make_entry.call((env.clone(), entry.name(), name)).map_err(lua_err)?;
         }
@@ -162,7 +162,7 @@ impl ThreadState {
             return Err(ShaderError::new(
                 ShaderErrorKind::NoEntryPoint,
                 name,
-                format!("{file}: defines none of the functions color, height or reflect"),
+                format!("{file}: defines none of the functions color, height, reflect, density or emission"),
             ));
         }
         let height3 = make_height3.call((env, name)).map_err(lua_err)?;
@@ -174,8 +174,8 @@ impl ThreadState {
     }
 
     /// Which entry points shader `id` defines.
-    pub(crate) fn entries(&self, id: usize) -> [bool; 3] {
-        self.shaders.get(id).map_or([false; 3], |c| c.entries.each_ref().map(Option::is_some))
+    pub(crate) fn entries(&self, id: usize) -> [bool; ENTRIES] {
+        self.shaders.get(id).map_or([false; ENTRIES], |c| c.entries.each_ref().map(Option::is_some))
     }
 
     /// Calls one entry point; the result's channels (a height in `[0]`).

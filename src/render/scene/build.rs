@@ -13,6 +13,7 @@ use crate::scene::{SceneError, Warning};
 use crate::shader::ShaderImages;
 use crate::shading::{AreaLight, Material, PointLight};
 use crate::texture::{shader, Image, Textures};
+use crate::volume::Volumes;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -61,6 +62,8 @@ impl Scene {
         }
 
         let mut textures = build_textures(desc, opts)?;
+        let images = shader_images(desc, &textures.images);
+        let volumes = Volumes::build(desc, &mut textures, Some(images), opts.shader_timeout)?;
         let mut prims = Vec::new();
         let mut planes = Vec::new();
         for (i, o) in desc.objects.iter().enumerate() {
@@ -105,6 +108,7 @@ impl Scene {
             planes,
             object_labels: desc.objects.iter().map(|o| object_label(&o.loc.path)).collect(),
             textures,
+            volumes,
             materials: desc.materials.iter().map(Material::from_desc).collect(),
             lights: desc
                 .point_lights
@@ -142,7 +146,8 @@ fn build_textures(desc: &Description, opts: &BuildOptions) -> Result<Textures, S
         .collect();
     // A shader may sample any image with texture(), so with shaders every
     // listed image is decoded.
-    let any_shader = desc.texture_maps.iter().any(|m| matches!(m.source, TextureSource::Shader { .. }));
+    let any_shader = desc.texture_maps.iter().any(|m| matches!(m.source, TextureSource::Shader { .. }))
+        || desc.volumes.iter().any(|v| v.script.is_some());
     let used: Vec<bool> = (0..desc.images.len())
         .map(|i| {
             any_shader
@@ -169,13 +174,18 @@ fn build_textures(desc: &Description, opts: &BuildOptions) -> Result<Textures, S
             Ok(img)
         })
         .collect::<Result<_, _>>()?;
-    let shader_images = ShaderImages {
-        names: shader::image_names(&desc.images),
-        sampler: Arc::new(shader::SceneImages(Arc::clone(&images))),
-    };
-    let shaders = shader::compile(&desc.texture_maps, opts.shader_timeout, Some(shader_images))
-        .map_err(|e| SceneError::at(&desc.file, &desc.texture_maps[e.map].loc, e.message))?;
+    let shaders =
+        shader::compile(&desc.texture_maps, opts.shader_timeout, Some(shader_images(desc, &images)))
+            .map_err(|e| SceneError::at(&desc.file, &desc.texture_maps[e.map].loc, e.message))?;
     Ok(Textures::new(images, &desc.texture_maps, desc.background_texture, shaders))
+}
+
+/// The scene's images as shaders sample them with `texture()`.
+fn shader_images(desc: &Description, images: &Arc<[Image]>) -> ShaderImages {
+    ShaderImages {
+        names: shader::image_names(&desc.images),
+        sampler: Arc::new(shader::SceneImages(Arc::clone(images))),
+    }
 }
 
 /// World bounds over the whole shutter interval: a translation sweeps the box

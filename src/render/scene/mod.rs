@@ -17,6 +17,7 @@ use crate::render::camera::Camera;
 use crate::scene::Warning;
 use crate::shading::{AreaLight, Material, PointLight};
 use crate::texture::{TexFrame, TexList, Textures};
+use crate::volume::Volumes;
 
 mod build;
 pub use build::BuildOptions;
@@ -82,6 +83,8 @@ pub enum HitGeom {
         /// Primitive.
         prim: u32,
     },
+    /// Hypertexture `i` (an index into the scene's `volumes.surfaces`).
+    Volume(u32),
 }
 
 /// Everything about the closest hit that shading needs, in world space.
@@ -114,6 +117,8 @@ pub struct Scene {
     object_labels: Vec<String>,
     /// Images and texture maps.
     pub textures: Textures,
+    /// Participating media and hypertextures.
+    pub volumes: Volumes,
     /// Materials.
     pub materials: Vec<Material>,
     /// Point lights.
@@ -143,6 +148,9 @@ impl Scene {
             HitGeom::Plane(i) => self.planes.get(i as usize).map(|p| p.3),
             HitGeom::Triangle { prim, .. } | HitGeom::Sphere { prim } => {
                 self.prims.get(prim as usize).map(|p| p.object)
+            }
+            HitGeom::Volume(i) => {
+                return self.volumes.surfaces.get(i as usize).map_or("a hypertexture", |v| v.label.as_str())
             }
         };
         object.and_then(|o| self.object_labels.get(o as usize)).map_or("an object", String::as_str)
@@ -260,6 +268,12 @@ impl Scene {
                 let local = p.to_local(ray, time).at(hit.t);
                 let (uv, dpdu, dpdv) = s.uv_frame(local);
                 (uv, local, dpdu, dpdv, s.normal(local), Some(p))
+            }
+            HitGeom::Volume(i) => {
+                let Some(v) = self.volumes.surfaces.get(i as usize) else {
+                    return flat_frame(hit, footprint);
+                };
+                return v.bound.tex_frame(hit.p, hit.ns, time, footprint);
             }
         };
         let to_world = prim.and_then(|p| p.xf.as_deref().copied());

@@ -14,6 +14,7 @@
 //! | `Materials/Material` | see [`material`] | |
 //! | `Transformations`, `VertexData`, `Objects` | see [`objects`] | |
 //! | `Textures`, `TexCoordData` | see [`textures`] | none |
+//! | `Volumes` | media and hypertextures (a luster extension), see [`volumes`] | none |
 //!
 //! Anything else gets a warning naming it, so a scene that relies on a feature
 //! luster lacks says so instead of rendering silently wrong.
@@ -25,6 +26,7 @@ pub mod objects;
 pub mod shader_map;
 pub mod textures;
 pub mod transforms;
+pub mod volumes;
 
 use super::description::Description;
 use super::element::{Element, Reader};
@@ -80,6 +82,7 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
             "TexCoordData",
             "Textures",
             "Objects",
+            "Volumes",
         ],
     );
     let max_recursion_depth = match root.child("MaxRecursionDepth") {
@@ -156,6 +159,19 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
         }
         None => Vec::new(),
     };
+    let volumes = match root.child("Volumes") {
+        Some(v) => {
+            let ctx = volumes::Context {
+                r,
+                materials: &material_ids,
+                textures: &texture_ids,
+                transforms: &transforms,
+                base_dir: &base_dir,
+            };
+            volumes::read_all(&ctx, v, &mut w)?
+        }
+        None => Vec::new(),
+    };
     Ok(Description {
         file: file.to_path_buf(),
         base_dir,
@@ -176,6 +192,7 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
         images,
         texture_maps,
         objects,
+        volumes,
         warnings: w.0,
     })
 }

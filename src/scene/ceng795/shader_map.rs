@@ -24,7 +24,7 @@
 //! (`render::Scene::build_with`), where syntax errors and missing entry points
 //! are reported against the `TextureMap`.
 
-use crate::scene::description::TextureSource;
+use crate::scene::description::{ScriptDesc, TextureSource};
 use crate::scene::element::{Element, Reader};
 use crate::scene::error::SceneError;
 use crate::scene::io_reason;
@@ -40,6 +40,13 @@ pub const CHILDREN: [&str; 2] = ["Shader", "Parameter"];
 
 /// Reads the source of a shader map: the script and its parameters.
 pub fn read(r: &Reader, el: &Element, base_dir: &Path) -> Result<TextureSource, SceneError> {
+    let ScriptDesc { path, code, params } = script(r, el, base_dir)?;
+    Ok(TextureSource::Shader { path, code, params })
+}
+
+/// Reads `el`'s `Shader` (required) and `Parameter` children: the script's
+/// text and its parameters. Volumes name their scripts the same way.
+pub fn script(r: &Reader, el: &Element, base_dir: &Path) -> Result<ScriptDesc, SceneError> {
     let shader = r.required(el, "Shader")?;
     let rel = shader.text.trim();
     if rel.is_empty() {
@@ -56,7 +63,7 @@ pub fn read(r: &Reader, el: &Element, base_dir: &Path) -> Result<TextureSource, 
         }
         params.push((name, value));
     }
-    Ok(TextureSource::Shader { path, code, params })
+    Ok(ScriptDesc { path, code, params })
 }
 
 fn read_script(path: &Path) -> Result<String, String> {

@@ -1,0 +1,15 @@
+-- A cumulus-like cloud: fBm noise shaped by a soft ball, so the density
+-- fades to nothing at the bound. Parameters: scale (noise features per unit,
+-- 2.5), octaves (5), coverage (how much of the ball is cloud, 0.55).
+local scale = param.scale or 2.5
+local octaves = param.octaves or 5
+local coverage = param.coverage or 0.55
+
+function density(s)
+  local p = s.P
+  local r = length(p)
+  -- A flattened base: clouds sit on a level.
+  local shape = 1 - smoothstep(0.35, 1.0, r) - smoothstep(0.1, -0.5, p.y)
+  local n = fbm(p.x * scale, p.y * scale, p.z * scale, octaves)
+  return clamp((shape + n * 0.8) - (1 - coverage), 0, 1) * 2
+end

@@ -1,0 +1,301 @@
+//! Volumes (a luster extension of the scene format): participating media
+//! that absorb, scatter and emit light along rays, and hypertextures, surfaces
+//! where a density field crosses a threshold (Perlin & Hoffert 1989).
+//!
+//! A volume is a bound ([`Bound`]: ball, box or ellipsoid, with a transform)
+//! and a density inside it: a constant, a Lua script's `density(s)`, or that
+//! script baked on a [`Grid`]. `s.P` is the point in the bound's own space,
+//! `s.Pw` in the world. Outside its bound a volume has no density.
+//!
+//! This module is the volumes' data and their local queries (density,
+//! emission, isosurface search). How rays gather light through them — ray
+//! marching with single scattering, shadow transmittance — is in
+//! `render::volumes`, next to the integrator it extends. Scene parameters are
+//! listed in `scene::ceng795::volumes`.
+
+pub mod bound;
+pub mod grid;
+mod surface;
+#[cfg(test)]
+mod tests;
+
+pub use bound::Bound;
+pub use grid::Grid;
+
+use crate::math::{Aabb, Vec3};
+use crate::scene::description::{Description, VolumeDesc, VolumeKind};
+use crate::scene::SceneError;
+use crate::shader::{ShadeInput, ShaderError, ShaderErrorKind, ShaderImages, ShaderSet, ShaderSource};
+use crate::texture::{TexList, Textures};
+use std::time::Duration;
+
+/// Default ray-marching steps across a medium's bound (its world diagonal over this).
+pub const MEDIUM_STEPS: f32 = 64.0;
+/// Default steps across a hypertexture's bound: finer, since a step can jump
+/// over a feature thinner than itself; the crossing found is then refined by
+/// bisection to a thousandth of a step.
+pub const SURFACE_STEPS: f32 = 256.0;
+
+/// Where a volume's density comes from.
+#[derive(Debug)]
+enum Field {
+    Constant,
+    Script(usize),
+    Grid(Grid<f32>),
+}
+
+/// Where a medium's emission comes from.
+#[derive(Debug)]
+pub enum Glow {
+    /// Emission per unit length at density 1, times the density.
+    Constant(Vec3),
+    /// The script's `emission(s)`.
+    Script(usize),
+    /// The script's `emission(s)`, baked.
+    Grid(Grid<Vec3>),
+}
+
+/// What a volume does.
+#[derive(Debug)]
+pub enum Kind {
+    /// A participating medium.
+    Medium {
+        /// σa at density 1.
+        absorption: Vec3,
+        /// σs at density 1.
+        scattering: Vec3,
+        /// Emission.
+        glow: Glow,
+        /// Henyey–Greenstein g.
+        anisotropy: f32,
+    },
+    /// A hypertexture.
+    Surface {
+        /// Material index.
+        material: u32,
+        /// The density of the surface.
+        threshold: f32,
+        /// Its texture maps.
+        textures: TexList,
+    },
+}
+
+/// One volume, ready to render.
+#[derive(Debug)]
+pub struct Volume {
+    /// Its region.
+    pub bound: Bound,
+    field: Field,
+    /// Multiplies the field (`Density`).
+    scale: f32,
+    /// Ray-marching step, world units.
+    pub step: f32,
+    /// Medium or surface.
+    pub kind: Kind,
+    /// How messages name it: `Volume[id=cloud]`.
+    pub label: String,
+}
+
+/// The scene's volumes and their scripts.
+#[derive(Debug, Default)]
+pub struct Volumes {
+    /// Participating media.
+    pub media: Vec<Volume>,
+    /// Hypertextures.
+    pub surfaces: Vec<Volume>,
+    shaders: Option<ShaderSet>,
+}
+
+impl Volume {
+    /// The density at world point `p` (0 outside is the caller's business:
+    /// this is only asked inside the bound).
+    #[inline]
+    pub fn density(&self, v: &Volumes, p: Vec3, time: f32) -> Result<f32, ShaderError> {
+        let d = match &self.field {
+            Field::Constant => 1.0,
+            Field::Script(id) => v.call(*id, self, p, time, ShaderSet::density)?,
+            Field::Grid(g) => g.at(self.bound.to_local(p)),
+        };
+        Ok(d.max(0.0) * self.scale)
+    }
+
+    /// A medium's emitted radiance per unit length at world point `p`, where
+    /// its density is `density`.
+    #[inline]
+    pub fn emission(&self, v: &Volumes, p: Vec3, time: f32, density: f32) -> Result<Vec3, ShaderError> {
+        let Kind::Medium { glow, .. } = &self.kind else { return Ok(Vec3::ZERO) };
+        Ok(match glow {
+            Glow::Constant(c) => *c * density,
+            Glow::Script(id) => {
+                Vec3::from_array(v.call(*id, self, p, time, ShaderSet::emission)?).max(Vec3::ZERO)
+            }
+            Glow::Grid(g) => g.at(self.bound.to_local(p)).max(Vec3::ZERO),
+        })
+    }
+
+    /// Whether the density is the same everywhere in the bound (so
+    /// transmittance through it is exact without marching).
+    pub fn is_homogeneous(&self) -> bool {
+        matches!(self.field, Field::Constant)
+    }
+
+    /// The constant density of a homogeneous volume.
+    pub fn constant_density(&self) -> Option<f32> {
+        self.is_homogeneous().then_some(self.scale)
+    }
+}
+
+impl Volumes {
+    /// Whether the scene has no volume at all.
+    pub fn is_empty(&self) -> bool {
+        self.media.is_empty() && self.surfaces.is_empty()
+    }
+
+    fn call<R>(
+        &self,
+        id: usize,
+        vol: &Volume,
+        p: Vec3,
+        time: f32,
+        f: impl FnOnce(&ShaderSet, usize, &ShadeInput) -> Result<R, ShaderError>,
+    ) -> Result<R, ShaderError> {
+        let set = self.shaders.as_ref().ok_or_else(|| missing_set(&vol.label))?;
+        let input = ShadeInput {
+            p: vol.bound.to_local(p).to_array(),
+            pw: p.to_array(),
+            n: [0.0; 3],
+            uv: [0.0; 2],
+            time,
+        };
+        f(set, id, &input)
+    }
+
+    /// Builds the volumes of `desc`: compiles their scripts (sampling
+    /// `images` with `texture()`), checks their entry points, bakes grids, and
+    /// registers hypertextures' texture maps in `textures`.
+    pub fn build(
+        desc: &Description,
+        textures: &mut Textures,
+        images: Option<ShaderImages>,
+        timeout: Duration,
+    ) -> Result<Volumes, SceneError> {
+        let err = |v: &VolumeDesc, msg: String| SceneError::at(&desc.file, &v.loc, msg);
+        // Script k of the set belongs to the k-th volume with a script.
+        let mut sources = Vec::new();
+        let mut owners = Vec::new();
+        for (i, v) in desc.volumes.iter().enumerate() {
+            if let Some(s) = &v.script {
+                let name = s
+                    .path
+                    .file_stem()
+                    .map_or_else(|| s.path.display().to_string(), |n| n.to_string_lossy().into());
+                let mut src = ShaderSource::new(name, s.path.clone(), s.code.clone());
+                src.params = s.params.clone();
+                sources.push(src);
+                owners.push(i);
+            }
+        }
+        let shaders = if sources.is_empty() {
+            None
+        } else {
+            let set = match images {
+                Some(images) => ShaderSet::with_images(sources.clone(), timeout, images),
+                None => ShaderSet::new(sources.clone(), timeout),
+            };
+            Some(set.map_err(|e| {
+                // The set names the failing shader; find its volume for the location.
+                let at = sources.iter().position(|s| s.name == e.shader).map_or(owners[0], |k| owners[k]);
+                err(&desc.volumes[at], e.to_string())
+            })?)
+        };
+        let mut out = Volumes { media: Vec::new(), surfaces: Vec::new(), shaders: None };
+        let mut next_script = 0;
+        for v in &desc.volumes {
+            let bound = Bound::new(&v.bound, &v.transform);
+            let label = format!(
+                "{}[id={}]",
+                if matches!(v.kind, VolumeKind::Surface { .. }) { "Hypertexture" } else { "Volume" },
+                v.id
+            );
+            let script = v.script.as_ref().map(|_| {
+                next_script += 1;
+                next_script - 1
+            });
+            if let (Some(id), Some(set)) = (script, &shaders) {
+                if !set.has_density(id) {
+                    return Err(err(
+                        v,
+                        format!(
+                            "shader '{}': {} defines no density(s) function",
+                            set.name(id).unwrap_or("?"),
+                            v.script.as_ref().map_or(String::new(), |s| s.path.display().to_string())
+                        ),
+                    ));
+                }
+            }
+            let steps =
+                if matches!(v.kind, VolumeKind::Surface { .. }) { SURFACE_STEPS } else { MEDIUM_STEPS };
+            let step = v.step.unwrap_or(bound.diagonal() / steps);
+            let kind = match &v.kind {
+                VolumeKind::Medium { absorption, scattering, emission, anisotropy } => {
+                    let glow = match (script, &shaders) {
+                        (Some(id), Some(set)) if set.has_emission(id) => Glow::Script(id),
+                        _ => Glow::Constant(*emission),
+                    };
+                    Kind::Medium {
+                        absorption: *absorption,
+                        scattering: *scattering,
+                        glow,
+                        anisotropy: *anisotropy,
+                    }
+                }
+                VolumeKind::Surface { material, threshold, textures: maps } => Kind::Surface {
+                    material: *material as u32,
+                    threshold: *threshold,
+                    textures: textures.add_list(maps),
+                },
+            };
+            let field = match script {
+                Some(id) => Field::Script(id),
+                None => Field::Constant,
+            };
+            let mut vol = Volume { bound, field, scale: v.density, step, kind, label };
+            if let (Some(n), Some(id)) = (v.grid, script) {
+                vol.bake(shaders.as_ref(), id, n).map_err(|e| err(v, e.to_string()))?;
+            }
+            match vol.kind {
+                Kind::Medium { .. } => out.media.push(vol),
+                Kind::Surface { .. } => out.surfaces.push(vol),
+            }
+        }
+        out.shaders = shaders;
+        Ok(out)
+    }
+}
+
+impl Volume {
+    /// Replaces the script's density (and emission) by grids of `n³` samples
+    /// over the bound's own box.
+    fn bake(&mut self, set: Option<&ShaderSet>, id: usize, n: u32) -> Result<(), ShaderError> {
+        let set = set.ok_or_else(|| missing_set(&self.label))?;
+        let b: Aabb = self.bound.local_box();
+        let bound = &self.bound;
+        let input = |q: Vec3| ShadeInput {
+            p: q.to_array(),
+            pw: bound.to_world(q).to_array(),
+            ..ShadeInput::default()
+        };
+        let density = Grid::bake(b, n, |q| set.density(id, &input(q)))?;
+        if let Kind::Medium { glow, .. } = &mut self.kind {
+            if matches!(glow, Glow::Script(_)) {
+                *glow = Glow::Grid(Grid::bake(b, n, |q| set.emission(id, &input(q)).map(Vec3::from_array))?);
+            }
+        }
+        self.field = Field::Grid(density);
+        Ok(())
+    }
+}
+
+fn missing_set(label: &str) -> ShaderError {
+    ShaderError::new(ShaderErrorKind::Internal, label, "volume scripts were not compiled")
+}
