@@ -81,6 +81,11 @@ const CASES: &[(&str, &[&str])] = &[
     ("image_name_parent.xml", &["<ImageName>", "\"../x.png\"", "output folder"]),
     ("image_name_absolute.json", &["<ImageName>", "\"/tmp/x.png\"", "absolute"]),
     ("image_name_bad_extension.xml", &["<ImageName>", "\"second.bmp\"", ".png"]),
+    // Ellipsoids (luster's extension).
+    ("ellipsoid_radii_two_numbers.xml", &["Ellipsoid[id=1]/Radii", "3 numbers", "found 2"]),
+    ("ellipsoid_radius_zero.json", &["Ellipsoid[id=1]/Radii", "three positive numbers", "0.5 0 0.4"]),
+    ("ellipsoid_radii_nan.json", &["Ellipsoid[id=1]/Radii", "non-finite", "NaN"]),
+    ("ellipsoid_rotation_zero_axis.xml", &["Ellipsoid[id=1]/Rotation", "line 46", "zero axis"]),
     // Shader maps (luster's extension).
     ("shader_missing_script.xml", &["TextureMap[id=5]/Shader", "no_such_shader.lua", "no such file"]),
     ("shader_syntax_error.xml", &["TextureMap[id=5]", "syntax_error.lua:3", "'then' expected"]),

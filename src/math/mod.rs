@@ -10,7 +10,7 @@ mod ray;
 mod transform;
 
 pub use aabb::Aabb;
-pub use glam::{Mat3, Mat4, Vec2, Vec3, Vec3A, Vec4};
+pub use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec3A, Vec4};
 pub use ray::Ray;
 pub use transform::Transform;
 

@@ -3,7 +3,7 @@
 //! or JSON; `render::Scene::build` turns it into something to trace.
 
 use super::error::{Loc, Warning};
-use crate::math::{Transform, Vec2, Vec3};
+use crate::math::{Quat, Transform, Vec2, Vec3};
 use crate::shader::ParamValue;
 use std::path::PathBuf;
 
@@ -190,6 +190,16 @@ pub enum Shape {
         center: Vec3,
         /// Radius.
         radius: f32,
+    },
+    /// An ellipsoid (luster's `<Ellipsoid>` extension), before its transform:
+    /// the unit sphere scaled by `radii`, turned by `rotation`, moved to `center`.
+    Ellipsoid {
+        /// Centre.
+        center: Vec3,
+        /// Radii along the ellipsoid's own axes, all positive.
+        radii: Vec3,
+        /// Its own axes to object space (the identity when not given).
+        rotation: Quat,
     },
     /// A single triangle.
     Triangle {

@@ -4,7 +4,7 @@
 use super::{Geom, Prim, Scene};
 use crate::accel::Bvh;
 use crate::geometry::mesh::vertex_normals;
-use crate::geometry::{Mesh, Plane, Sphere};
+use crate::geometry::{Ellipsoid, Mesh, Plane, Sphere};
 use crate::math::{Aabb, Vec2};
 use crate::render::camera::Camera;
 use crate::scene::description::{Description, MeshSource, Shape};
@@ -66,6 +66,7 @@ impl Scene {
         let volumes = Volumes::build(desc, &mut textures, Some(images), opts.shader_timeout)?;
         let mut prims = Vec::new();
         let mut planes = Vec::new();
+        let mut ellipsoids = Vec::new();
         for (i, o) in desc.objects.iter().enumerate() {
             let xf = (!o.transform.is_identity()).then(|| Box::new(o.transform));
             let material = o.material as u32;
@@ -79,6 +80,10 @@ impl Scene {
                     }
                 },
                 Shape::Sphere { center, radius } => Geom::Sphere(Sphere { center: *center, radius: *radius }),
+                Shape::Ellipsoid { center, radii, rotation } => {
+                    ellipsoids.push(Ellipsoid::new(*center, *radii, *rotation));
+                    Geom::Ellipsoid(ellipsoids.len() as u32 - 1)
+                }
                 Shape::Plane { point, normal } => {
                     let p = Plane {
                         point: o.transform.point(*point),
@@ -95,7 +100,7 @@ impl Scene {
             }
             prims.push(Prim { geom, material, motion: o.motion, xf, textures: tex, object: i as u32 });
         }
-        let bounds: Vec<Aabb> = prims.iter().map(|p| prim_bounds(p, &meshes)).collect();
+        let bounds: Vec<Aabb> = prims.iter().map(|p| prim_bounds(p, &meshes, &ellipsoids)).collect();
         let tlas = Bvh::build(&bounds);
         // Put primitives in the BVH's leaf order so a leaf is a contiguous range.
         let mut slots: Vec<Option<Prim>> = prims.into_iter().map(Some).collect();
@@ -103,6 +108,7 @@ impl Scene {
 
         Ok(Scene {
             meshes,
+            ellipsoids,
             prims,
             tlas,
             planes,
@@ -190,10 +196,11 @@ fn shader_images(desc: &Description, images: &Arc<[Image]>) -> ShaderImages {
 
 /// World bounds over the whole shutter interval: a translation sweeps the box
 /// from its place at time 0 to its place at time 1.
-fn prim_bounds(p: &Prim, meshes: &[Mesh]) -> Aabb {
+fn prim_bounds(p: &Prim, meshes: &[Mesh], ellipsoids: &[Ellipsoid]) -> Aabb {
     let b = match p.geom {
         Geom::Mesh(m) => meshes[m as usize].bounds(),
         Geom::Sphere(s) => s.bounds(),
+        Geom::Ellipsoid(e) => ellipsoids[e as usize].bounds(),
     };
     let b = match &p.xf {
         Some(xf) => xf.aabb(&b),

@@ -3,15 +3,15 @@
 //!
 //! Geometry is two-level. Every mesh (inline, PLY, or a single `Triangle`) is
 //! built once in its own object space with its own BVH; objects — meshes,
-//! instances of meshes, spheres — are primitives of a top-level BVH, each with
-//! an optional object-to-world transform. Rays are moved into object space
-//! without renormalizing, so `t` means the same in both spaces. Infinite planes
-//! have no box and are tested beside the BVH. Moving objects (`MotionBlur`)
-//! sit in the top level with boxes swept over the shutter interval, so one
-//! BVH serves every ray time.
+//! instances of meshes, spheres, ellipsoids — are primitives of a top-level
+//! BVH, each with an optional object-to-world transform. Rays are moved into
+//! object space without renormalizing, so `t` means the same in both spaces.
+//! Infinite planes have no box and are tested beside the BVH. Moving objects
+//! (`MotionBlur`) sit in the top level with boxes swept over the shutter
+//! interval, so one BVH serves every ray time.
 
 use crate::accel::{Bvh, TriHit};
-use crate::geometry::{Mesh, Plane, Sphere};
+use crate::geometry::{Ellipsoid, Mesh, Plane, Sphere};
 use crate::math::{Ray, Transform, Vec2, Vec3};
 use crate::render::camera::Camera;
 use crate::scene::Warning;
@@ -27,6 +27,8 @@ pub use build::BuildOptions;
 enum Geom {
     Mesh(u32),
     Sphere(Sphere),
+    /// Index into [`Scene::ellipsoids`] (kept apart so this enum stays small).
+    Ellipsoid(u32),
 }
 
 /// A primitive of the top-level BVH.
@@ -64,6 +66,7 @@ enum Closest {
     Plane(usize),
     Triangle(usize, TriHit),
     Sphere(usize),
+    Ellipsoid(usize),
 }
 
 /// Which surface a hit is on, for computing its texture frame on demand.
@@ -80,6 +83,11 @@ pub enum HitGeom {
     },
     /// The sphere of primitive `prim`.
     Sphere {
+        /// Primitive.
+        prim: u32,
+    },
+    /// The ellipsoid of primitive `prim`.
+    Ellipsoid {
         /// Primitive.
         prim: u32,
     },
@@ -109,6 +117,7 @@ pub struct Hit {
 /// A scene ready to render.
 pub struct Scene {
     meshes: Vec<Mesh>,
+    ellipsoids: Vec<Ellipsoid>,
     prims: Vec<Prim>,
     tlas: Bvh,
     /// Infinite planes: the plane, its material, its maps and its object index.
@@ -146,7 +155,7 @@ impl Scene {
     pub fn object_label(&self, hit: &Hit) -> &str {
         let object = match hit.geom {
             HitGeom::Plane(i) => self.planes.get(i as usize).map(|p| p.3),
-            HitGeom::Triangle { prim, .. } | HitGeom::Sphere { prim } => {
+            HitGeom::Triangle { prim, .. } | HitGeom::Sphere { prim } | HitGeom::Ellipsoid { prim } => {
                 self.prims.get(prim as usize).map(|p| p.object)
             }
             HitGeom::Volume(i) => {
@@ -196,6 +205,13 @@ impl Scene {
                             hit = true;
                         }
                     }
+                    Geom::Ellipsoid(e) => {
+                        if let Some(t) = self.ellipsoids[e as usize].intersect(&local, t_min, *t_max) {
+                            *t_max = t;
+                            best = Some(Closest::Ellipsoid(pi));
+                            hit = true;
+                        }
+                    }
                 }
             }
             if hit {
@@ -227,6 +243,12 @@ impl Scene {
                 let Geom::Sphere(s) = p.geom else { return None };
                 let n = s.normal(p.to_local(ray, time).at(best_t));
                 (pi, n, n, HitGeom::Sphere { prim: pi as u32 })
+            }
+            Closest::Ellipsoid(pi) => {
+                let p = &self.prims[pi];
+                let Geom::Ellipsoid(e) = p.geom else { return None };
+                let n = self.ellipsoids[e as usize].normal(p.to_local(ray, time).at(best_t));
+                (pi, n, n, HitGeom::Ellipsoid { prim: pi as u32 })
             }
         };
         let p = &self.prims[pi];
@@ -269,6 +291,14 @@ impl Scene {
                 let (uv, dpdu, dpdv) = s.uv_frame(local);
                 (uv, local, dpdu, dpdv, s.normal(local), Some(p))
             }
+            HitGeom::Ellipsoid { prim } => {
+                let p = &self.prims[prim as usize];
+                let Geom::Ellipsoid(e) = p.geom else { return flat_frame(hit, footprint) };
+                let e = &self.ellipsoids[e as usize];
+                let local = p.to_local(ray, time).at(hit.t);
+                let (uv, dpdu, dpdv) = e.uv_frame(local);
+                (uv, local, dpdu, dpdv, e.normal(local), Some(p))
+            }
             HitGeom::Volume(i) => {
                 let Some(v) = self.volumes.surfaces.get(i as usize) else {
                     return flat_frame(hit, footprint);
@@ -298,6 +328,9 @@ impl Scene {
                 match p.geom {
                     Geom::Mesh(m) => self.meshes[m as usize].occluded(&local, t_min, t_max),
                     Geom::Sphere(s) => s.intersect(&local, t_min, t_max).is_some(),
+                    Geom::Ellipsoid(e) => {
+                        self.ellipsoids[e as usize].intersect(&local, t_min, t_max).is_some()
+                    }
                 }
             })
         })
