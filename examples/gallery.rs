@@ -7,6 +7,8 @@
 //! done
 //! cargo run --release --example gallery -- docs/gallery.png /tmp/gallery/{marble,wood,copper,planet,brick,stones}.png
 //! ```
+//!
+//! Four images make a 2×2 sheet (`docs/volumes.png`).
 
 use image::{GenericImage, RgbImage};
 
@@ -18,7 +20,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let tiles: Vec<RgbImage> =
         inputs.iter().map(|p| image::open(p).map(|i| i.to_rgb8())).collect::<Result<_, _>>()?;
     let (w, h) = tiles.first().map(|t| t.dimensions()).ok_or("no images given")?;
-    let cols = 3.min(tiles.len()) as u32;
+    let cols = if tiles.len() == 4 { 2 } else { 3.min(tiles.len()) as u32 };
     let rows = (tiles.len() as u32).div_ceil(cols);
     let mut sheet = RgbImage::new(w * cols, h * rows);
     for (i, t) in tiles.iter().enumerate() {

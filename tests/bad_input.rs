@@ -92,6 +92,16 @@ const CASES: &[(&str, &[&str])] = &[
     ("shader_parameter_two_numbers.xml", &["Parameter", "\"tint\"", "2 numbers", "three (a vec3)"]),
     ("shader_missing_entry_point.xml", &["TextureMap[id=5]", "height_only.lua", "no color(s)", "replace_kd"]),
     ("shader_bump_without_height.xml", &["TextureMap[id=5]", "no height(s)", "bump_normal"]),
+    // Volumes.
+    ("volume_no_bound.xml", &["Volume[id=fog]", "needs a bound"]),
+    ("volume_two_bounds.xml", &["Volume[id=fog]", "more than one bound"]),
+    ("volume_box_inverted.xml", &["Box", "<Min> must be below <Max>"]),
+    ("volume_grid_without_shader.xml", &["GridResolution", "needs a <Shader>"]),
+    ("volume_grid_huge.xml", &["GridResolution", "2 to 512", "100000"]),
+    ("volume_negative_absorption.xml", &["Absorption", "≥ 0"]),
+    ("volume_shader_without_density.xml", &["Volume[id=fog]", "color_only.lua", "no density(s)"]),
+    ("hypertexture_without_shader.xml", &["Hypertexture[id=h]", "needs a <Shader>"]),
+    ("hypertexture_unknown_material.xml", &["material \"9\"", "not defined"]),
 ];
 
 /// A scene path that must not exist.

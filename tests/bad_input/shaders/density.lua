@@ -1,0 +1,1 @@
+function density(s) return 1 end
