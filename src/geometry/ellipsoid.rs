@@ -80,31 +80,7 @@ impl Ellipsoid {
     /// `None` when the line misses (or the direction is zero).
     #[inline]
     fn roots(&self, ray: &Ray) -> Option<(f32, f32)> {
-        let Ray { o, d } = self.local_ray(ray);
-        let a = d.length_squared();
-        if a == 0.0 || !a.is_finite() {
-            return None;
-        }
-        let half_b = o.dot(d);
-        // As in `Sphere::intersect`: c − b²/a is |o − (o·d/a) d|² − 1, the
-        // squared distance of the line from the centre, which has no
-        // cancellation; 1 − |f|² is factored so that a grazing ray loses
-        // no digits either.
-        let f = o - d * (half_b / a);
-        let fl = f.length();
-        let disc = a * ((1.0 - fl) * (1.0 + fl));
-        if disc.is_nan() || disc < 0.0 {
-            return None;
-        }
-        let c = o.length_squared() - 1.0;
-        let q = -half_b - disc.sqrt().copysign(half_b);
-        if q == 0.0 {
-            // o·d = 0 and a tangent line: both roots are where it touches.
-            let t = -half_b / a;
-            return Some((t, t));
-        }
-        let (t0, t1) = (c / q, q / a);
-        Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
+        Sphere { center: Vec3::ZERO, radius: 1.0 }.roots(&self.local_ray(ray))
     }
 
     /// The nearest `t` in `(t_min, t_max)` where the ray meets the surface.

@@ -13,27 +13,42 @@ pub struct Sphere {
 }
 
 impl Sphere {
-    /// The nearest `t` in `(t_min, t_max)` where the ray meets the sphere. The
-    /// direction need not be unit length (rays moved into object space keep
-    /// their scale so `t` is the same in both spaces).
+    /// The two parameters, in order, where the ray's line meets the sphere,
+    /// or `None` when it misses (or the direction is zero). The direction
+    /// need not be unit length (rays moved into object space keep their
+    /// scale so `t` is the same in both spaces). Volumes use this as the
+    /// span of the solid ball.
     #[inline]
-    pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+    pub fn roots(&self, ray: &Ray) -> Option<(f32, f32)> {
         let oc = ray.o - self.center;
         let a = ray.d.length_squared();
+        if a == 0.0 || !a.is_finite() {
+            return None;
+        }
         let half_b = oc.dot(ray.d);
         // Computing c - b²/a as |oc - (oc·d/a) d|² - r² (Hearn & Baker's form, used by
-        // Ray Tracing Gems ch. 7) avoids the cancellation of the textbook discriminant.
-        let f = oc - ray.d * (half_b / a);
-        let disc = a * (self.radius * self.radius - f.length_squared());
-        if disc < 0.0 {
+        // Ray Tracing Gems ch. 7) avoids the cancellation of the textbook
+        // discriminant; r² − |f|² is factored so a grazing ray loses no digits either.
+        let f = (oc - ray.d * (half_b / a)).length();
+        let disc = a * ((self.radius - f) * (self.radius + f));
+        if disc.is_nan() || disc < 0.0 {
             return None;
         }
         let c = oc.length_squared() - self.radius * self.radius;
         let q = -half_b - disc.sqrt().copysign(half_b);
-        let (mut t0, mut t1) = (c / q, q / a);
-        if t0 > t1 {
-            std::mem::swap(&mut t0, &mut t1);
+        if q == 0.0 {
+            // oc·d = 0 and a tangent line: both roots are where it touches.
+            let t = -half_b / a;
+            return Some((t, t));
         }
+        let (t0, t1) = (c / q, q / a);
+        Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
+    }
+
+    /// The nearest `t` in `(t_min, t_max)` where the ray meets the sphere.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+        let (t0, t1) = self.roots(ray)?;
         if t0 > t_min && t0 < t_max {
             Some(t0)
         } else if t1 > t_min && t1 < t_max {

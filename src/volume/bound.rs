@@ -94,21 +94,7 @@ impl Bound {
             None => (ray.o, ray.d),
         };
         let (t0, t1) = match self.shape {
-            Shape::Ball { center, radius } => {
-                let oc = o - center;
-                let a = d.length_squared();
-                let half_b = oc.dot(d);
-                // The cancellation-free discriminant, as in geometry::Sphere.
-                let f = oc - d * (half_b / a);
-                let disc = a * (radius * radius - f.length_squared());
-                if disc.is_nan() || disc <= 0.0 {
-                    return None;
-                }
-                let c = oc.length_squared() - radius * radius;
-                let q = -half_b - disc.sqrt().copysign(half_b);
-                let (a0, a1) = (c / q, q / a);
-                (a0.min(a1), a0.max(a1))
-            }
+            Shape::Ball { center, radius } => Sphere { center, radius }.roots(&Ray::new(o, d))?,
             Shape::Box { min, max } => {
                 let inv = d.recip();
                 let a = (min - o) * inv;
