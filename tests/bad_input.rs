@@ -4,7 +4,9 @@
 //! the output folder (no image, no temporary file).
 //!
 //! To add a case, drop the scene in `tests/bad_input/` (PLY files it needs go
-//! in `tests/bad_input/ply/`, images in `tests/bad_input/textures/`) and add one line to [`CASES`]. A file in the
+//! in `tests/bad_input/ply/`, images in `tests/bad_input/textures/`, OBJ and
+//! MTL files that scenes or models refer to in `tests/bad_input/obj/`; an
+//! `.obj` case is rendered as a model) and add one line to [`CASES`]. A file in the
 //! folder without a line in the table fails the test, so a scene that loads
 //! fine cannot pass unnoticed.
 
@@ -102,6 +104,31 @@ const CASES: &[(&str, &[&str])] = &[
     ("volume_shader_without_density.xml", &["Volume[id=fog]", "color_only.lua", "no density(s)"]),
     ("hypertexture_without_shader.xml", &["Hypertexture[id=h]", "needs a <Shader>"]),
     ("hypertexture_unknown_material.xml", &["material \"9\"", "not defined"]),
+    // OBJ models (rendered on their own, or as a Mesh's objFile) and their MTL files.
+    (
+        "obj_missing.xml",
+        &["Mesh[id=1]/Faces", "no_such_model.obj", "cannot read the OBJ file", "no such file"],
+    ),
+    ("obj_empty_file_name.json", &["<Faces>", "empty objFile"]),
+    ("obj_face_index_out_of_range.xml", &["face_index_out_of_range.obj", "line 6", "vertex 9", "defines 4"]),
+    ("obj_instance_of_several_materials.xml", &["MeshInstance[id=2]", "several materials", "<Material>"]),
+    (
+        "obj_missing_mtl.obj",
+        &["line 2", "no_such_library.mtl", "cannot read the material library", "no such file"],
+    ),
+    (
+        "obj_missing_texture.obj",
+        &["missing_texture.mtl", "line 3", "map_Kd", "no_such_texture.png", "no such file"],
+    ),
+    (
+        "obj_missing_shader.obj",
+        &["missing_shader.mtl", "line 3", "texture_shader", "no_such_shader.lua", "no such file"],
+    ),
+    ("obj_bad_mtl_statement.obj", &["bad_color.mtl", "line 3", "Kd needs 1 or 3 numbers, found 2"]),
+    ("obj_unknown_usemtl.obj", &["line 5", "usemtl \"chrome\"", "cube.mtl"]),
+    ("obj_face_index_zero.obj", &["line 5", "vertex index 0", "from 1"]),
+    ("obj_garbage.obj", &["line 6", "\"this\" is not an OBJ statement"]),
+    ("obj_no_faces.obj", &["no faces"]),
 ];
 
 /// A scene path that must not exist.
@@ -268,7 +295,7 @@ fn table_covers_the_corpus() {
         .expect("the corpus folder")
         .flatten()
         .map(|e| e.file_name().to_string_lossy().into_owned())
-        .filter(|n| !["ply", "textures", "shaders"].contains(&n.as_str()) && !n.starts_with('.'))
+        .filter(|n| !["ply", "textures", "shaders", "obj"].contains(&n.as_str()) && !n.starts_with('.'))
         .collect();
     let in_table: BTreeSet<String> = CASES
         .iter()
@@ -288,7 +315,7 @@ fn table_covers_the_corpus() {
         .filter_map(|n| std::fs::read(dir.join(n)).ok())
         .map(|b| String::from_utf8_lossy(&b).into_owned())
         .collect();
-    for folder in ["ply", "textures", "shaders"] {
+    for folder in ["ply", "textures", "shaders", "obj"] {
         for file in std::fs::read_dir(dir.join(folder)).expect("the asset folder").flatten() {
             let name = format!("{folder}/{}", file.file_name().to_string_lossy());
             assert!(texts.iter().any(|t| t.contains(&name)), "{name} is used by no scene");

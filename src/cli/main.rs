@@ -28,12 +28,15 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render scenes (CENG795 XML or JSON); writes one image per camera.
+    /// Render scenes (CENG795 XML or JSON) or OBJ models; writes one image per camera.
     ///
-    /// Each camera's image goes to OUTDIR/<ImageName>. Errors in one scene are
-    /// reported and the others still render; the exit code is 2 if any failed.
+    /// Each camera's image goes to OUTDIR/<ImageName>. An .obj file is
+    /// rendered on its own, framed by a camera with a studio light setup, to
+    /// OUTDIR/<stem>.png; the model flags below set that view. Errors in one
+    /// scene are reported and the others still render; the exit code is 2 if
+    /// any failed.
     Render {
-        /// Scene files (.xml or .json).
+        /// Scene files (.xml or .json) or OBJ models (.obj).
         #[arg(required = true)]
         scenes: Vec<PathBuf>,
         /// Folder for the images (created if needed).
@@ -59,6 +62,8 @@ enum Command {
         #[arg(long, value_name = "SECONDS", value_parser = parse_timeout,
               default_value_t = luster::shader::DEFAULT_TIMEOUT.as_secs_f64())]
         shader_timeout: f64,
+        #[command(flatten)]
+        model: ModelArgs,
     },
     /// Benchmark the BVH on PLY meshes (build time, memory, Mrays/s).
     ///
@@ -147,7 +152,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Render { scenes, outdir, threads, quiet, spp, seed, filter, shader_timeout } => {
+        Command::Render { scenes, outdir, threads, quiet, spp, seed, filter, shader_timeout, model } => {
             let filter = match filter {
                 FilterArg::Box => luster::render::Filter::Box,
                 FilterArg::Gaussian => luster::render::Filter::Gaussian,
@@ -156,7 +161,7 @@ fn main() -> ExitCode {
             let build = luster::render::BuildOptions {
                 shader_timeout: std::time::Duration::from_secs_f64(shader_timeout),
             };
-            render::run(&scenes, &outdir, threads, quiet, &opts, &build)
+            render::run(&scenes, &outdir, threads, quiet, &opts, &build, &model.view())
         }
         Command::Bench { plys, threads, reps } => match luster::bench::run(&plys, &threads, reps) {
             Ok(()) => ExitCode::SUCCESS,
@@ -194,6 +199,82 @@ fn parse_timeout(s: &str) -> Result<f64, String> {
         Ok(t) if t > 0.0 && t <= 86_400.0 => Ok(t),
         Ok(t) => Err(format!("{t} is not a time limit (expected seconds, more than 0 and at most 86400)")),
         Err(_) => Err(format!("\"{s}\" is not a number of seconds")),
+    }
+}
+
+/// How `luster render` looks at an OBJ model (see `luster::scene::obj::model`).
+#[derive(clap::Args)]
+#[command(next_help_heading = "OBJ models")]
+struct ModelArgs {
+    /// Image size of a model's render.
+    #[arg(long, value_name = "WxH", value_parser = parse_size, default_value = "800x600")]
+    size: (u32, u32),
+    /// Camera direction around the model, degrees from the front (+z), positive to the right.
+    #[arg(long, value_name = "DEG", default_value_t = 35.0, allow_negative_numbers = true)]
+    azimuth: f32,
+    /// Camera height, degrees above the horizon (-89 to 89).
+    #[arg(long, value_name = "DEG", default_value_t = 25.0, allow_negative_numbers = true,
+          value_parser = parse_elevation)]
+    elevation: f32,
+    /// Vertical field of view, degrees.
+    #[arg(long, value_name = "DEG", default_value_t = 40.0, value_parser = parse_fov)]
+    fov: f32,
+    /// Camera distance from the model's centre, in model units (default: the
+    /// model's bounding sphere fills the view with a 10% margin).
+    #[arg(long, value_name = "UNITS", value_parser = parse_distance)]
+    distance: Option<f32>,
+    /// Leave out the ground plane under the model.
+    #[arg(long)]
+    no_ground: bool,
+}
+
+impl ModelArgs {
+    fn view(&self) -> luster::scene::obj::ModelView {
+        luster::scene::obj::ModelView {
+            width: self.size.0,
+            height: self.size.1,
+            azimuth: self.azimuth,
+            elevation: self.elevation,
+            fov_y: self.fov,
+            distance: self.distance,
+            ground: !self.no_ground,
+            ..Default::default()
+        }
+    }
+}
+
+/// A `--size`: `WIDTHxHEIGHT`, 1 to 16384 pixels a side.
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) =
+        s.split_once(['x', 'X']).ok_or_else(|| format!("\"{s}\" is not WIDTHxHEIGHT (e.g. 800x600)"))?;
+    let side = |t: &str| t.trim().parse::<u32>().ok().filter(|&v| (1..=16384).contains(&v));
+    match (side(w), side(h)) {
+        (Some(w), Some(h)) => Ok((w, h)),
+        _ => Err(format!("\"{s}\" is not WIDTHxHEIGHT with 1 to 16384 pixels a side")),
+    }
+}
+
+/// A number of degrees within `lo..=hi` (`open`: both ends excluded).
+fn degrees(s: &str, lo: f32, hi: f32, open: bool) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(d) if (open && d > lo && d < hi) || (!open && d >= lo && d <= hi) => Ok(d),
+        _ => Err(format!("\"{s}\" is not a number of degrees between {lo} and {hi}")),
+    }
+}
+
+fn parse_elevation(s: &str) -> Result<f32, String> {
+    degrees(s, -89.0, 89.0, false)
+}
+
+fn parse_fov(s: &str) -> Result<f32, String> {
+    degrees(s, 0.0, 180.0, true)
+}
+
+/// A `--distance`: a positive number.
+fn parse_distance(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(d) if d > 0.0 && d.is_finite() => Ok(d),
+        _ => Err(format!("\"{s}\" is not a positive distance")),
     }
 }
 

@@ -1,8 +1,10 @@
-//! `luster render`: load, build, render every camera, write images atomically.
+//! `luster render`: load (a scene, or an OBJ model in a scene made around it),
+//! build, render every camera, write images atomically.
 
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use luster::render::{self, BuildOptions, RenderOptions, Scene};
+use luster::scene::obj::ModelView;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -15,6 +17,7 @@ pub fn run(
     quiet: bool,
     opts: &RenderOptions,
     build: &BuildOptions,
+    view: &ModelView,
 ) -> ExitCode {
     let pool = match super::pool(threads) {
         Ok(p) => p,
@@ -22,7 +25,7 @@ pub fn run(
     };
     let mut failed = 0;
     for s in scenes {
-        if let Err(e) = pool.install(|| render_scene(s, outdir, quiet, opts, build)) {
+        if let Err(e) = pool.install(|| render_scene(s, outdir, quiet, opts, build, view)) {
             eprintln!("error: {e:#}");
             failed += 1;
         }
@@ -44,9 +47,14 @@ fn render_scene(
     quiet: bool,
     opts: &RenderOptions,
     build: &BuildOptions,
+    view: &ModelView,
 ) -> anyhow::Result<()> {
     let t0 = Instant::now();
-    let desc = luster::scene::load(path)?;
+    let desc = if luster::scene::is_obj(path) {
+        luster::scene::obj::model_scene(path, view)?
+    } else {
+        luster::scene::load(path)?
+    };
     for w in &desc.warnings {
         eprintln!("warning: {}: {w}", path.display());
     }

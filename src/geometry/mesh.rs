@@ -134,3 +134,18 @@ pub fn vertex_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
     }
     n
 }
+
+/// [`vertex_normals`] for a mesh whose vertices may be split at texture seams
+/// (an OBJ file's `v/vt` pairs become separate vertices): vertices at exactly
+/// the same position share one normal, so a seam does not show as a crease.
+pub fn welded_vertex_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
+    let mut first: std::collections::HashMap<[u32; 3], u32> = std::collections::HashMap::new();
+    let canon: Vec<u32> = positions
+        .iter()
+        .enumerate()
+        .map(|(i, p)| *first.entry(p.to_array().map(f32::to_bits)).or_insert(i as u32))
+        .collect();
+    let welded: Vec<[u32; 3]> = triangles.iter().map(|t| t.map(|i| canon[i as usize])).collect();
+    let n = vertex_normals(positions, &welded);
+    canon.iter().map(|&c| n[c as usize]).collect()
+}

@@ -6,6 +6,7 @@ use super::error::{Loc, Warning};
 use crate::math::{Quat, Transform, Vec2, Vec3};
 use crate::shader::ParamValue;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// A whole scene as the file describes it.
 #[derive(Clone, Debug)]
@@ -179,6 +180,21 @@ pub enum MeshSource {
     },
     /// A PLY file with its own vertices.
     Ply(PathBuf),
+    /// Vertex arrays read when the scene loaded (an OBJ model's part).
+    Arrays(Arc<MeshArrays>),
+}
+
+/// A mesh's own vertex arrays, 0-based: what an OBJ file gives.
+#[derive(Clone, Debug, Default)]
+pub struct MeshArrays {
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Per-vertex shading normals, when the file has them for every vertex.
+    pub normals: Option<Vec<Vec3>>,
+    /// Per-vertex texture coordinates, when the file has them for every vertex.
+    pub uvs: Option<Vec<Vec2>>,
+    /// Triangles, as indices into the arrays.
+    pub triangles: Vec<[u32; 3]>,
 }
 
 /// The shape of an object.
@@ -219,7 +235,8 @@ pub enum Shape {
     Mesh {
         /// Its triangles.
         source: MeshSource,
-        /// Interpolate vertex normals (`shadingMode="smooth"`).
+        /// Interpolate vertex normals (`shadingMode="smooth"`): the file's own
+        /// normals where [`MeshSource::Arrays`] has them, else area-weighted ones.
         smooth: bool,
     },
     /// A `MeshInstance`: the geometry of another mesh (resolved through any chain

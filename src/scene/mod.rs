@@ -1,11 +1,12 @@
-//! Scene loading: the two encodings of the CENG795 format, meshes, and the
-//! plain [`Description`] they produce.
+//! Scene loading: the two encodings of the CENG795 format, OBJ models,
+//! meshes, and the plain [`Description`] they produce.
 
 pub mod ceng795;
 pub mod description;
 pub mod element;
 pub mod error;
 pub mod json;
+pub mod obj;
 pub mod ply;
 pub mod xml;
 
@@ -18,8 +19,13 @@ use std::path::Path;
 const MAX_SCENE_BYTES: u64 = 1 << 30;
 
 /// Loads a scene file, choosing the encoding by its extension (`.json` or
-/// `.xml`) or, failing that, by its first character.
+/// `.xml`) or, failing that, by its first character. An `.obj` file is a
+/// model, rendered in the scene [`obj::model_scene`] makes around it with the
+/// default [`obj::ModelView`].
 pub fn load(path: &Path) -> Result<Description, SceneError> {
+    if is_obj(path) {
+        return obj::model_scene(path, &obj::ModelView::default());
+    }
     let meta = std::fs::metadata(path)
         .map_err(|e| SceneError::file(path, format!("cannot read the scene: {}", io_reason(&e))))?;
     if meta.is_dir() {
@@ -52,6 +58,11 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
     };
     let root = if is_json { json::parse(path, &text)? } else { xml::parse(path, &text)? };
     ceng795::read(path, &root)
+}
+
+/// Whether a path names an OBJ model (by its extension, in any case).
+pub fn is_obj(path: &Path) -> bool {
+    path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("obj"))
 }
 
 /// The reason of an I/O error without the "(os error N)" noise.

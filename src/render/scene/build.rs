@@ -1,9 +1,9 @@
-//! Building the render scene from a [`Description`]: meshes (inline, PLY) and
+//! Building the render scene from a [`Description`]: meshes (inline, PLY, OBJ arrays) and
 //! their BVHs in parallel, images and shader scripts, then the top-level BVH.
 
 use super::{Geom, Prim, Scene};
 use crate::accel::Bvh;
-use crate::geometry::mesh::vertex_normals;
+use crate::geometry::mesh::{vertex_normals, welded_vertex_normals};
 use crate::geometry::{Ellipsoid, Mesh, Plane, Sphere};
 use crate::math::{Aabb, Vec2};
 use crate::render::camera::Camera;
@@ -258,6 +258,13 @@ fn build_mesh(desc: &Description, i: usize) -> Result<(Mesh, Option<Warning>), S
             });
             let normals = smooth.then(|| vertex_normals(&ply.positions, &ply.triangles));
             Ok((Mesh::new(ply.positions, ply.triangles, normals).with_uvs(ply.uvs), warning))
+        }
+        Shape::Mesh { source: MeshSource::Arrays(a), smooth } => {
+            let normals = smooth.then(|| {
+                a.normals.clone().unwrap_or_else(|| welded_vertex_normals(&a.positions, &a.triangles))
+            });
+            let mesh = Mesh::new(a.positions.clone(), a.triangles.clone(), normals);
+            Ok((mesh.with_uvs(a.uvs.clone()), None))
         }
         _ => Err(SceneError::at(&desc.file, &o.loc, "internal error: not a mesh")),
     }

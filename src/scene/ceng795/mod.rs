@@ -12,7 +12,7 @@
 //! | `Cameras/Camera` | see [`camera`] | required |
 //! | `Lights/AmbientLight`, `Lights/PointLight` | see [`lights`] | none |
 //! | `Materials/Material` | see [`material`] | |
-//! | `Transformations`, `VertexData`, `Objects` | see [`objects`] | |
+//! | `Transformations`, `VertexData`, `Objects` | see [`objects`] (and [`obj_file`] for OBJ meshes) | |
 //! | `Textures`, `TexCoordData` | see [`textures`] | none |
 //! | `Volumes` | media and hypertextures (a luster extension), see [`volumes`] | none |
 //!
@@ -22,6 +22,7 @@
 pub mod camera;
 pub mod lights;
 pub mod material;
+pub mod obj_file;
 pub mod objects;
 pub mod shader_map;
 pub mod textures;
@@ -119,7 +120,7 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
         Some(l) => lights::read_all(&r, l, &mut w)?,
         None => (Vec3::ZERO, Vec::new(), Vec::new()),
     };
-    let materials = match root.child("Materials") {
+    let mut materials = match root.child("Materials") {
         Some(m) => material::read_all(&r, m, &mut w)?,
         None => Vec::new(),
     };
@@ -138,13 +139,13 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
         None => Vec::new(),
     };
     let base_dir = file.parent().map(Path::to_path_buf).unwrap_or_default();
-    let (images, texture_maps) = match root.child("Textures") {
+    let (mut images, mut texture_maps) = match root.child("Textures") {
         Some(t) => textures::read_all(&r, t, &base_dir, &mut w)?,
         None => (Vec::new(), Vec::new()),
     };
     let texture_ids: HashMap<&str, usize> =
         texture_maps.iter().enumerate().rev().map(|(i, m)| (m.id.as_str(), i)).collect();
-    let objects = match root.child("Objects") {
+    let (objects, obj_additions) = match root.child("Objects") {
         Some(o) => {
             let ctx = objects::Context {
                 r,
@@ -154,10 +155,16 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
                 vertices: &vertices,
                 tex_coords: &tex_coords,
                 base_dir: &base_dir,
+                obj: std::cell::RefCell::new(obj_file::Pending::new(
+                    materials.len(),
+                    images.len(),
+                    texture_maps.len(),
+                )),
             };
-            objects::read_all(&ctx, o, &mut w)?
+            let objects = objects::read_all(&ctx, o, &mut w)?;
+            (objects, ctx.obj.into_inner().add)
         }
-        None => Vec::new(),
+        None => (Vec::new(), Default::default()),
     };
     let volumes = match root.child("Volumes") {
         Some(v) => {
@@ -172,6 +179,10 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
         }
         None => Vec::new(),
     };
+    // OBJ meshes' materials and maps, numbered after the scene's own.
+    materials.extend(obj_additions.materials);
+    images.extend(obj_additions.images);
+    texture_maps.extend(obj_additions.texture_maps);
     Ok(Description {
         file: file.to_path_buf(),
         base_dir,

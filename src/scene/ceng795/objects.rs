@@ -2,7 +2,7 @@
 //!
 //! | object | reads |
 //! |---|---|
-//! | `Mesh` | `Material`, `Transformations`, `Faces` (inline 1-based vertex indices, or `plyFile="..."`), `shadingMode="smooth"` |
+//! | `Mesh` | `Material`, `Transformations`, `Faces` (inline 1-based vertex indices, `plyFile="..."`, or `objFile="..."`: see [`super::obj_file`]), `shadingMode="smooth"` |
 //! | `Triangle` | `Material`, `Transformations`, `Indices` (three vertex indices) |
 //! | `Sphere` | `Material`, `Transformations`, `Center` (a vertex index), `Radius` |
 //! | `Ellipsoid` | `Material`, `Transformations`, `Center` (a vertex index), `Radii` (three positive numbers), `Rotation` (optional: angle in degrees, counter-clockwise, and axis x y z) |
@@ -29,6 +29,7 @@
 //! `resetTransform="true"` (hw2 spec, eq. 3). Degenerate inline triangles (two
 //! equal indices) are dropped with a warning, as the course's specs advise.
 
+use super::obj_file::{self, Pending};
 use super::textures::object_textures;
 use super::transforms::compose;
 use super::Warnings;
@@ -36,6 +37,7 @@ use crate::math::{Quat, Transform, Vec2, Vec3};
 use crate::scene::description::{MeshSource, ObjectDesc, Shape};
 use crate::scene::element::{Element, Reader};
 use crate::scene::error::SceneError;
+use std::cell::RefCell;
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -55,6 +57,8 @@ pub struct Context<'a> {
     pub tex_coords: &'a [Vec2],
     /// Folder of the scene file.
     pub base_dir: &'a Path,
+    /// What OBJ meshes add to the scene's lists.
+    pub obj: RefCell<Pending>,
 }
 
 /// Reads `VertexData`: a multiple of three numbers.
@@ -84,6 +88,12 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Vec<O
     let mut pending = Vec::new();
     let mut mesh_ids: HashMap<String, usize> = HashMap::new();
     for el in &objs.children {
+        if el.name == "Mesh" && obj_file::is_obj_mesh(el) {
+            let first = out.len();
+            obj_file::read(ctx, el, w, &mut out)?;
+            register(&mut mesh_ids, el.attr("id").unwrap_or("").trim(), first, el, w);
+            continue;
+        }
         let shape = match el.name.as_str() {
             "Mesh" => mesh(ctx, el, w)?,
             "Triangle" => {
@@ -309,7 +319,7 @@ fn vertex(ctx: &Context, el: &Element, i: u32) -> Result<Vec3, SceneError> {
     Ok(ctx.vertices[i as usize - 1])
 }
 
-fn material(ctx: &Context, el: &Element) -> Result<usize, SceneError> {
+pub(super) fn material(ctx: &Context, el: &Element) -> Result<usize, SceneError> {
     let id = el.text.trim();
     ctx.materials
         .get(id)
@@ -317,11 +327,11 @@ fn material(ctx: &Context, el: &Element) -> Result<usize, SceneError> {
         .ok_or_else(|| ctx.r.err(el, format!("material \"{id}\" is not defined in <Materials>")))
 }
 
-fn textures(ctx: &Context, el: &Element) -> Result<Option<Vec<usize>>, SceneError> {
+pub(super) fn textures(ctx: &Context, el: &Element) -> Result<Option<Vec<usize>>, SceneError> {
     el.child("Textures").map(|t| object_textures(&ctx.r, t, ctx.textures)).transpose()
 }
 
-fn transform(ctx: &Context, el: &Element) -> Result<Transform, SceneError> {
+pub(super) fn transform(ctx: &Context, el: &Element) -> Result<Transform, SceneError> {
     match el.child("Transformations") {
         Some(t) => compose(&ctx.r, t, ctx.transforms),
         None => Ok(Transform::IDENTITY),
@@ -357,6 +367,16 @@ fn resolve_instances(
                 break (*m, *t, *mat, tex.clone());
             }
             if !by_index.contains_key(&base) {
+                if ctx.obj.borrow().multi.contains(&base) {
+                    return Err(r.err(
+                        &loc_el(objs, &out[p.index]),
+                        format!(
+                            "baseMeshId \"{}\" is an OBJ mesh with several materials, which makes several \
+                             objects; an instance needs one (give that Mesh a <Material>)",
+                            inst.base_id
+                        ),
+                    ));
+                }
                 break (base, out[base].transform, out[base].material, out[base].textures.clone());
             }
             if chain.contains(&base) {

@@ -66,7 +66,9 @@ pub fn script(r: &Reader, el: &Element, base_dir: &Path) -> Result<ScriptDesc, S
     Ok(ScriptDesc { path, code, params })
 }
 
-fn read_script(path: &Path) -> Result<String, String> {
+/// A shader script's text, or why it cannot be read (a sentence fragment:
+/// "no such file", "it is a folder", ...).
+pub fn read_script(path: &Path) -> Result<String, String> {
     let meta = std::fs::metadata(path).map_err(|e| io_reason(&e))?;
     if meta.is_dir() {
         return Err("it is a folder".to_string());
@@ -79,48 +81,47 @@ fn read_script(path: &Path) -> Result<String, String> {
 }
 
 /// One `<Parameter name="...">value</Parameter>`.
-///
-/// A value made only of numbers must be one number or three: two or four
-/// numbers are almost certainly a typo for a vector, and passing them on as a
-/// string would only fail later, inside the script, far from the mistake.
 fn parameter(r: &Reader, el: &Element) -> Result<(String, ParamValue), SceneError> {
     let name = el.attr("name").map(str::trim).unwrap_or("");
     if name.is_empty() {
         return Err(r.err(el, "<Parameter> has no name attribute"));
     }
+    let value = param_value(name, &el.text).map_err(|why| r.err(el, why))?;
+    Ok((name.to_string(), value))
+}
+
+/// A shader parameter's value from its text, whatever file it came from (a
+/// scene's `Parameter`, an MTL file's `-p`): one number is a Lua number,
+/// three a `vec3`, anything that is not only numbers a string.
+///
+/// A value made only of numbers must be one number or three: two or four
+/// numbers are almost certainly a typo for a vector, and passing them on as a
+/// string would only fail later, inside the script, far from the mistake.
+/// The name must be a Lua name, since the script reads it as `param.NAME`.
+pub fn param_value(name: &str, text: &str) -> Result<ParamValue, String> {
     if !is_identifier(name) {
-        return Err(r.err(
-            el,
-            format!(
-                "parameter name \"{name}\" is not a Lua name (letters, digits and _, not starting with a digit)"
-            ),
+        return Err(format!(
+            "parameter name \"{name}\" is not a Lua name (letters, digits and _, not starting with a digit)"
         ));
     }
-    let text = el.text.trim();
+    let text = text.trim();
     let numbers: Option<Vec<f64>> = text.split_ascii_whitespace().map(|t| t.parse::<f64>().ok()).collect();
-    let value = match numbers {
+    match numbers {
         Some(v) if !v.is_empty() => {
             if let Some(bad) = v.iter().find(|x| !x.is_finite()) {
-                return Err(r.err(el, format!("parameter \"{name}\" is not finite ({bad})")));
+                return Err(format!("parameter \"{name}\" is not finite ({bad})"));
             }
             match v[..] {
-                [x] => ParamValue::Number(x),
-                [x, y, z] => ParamValue::Vec3([x, y, z]),
-                _ => {
-                    return Err(r.err(
-                        el,
-                        format!(
-                            "parameter \"{name}\" has {} numbers; a parameter is one number, three \
-                             (a vec3) or text",
-                            v.len()
-                        ),
-                    ))
-                }
+                [x] => Ok(ParamValue::Number(x)),
+                [x, y, z] => Ok(ParamValue::Vec3([x, y, z])),
+                _ => Err(format!(
+                    "parameter \"{name}\" has {} numbers; a parameter is one number, three (a vec3) or text",
+                    v.len()
+                )),
             }
         }
-        _ => ParamValue::Text(text.to_string()),
-    };
-    Ok((name.to_string(), value))
+        _ => Ok(ParamValue::Text(text.to_string())),
+    }
 }
 
 fn is_identifier(s: &str) -> bool {
