@@ -1,5 +1,5 @@
-//! Volumes end to end: transmittance through a homogeneous slab is
-//! exp(−σt·d) for camera and shadow rays, marched or closed-form; a
+//! Volumes end to end: transmittance through a homogeneous slab (and an
+//! ellipsoid) is exp(−σt·d) for camera and shadow rays, marched or closed-form; a
 //! constant-density hypertexture renders the analytic sphere's silhouette;
 //! media cast shadows and are shadowed; a baked grid renders like the script;
 //! a failing density script stops the render naming the volume.
@@ -90,6 +90,24 @@ fn transmittance_through_a_homogeneous_slab() {
     let doubled = render(&scene(9, "", &slab("<Density>2</Density>"), "0 0 20"), &[]);
     let want2 = [200.0 * (-0.8f32).exp(), 100.0 * (-1.6f32).exp(), 50.0 * (-3.2f32).exp()];
     assert_within_1_percent(centre(&doubled), want2);
+}
+
+/// The GLSL ellipsoid page's case: a homogeneous, semi-opaque ellipsoid
+/// whose opacity follows the path length through it. Along the axis the
+/// chord is twice the radius in that direction, also after a rotation.
+#[test]
+fn a_homogeneous_ellipsoid_is_as_opaque_as_its_chord_is_long() {
+    let ellipsoid = |rotation: &str| {
+        format!(
+            r#"<Volume id="e"><Ellipsoid><Center>0 0 0</Center><Radii>1 0.5 2</Radii>{rotation}</Ellipsoid>
+            <Absorption>0.3 0.5 0.1</Absorption><Scattering>0 0 0</Scattering></Volume>"#
+        )
+    };
+    let chord =
+        |len: f32| [200.0 * (-0.3 * len).exp(), 100.0 * (-0.5 * len).exp(), 50.0 * (-0.1 * len).exp()];
+    assert_within_1_percent(centre(&render(&scene(9, "", &ellipsoid(""), "0 0 20"), &[])), chord(4.0));
+    let turned = ellipsoid("<Rotation>90 0 1 0</Rotation>");
+    assert_within_1_percent(centre(&render(&scene(9, "", &turned, "0 0 20"), &[])), chord(2.0));
 }
 
 /// Shadow rays: a plane lit through the slab receives exp(−σa·0.8) of the
