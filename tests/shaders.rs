@@ -3,6 +3,8 @@
 //! `luster render` with one error naming the shader, the script line and the
 //! object, exit code 2 and no image.
 
+mod common;
+use common::folder;
 use luster::render::{render, try_render_with, RenderOptions, Scene};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -60,15 +62,6 @@ fn scene_xml(maps: &str, width: u32) -> String {
     </Objects>
 </Scene>"#
     )
-}
-
-/// Writes `files` (name, text) into a fresh folder; returns it.
-fn folder(files: &[(&str, &str)]) -> tempfile::TempDir {
-    let dir = tempfile::tempdir().expect("a temporary folder");
-    for (name, text) in files {
-        std::fs::write(dir.path().join(name), text).expect("a test file");
-    }
-    dir
 }
 
 fn render_rgb(scene: &Path) -> Vec<u8> {

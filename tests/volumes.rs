@@ -4,6 +4,8 @@
 //! media cast shadows and are shadowed; a baked grid renders like the script;
 //! a failing density script stops the render naming the volume.
 
+mod common;
+use common::folder;
 use luster::render::{try_render_with, RenderOptions, RenderedImage, Scene};
 use std::path::Path;
 
@@ -28,14 +30,6 @@ fn scene(res: u32, objects: &str, volumes: &str, light: &str) -> String {
   <Volumes>{volumes}</Volumes>
 </Scene>"#
     )
-}
-
-fn folder(files: &[(&str, &str)]) -> tempfile::TempDir {
-    let dir = tempfile::tempdir().expect("a temporary folder");
-    for (name, text) in files {
-        std::fs::write(dir.path().join(name), text).expect("a test file");
-    }
-    dir
 }
 
 fn render_file(path: &Path, spp: u32) -> Result<RenderedImage, String> {

@@ -87,14 +87,8 @@ impl Ellipsoid {
     /// The direction need not be unit length.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
-        let (t0, t1) = self.roots(ray)?;
-        if t0 > t_min && t0 < t_max {
-            Some(t0)
-        } else if t1 > t_min && t1 < t_max {
-            Some(t1)
-        } else {
-            None
-        }
+        // The local ray keeps the world ray's `t`.
+        Sphere { center: Vec3::ZERO, radius: 1.0 }.intersect(&self.local_ray(ray), t_min, t_max)
     }
 
     /// Where the ray's line passes through the solid ellipsoid: the entry and
