@@ -100,6 +100,7 @@ const CASES: &[(&str, &[&str])] = &[
     ("volume_box_inverted.xml", &["Box", "<Min> must be below <Max>"]),
     ("volume_grid_without_shader.xml", &["GridResolution", "needs a <Shader>"]),
     ("volume_grid_huge.xml", &["GridResolution", "2 to 512", "100000"]),
+    ("volume_grid_too_much_memory.xml", &["Volume[id=fire]", "512³ grid of density and emission", "2.1 GB"]),
     ("volume_negative_absorption.xml", &["Absorption", "≥ 0"]),
     ("volume_shader_without_density.xml", &["Volume[id=fog]", "color_only.lua", "no density(s)"]),
     ("hypertexture_without_shader.xml", &["Hypertexture[id=h]", "needs a <Shader>"]),

@@ -36,6 +36,9 @@ pub const MEDIUM_STEPS: f32 = 64.0;
 /// bisection to a thousandth of a step.
 pub const SURFACE_STEPS: f32 = 256.0;
 
+/// Most memory the baked grids of one volume may take.
+pub const MAX_GRID_BYTES: u64 = 1 << 30;
+
 /// Where a volume's density comes from.
 #[derive(Debug)]
 enum Field {
@@ -261,7 +264,7 @@ impl Volumes {
             };
             let mut vol = Volume { bound, field, scale: v.density, step, kind, label };
             if let (Some(n), Some(id)) = (v.grid, script) {
-                vol.bake(shaders.as_ref(), id, n).map_err(|e| err(v, e.to_string()))?;
+                vol.bake(shaders.as_ref(), id, n).map_err(|e| err(v, e))?;
             }
             match vol.kind {
                 Kind::Medium { .. } => out.media.push(vol),
@@ -276,8 +279,19 @@ impl Volumes {
 impl Volume {
     /// Replaces the script's density (and emission) by grids of `n³` samples
     /// over the bound's own box.
-    fn bake(&mut self, set: Option<&ShaderSet>, id: usize, n: u32) -> Result<(), ShaderError> {
-        let set = set.ok_or_else(|| missing_set(&self.label))?;
+    fn bake(&mut self, set: Option<&ShaderSet>, id: usize, n: u32) -> Result<(), String> {
+        let set = set.ok_or_else(|| missing_set(&self.label).to_string())?;
+        let glows = matches!(self.kind, Kind::Medium { glow: Glow::Script(_), .. });
+        let per_point = if glows { 16 } else { 4 };
+        let bytes = u64::from(n).pow(3) * per_point;
+        if bytes > MAX_GRID_BYTES {
+            return Err(format!(
+                "a {n}³ grid{} takes {:.1} GB, more than the {:.1} GB allowed; use a smaller GridResolution",
+                if glows { " of density and emission" } else { "" },
+                bytes as f64 / 1e9,
+                MAX_GRID_BYTES as f64 / 1e9
+            ));
+        }
         let b: Aabb = self.bound.local_box();
         let bound = &self.bound;
         let input = |q: Vec3| ShadeInput {
@@ -285,10 +299,11 @@ impl Volume {
             pw: bound.to_world(q).to_array(),
             ..ShadeInput::default()
         };
-        let density = Grid::bake(b, n, |q| set.density(id, &input(q)))?;
+        let density = Grid::bake(b, n, |q| set.density(id, &input(q))).map_err(|e| e.to_string())?;
         if let Kind::Medium { glow, .. } = &mut self.kind {
             if matches!(glow, Glow::Script(_)) {
-                *glow = Glow::Grid(Grid::bake(b, n, |q| set.emission(id, &input(q)).map(Vec3::from_array))?);
+                let g = Grid::bake(b, n, |q| set.emission(id, &input(q)).map(Vec3::from_array));
+                *glow = Glow::Grid(g.map_err(|e| e.to_string())?);
             }
         }
         self.field = Field::Grid(density);

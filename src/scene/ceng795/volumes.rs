@@ -28,7 +28,7 @@
 //! | `Shader`, `Parameter` | a script defining `density(s)` (media may add `emission(s)`), read as for shader maps | none: constant density |
 //! | `Density` | the constant density, or a factor on the script's | 1 |
 //! | `StepSize` | ray-marching step, world units | 1/64 of the bound's world diagonal |
-//! | `GridResolution` | bake the script's density on a grid of N³ cells (2 to 512) | none: exact |
+//! | `GridResolution` | bake the script's density (and emission) on N³ points (2 to 512, at most 1 GiB of samples) | none: exact |
 //! | `Absorption`, `Scattering` (media) | σa, σs per unit length at density 1 | 1 1 1, 0 0 0 |
 //! | `Emission` (media) | emitted radiance per unit length at density 1 | 0 0 0 |
 //! | `Anisotropy` (media) | Henyey–Greenstein g, −1 to 1 | 0 |
