@@ -99,6 +99,7 @@ const CASES: &[(&str, &[&str])] = &[
     ("volume_two_bounds.xml", &["Volume[id=fog]", "more than one bound"]),
     ("volume_box_inverted.xml", &["Box", "<Min> must be below <Max>"]),
     ("volume_grid_without_shader.xml", &["GridResolution", "needs a <Shader>"]),
+    ("volume_step_tiny.xml", &["Volume[id=fog]", "<StepSize> 0.000000001", "more than 100000 steps"]),
     ("volume_grid_huge.xml", &["GridResolution", "2 to 512", "100000"]),
     ("volume_grid_too_much_memory.xml", &["Volume[id=fire]", "512³ grid of density and emission", "2.1 GB"]),
     ("volume_negative_absorption.xml", &["Absorption", "≥ 0"]),

@@ -32,7 +32,7 @@
 use super::integrator::PathState;
 use super::scene::{Hit, HitGeom, Scene};
 use crate::math::{Ray, Vec3};
-use crate::volume::{Kind, Volume};
+use crate::volume::{steps, Kind, Volume};
 use std::f32::consts::PI;
 
 /// Transmittance below which a ray is considered absorbed (its remaining
@@ -111,7 +111,7 @@ fn transmittance(scene: &Scene, v: &Volume, ray: &Ray, t_lo: f32, t_hi: f32, st:
     if let Some(rho) = v.constant_density() {
         return (-sigma_t * (rho * (b - a))).exp();
     }
-    let n = ((b - a) / (2.0 * v.step)).ceil().max(1.0) as u32;
+    let n = steps(b - a, 2.0 * v.step);
     let dt = (b - a) / n as f32;
     let mut depth = 0.0;
     for k in 0..n {
@@ -166,7 +166,7 @@ pub fn through_media(scene: &Scene, ray: &Ray, t_end: f32, behind: Vec3, st: &mu
             continue;
         }
         let step = active.iter().map(|&i| media[i].step).fold(f32::INFINITY, f32::min);
-        let n = ((b - a) / step).ceil().max(1.0) as u32;
+        let n = steps(b - a, step);
         let dt = (b - a) / n as f32;
         for k in 0..n {
             let p = ray.at(a + (k as f32 + jitter) * dt);

@@ -36,6 +36,17 @@ pub const MEDIUM_STEPS: f32 = 64.0;
 /// bisection to a thousandth of a step.
 pub const SURFACE_STEPS: f32 = 256.0;
 
+/// Most steps one ray takes across one volume: a `StepSize` that would need
+/// more is refused when the scene is built (it would stall the render).
+pub const MAX_STEPS: f32 = 100_000.0;
+
+/// How many equal steps of at most `step` cover `len` (at least 1, at most
+/// [`MAX_STEPS`]).
+#[inline]
+pub fn steps(len: f32, step: f32) -> u32 {
+    (len / step).ceil().clamp(1.0, MAX_STEPS) as u32
+}
+
 /// Most memory the baked grids of one volume may take.
 pub const MAX_GRID_BYTES: u64 = 1 << 30;
 
@@ -236,9 +247,18 @@ impl Volumes {
                     ));
                 }
             }
-            let steps =
+            let per_bound =
                 if matches!(v.kind, VolumeKind::Surface { .. }) { SURFACE_STEPS } else { MEDIUM_STEPS };
-            let step = v.step.unwrap_or(bound.diagonal() / steps);
+            let step = v.step.unwrap_or(bound.diagonal() / per_bound);
+            if bound.diagonal() / step > MAX_STEPS {
+                return Err(err(
+                    v,
+                    format!(
+                        "<StepSize> {step} would take more than {MAX_STEPS} steps across the volume (its box is {:.3} across)",
+                        bound.diagonal()
+                    ),
+                ));
+            }
             let kind = match &v.kind {
                 VolumeKind::Medium { absorption, scattering, emission, anisotropy } => {
                     let glow = match (script, &shaders) {

@@ -13,7 +13,7 @@
 //!
 //! A feature thinner than a step can be stepped over; `StepSize` is the knob.
 
-use super::{Kind, Volume, Volumes};
+use super::{steps, Kind, Volume, Volumes};
 use crate::math::{Ray, Vec3};
 use crate::shader::ShaderError;
 
@@ -86,7 +86,7 @@ impl Volume {
             // Entering the bound where it is already dense: the bound is the surface.
             return Ok(Some((start, self.bound.normal(ray.at(start)))));
         }
-        let n = ((end - start) / self.step).ceil().max(1.0) as u32;
+        let n = steps(end - start, self.step);
         let dt = (end - start) / n as f32;
         let mut prev = start;
         for k in 1..=n {
