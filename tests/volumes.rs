@@ -209,6 +209,30 @@ fn volumes_cast_and_receive_shadows() {
     assert!(blocked[0] < open[0] * 0.05, "the sphere shadows the medium: {blocked:?} vs {open:?}");
 }
 
+/// More scattering octaves brighten a dense, lit medium (light that would
+/// scatter more than once), and one octave is plain single scattering.
+#[test]
+fn scattering_octaves_brighten_a_dense_medium() {
+    let cloud = |extra: &str| {
+        format!(
+            r#"<Volume id="c"><Sphere><Center>0 0 0</Center><Radius>0.5</Radius></Sphere>
+            <Absorption>0.05 0.05 0.05</Absorption><Scattering>6 6 6</Scattering>{extra}</Volume>"#
+        )
+    };
+    let black = |xml: String| xml.replace("<BackgroundColor>200 100 50</BackgroundColor>", "");
+    let one = centre(&render(&black(scene(9, "", &cloud(""), "10 0 0")), &[]));
+    let same = centre(&render(
+        &black(scene(9, "", &cloud("<ScatteringOctaves>1</ScatteringOctaves>"), "10 0 0")),
+        &[],
+    ));
+    let three = centre(&render(
+        &black(scene(9, "", &cloud("<ScatteringOctaves>3</ScatteringOctaves>"), "10 0 0")),
+        &[],
+    ));
+    assert_eq!(one, same);
+    assert!(three[0] > one[0] * 1.2, "{three:?} vs {one:?}");
+}
+
 /// A script's density baked on a grid renders close to the script itself.
 #[test]
 fn a_baked_grid_renders_like_its_script() {

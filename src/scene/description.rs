@@ -433,6 +433,8 @@ pub enum VolumeKind {
         emission: Vec3,
         /// Henyey–Greenstein asymmetry, −1 (back) to 1 (forward); 0 is isotropic.
         anisotropy: f32,
+        /// Orders of the multiple-scattering approximation (1: single scattering only).
+        octaves: u32,
     },
     /// A hypertexture: the surface where the density crosses `threshold`,
     /// shaded with a material like any surface.

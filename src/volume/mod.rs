@@ -82,6 +82,8 @@ pub enum Kind {
         glow: Glow,
         /// Henyey–Greenstein g.
         anisotropy: f32,
+        /// Terms of the multiple-scattering approximation (1: single scattering).
+        octaves: u32,
     },
     /// A hypertexture.
     Surface {
@@ -260,7 +262,7 @@ impl Volumes {
                 ));
             }
             let kind = match &v.kind {
-                VolumeKind::Medium { absorption, scattering, emission, anisotropy } => {
+                VolumeKind::Medium { absorption, scattering, emission, anisotropy, octaves } => {
                     let glow = match (script, &shaders) {
                         (Some(id), Some(set)) if set.has_emission(id) => Glow::Script(id),
                         _ => Glow::Constant(*emission),
@@ -270,6 +272,7 @@ impl Volumes {
                         scattering: *scattering,
                         glow,
                         anisotropy: *anisotropy,
+                        octaves: *octaves,
                     }
                 }
                 VolumeKind::Surface { material, threshold, textures: maps } => Kind::Surface {

@@ -99,6 +99,7 @@ fn negative_densities_count_as_empty_and_scale_applies() {
         scattering: Vec3::ZERO,
         emission: Vec3::ONE,
         anisotropy: 0.0,
+        octaves: 1,
     };
     let v = build(vec![d]).unwrap();
     let m = &v.media[0];

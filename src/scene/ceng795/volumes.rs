@@ -31,7 +31,8 @@
 //! | `GridResolution` | bake the script's density (and emission) on N³ points (2 to 512, at most 1 GiB of samples) | none: exact |
 //! | `Absorption`, `Scattering` (media) | σa, σs per unit length at density 1 | 1 1 1, 0 0 0 |
 //! | `Emission` (media) | emitted radiance per unit length at density 1 | 0 0 0 |
-//! | `Anisotropy` (media) | Henyey–Greenstein g, −1 to 1 | 0 |
+//! | `Anisotropy` (media) | Henyey–Greenstein g, −0.99 to 0.99 | 0 |
+//! | `ScatteringOctaves` (media) | terms of the multiple-scattering approximation, 1 to 8 (1: single scattering) | 1 |
 //! | `Material`, `Threshold`, `Textures` (hypertextures) | the surface's material, the density of the surface, its texture maps | required, 0.5, none |
 
 use super::shader_map;
@@ -47,6 +48,9 @@ use std::path::Path;
 
 /// Largest `GridResolution`: 512³ floats are half a gigabyte.
 pub const MAX_GRID: u32 = 512;
+
+/// Most `ScatteringOctaves`: each halves the last one's contribution.
+pub const MAX_OCTAVES: u32 = 8;
 
 /// What volume reading needs from the rest of the file.
 pub struct Context<'a> {
@@ -82,7 +86,7 @@ pub fn read_all(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Vec<Vol
     for v in &el.children {
         let kind = match v.name.as_str() {
             "Volume" => {
-                let extra = ["Absorption", "Scattering", "Emission", "Anisotropy"];
+                let extra = ["Absorption", "Scattering", "Emission", "Anisotropy", "ScatteringOctaves"];
                 w.unknown_children(v, &[&COMMON[..], &extra[..]].concat());
                 let non_negative = |name: &str, default: Vec3| -> Result<Vec3, SceneError> {
                     let c = r.vec3_or(v, name, default)?;
@@ -100,7 +104,21 @@ pub fn read_all(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Vec<Vol
                         format!("<Anisotropy> must lie between -0.99 and 0.99, found {anisotropy}"),
                     ));
                 }
+                let octaves = match v.child("ScatteringOctaves") {
+                    Some(o) => {
+                        let n = r.uint(o)?;
+                        if !(1..=MAX_OCTAVES).contains(&n) {
+                            return Err(r.err(
+                                o,
+                                format!("<ScatteringOctaves> must be 1 to {MAX_OCTAVES}, found {n}"),
+                            ));
+                        }
+                        n
+                    }
+                    None => 1,
+                };
                 VolumeKind::Medium {
+                    octaves,
                     absorption: non_negative("Absorption", Vec3::ONE)?,
                     scattering: non_negative("Scattering", Vec3::ZERO)?,
                     emission: non_negative("Emission", Vec3::ZERO)?,
