@@ -8,6 +8,7 @@
 //! `hwN/expected/2022/<ImageName>` and then `.../2020/...` when present: those
 //! older images belong to the older XML version of a scene.
 
+pub mod measures;
 pub mod runner;
 pub mod thresholds;
 
