@@ -1,4 +1,5 @@
-//! Distribution ray tracing: the image must not depend on the thread count,
+//! Distribution ray tracing: the image must not depend on the thread count
+//! (volumes included),
 //! the area-light estimate must converge as samples grow, and a moving object
 //! must be found along its whole path (the BVH's swept bounds).
 
@@ -66,6 +67,40 @@ fn every_effect_renders_identically_on_one_and_two_threads() {
         let c = render_with(&s, 0, &RenderOptions { seed: 4, ..opts }, &|_| {});
         assert_ne!(rgb(&a), rgb(&c));
     }
+}
+
+/// Volumes draw jitter and light samples from the pixel's sampler and run
+/// scripts in per-thread Lua states: the image must still not depend on the
+/// thread count.
+#[test]
+fn volumes_render_identically_on_one_and_two_threads() {
+    let volumes = r#"<Volumes>
+        <Volume id="fog"><Sphere><Center>0.3 1.2 0</Center><Radius>0.9</Radius></Sphere><Shader>fog.lua</Shader>
+          <Absorption>0.2 0.2 0.2</Absorption><Scattering>1.5 1.5 1.5</Scattering><Anisotropy>0.4</Anisotropy></Volume>
+        <Hypertexture id="ball"><Sphere><Center>-1 0.7 0.5</Center><Radius>0.7</Radius></Sphere><Material>1</Material>
+          <Shader>fuzz.lua</Shader></Hypertexture>
+      </Volumes></Scene>"#;
+    let xml = scene("", "").replace("</Scene>", volumes);
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("s.xml"), xml).unwrap();
+    std::fs::write(
+        dir.path().join("fog.lua"),
+        "function density(s) return 0.5 + 0.5 * fbm(s.P.x * 3, s.P.y * 3, s.P.z * 3, 3) end",
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("fuzz.lua"), "function density(s) return 1 - length(s.P) / 0.6 + 0.3 * turbulence(s.P.x * 4, s.P.y * 4, s.P.z * 4, 3) end").unwrap();
+    let desc = luster::scene::load(&dir.path().join("s.xml")).unwrap();
+    let s = Scene::build(&desc).unwrap();
+    let opts = RenderOptions { spp: Some(4), seed: 1, ..Default::default() };
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let two = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+    let a = one.install(|| render_with(&s, 0, &opts, &|_| {}));
+    let b = two.install(|| render_with(&s, 0, &opts, &|_| {}));
+    assert_eq!(rgb(&a), rgb(&b));
+    // The volumes are in the picture (the test is not of an empty room).
+    let (_d, plain) = load(&scene("", ""));
+    let without = render_with(&Scene::build(&plain).unwrap(), 0, &opts, &|_| {});
+    assert!(rms(&rgb(&a), &rgb(&without)) > 1.0);
 }
 
 #[test]
