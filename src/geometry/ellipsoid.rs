@@ -95,9 +95,8 @@ impl Ellipsoid {
     /// exit parameters `(t_in, t_out)`, `t_in ≤ t_out`, in units of the
     /// ray's own direction (which need not be unit length). Both may be
     /// negative (the solid is behind the origin); `t_in < 0 ≤ t_out` means
-    /// the origin is inside. `None` when the line misses. Volume rendering
-    /// marches a medium bounded by the ellipsoid over this interval, clipped
-    /// to `[0, t_max]` by the caller.
+    /// the origin is inside. `None` when the line misses. (Volume bounds
+    /// keep the unit ball's space for scripts, so they use `volume::Bound`.)
     pub fn interval(&self, ray: &Ray) -> Option<(f32, f32)> {
         self.roots(ray)
     }

@@ -166,6 +166,8 @@ pub fn through_media(scene: &Scene, ray: &Ray, t_end: f32, behind: Vec3, st: &mu
     let mut radiance = Vec3::ZERO;
     let mut tr = Vec3::ONE;
     let mut active: Vec<usize> = Vec::with_capacity(spans.len());
+    // Per scattering medium at a sample point: σs·ρ, g, octaves (reused).
+    let mut scatter: Vec<(Vec3, f32, u32)> = Vec::with_capacity(spans.len());
     for w in cuts.windows(2) {
         let (a, b) = (w[0], w[1]);
         active.clear();
@@ -178,7 +180,7 @@ pub fn through_media(scene: &Scene, ray: &Ray, t_end: f32, behind: Vec3, st: &mu
         let dt = (b - a) / n as f32;
         for k in 0..n {
             let p = ray.at(a + (k as f32 + jitter) * dt);
-            let (sigma_t, source) = match point(scene, &active, p, ray.d, st) {
+            let (sigma_t, source) = match point(scene, &active, &mut scatter, p, ray.d, st) {
                 Some(x) => x,
                 None => return Vec3::ZERO,
             };
@@ -202,14 +204,18 @@ pub fn through_media(scene: &Scene, ray: &Ray, t_end: f32, behind: Vec3, st: &mu
 /// Extinction and source (in-scattering plus emission) at `p` for a ray
 /// travelling along `d`, summed over the `active` media; `None` after a
 /// script failed (recorded in `st`).
-fn point(scene: &Scene, active: &[usize], p: Vec3, d: Vec3, st: &mut PathState) -> Option<(Vec3, Vec3)> {
+fn point(
+    scene: &Scene,
+    active: &[usize],
+    scatter: &mut Vec<(Vec3, f32, u32)>,
+    p: Vec3,
+    d: Vec3,
+    st: &mut PathState,
+) -> Option<(Vec3, Vec3)> {
     let vols = &scene.volumes;
     let mut sigma_t = Vec3::ZERO;
     let mut emitted = Vec3::ZERO;
-    // Per medium: its σs·ρ, its phase asymmetry and its scattering octaves.
-    let mut scatter: [(Vec3, f32, u32); 4] = [(Vec3::ZERO, 0.0, 1); 4];
-    let mut n_scatter = 0;
-    let mut extra_scatter = Vec3::ZERO;
+    scatter.clear();
     for &i in active {
         let v = &vols.media[i];
         let Kind::Medium { absorption, scattering, anisotropy, octaves, .. } = v.kind else { continue };
@@ -230,17 +236,11 @@ fn point(scene: &Scene, active: &[usize], p: Vec3, d: Vec3, st: &mut PathState) 
         sigma_t += (absorption + scattering) * rho;
         let s = scattering * rho;
         if s.max_element() > 0.0 {
-            if n_scatter < scatter.len() {
-                scatter[n_scatter] = (s, anisotropy, octaves);
-                n_scatter += 1;
-            } else {
-                // More than four overlapping scattering media: the rest scatter isotropically.
-                extra_scatter += s;
-            }
+            scatter.push((s, anisotropy, octaves));
         }
     }
-    let scatter = &scatter[..n_scatter];
-    let total_s = scatter.iter().map(|s| s.0).sum::<Vec3>() + extra_scatter;
+    let scatter = &scatter[..];
+    let total_s = scatter.iter().map(|s| s.0).sum::<Vec3>();
     if total_s.max_element() <= 0.0 {
         return Some((sigma_t, emitted));
     }
@@ -252,8 +252,7 @@ fn point(scene: &Scene, active: &[usize], p: Vec3, d: Vec3, st: &mut PathState) 
             return;
         }
         let cos = l.dot(d);
-        // Isotropic (p = 1/4π) for media beyond the four tracked, times π.
-        let mut f = extra_scatter * 0.25 * tr;
+        let mut f = Vec3::ZERO;
         for &(s, g, octaves) in scatter {
             f += s * (PI * henyey_greenstein(cos, g)) * tr;
             // The multiple-scattering approximation: octave k scatters 2⁻ᵏ as
@@ -262,8 +261,7 @@ fn point(scene: &Scene, active: &[usize], p: Vec3, d: Vec3, st: &mut PathState) 
             let mut k_scale = 1.0;
             for _ in 1..octaves {
                 k_scale *= 0.5;
-                let tr_k = Vec3::select(tr.cmpgt(Vec3::ZERO), tr.powf(k_scale), Vec3::ZERO);
-                f += s * (k_scale * PI * henyey_greenstein(cos, g * k_scale)) * tr_k;
+                f += s * (k_scale * PI * henyey_greenstein(cos, g * k_scale)) * tr.powf(k_scale);
             }
         }
         inscatter += f * e;

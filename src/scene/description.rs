@@ -404,8 +404,8 @@ pub enum BoundDesc {
         center: Vec3,
         /// Semi-axes along the rotated x, y, z.
         radii: Vec3,
-        /// Rotation, as a transform (identity when none is given).
-        rotation: Transform,
+        /// Rotation (identity when none is given).
+        rotation: Quat,
     },
 }
 

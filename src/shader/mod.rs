@@ -212,20 +212,12 @@ impl ShaderSet {
     /// one's top level, and checks that each defines at least one entry point.
     /// `timeout` bounds every later call (and each top level).
     pub fn new(sources: Vec<ShaderSource>, timeout: Duration) -> Result<ShaderSet, ShaderError> {
-        ShaderSet::build(sources, timeout, None)
+        ShaderSet::with_images(sources, timeout, None)
     }
 
-    /// Like [`ShaderSet::new`], with images the scripts sample with
-    /// `texture(name, u, v)`.
+    /// Like [`ShaderSet::new`], with the images (if any) the scripts sample
+    /// with `texture(name, u, v)`.
     pub fn with_images(
-        sources: Vec<ShaderSource>,
-        timeout: Duration,
-        images: ShaderImages,
-    ) -> Result<ShaderSet, ShaderError> {
-        ShaderSet::build(sources, timeout, Some(images))
-    }
-
-    fn build(
         sources: Vec<ShaderSource>,
         timeout: Duration,
         images: Option<ShaderImages>,

@@ -373,7 +373,7 @@ fn texture_reaches_the_sampler_by_name_and_filter() {
            return a, b + v, f
          end",
     );
-    let set = ShaderSet::with_images(vec![src], DEFAULT_TIMEOUT, images).unwrap();
+    let set = ShaderSet::with_images(vec![src], DEFAULT_TIMEOUT, Some(images)).unwrap();
     assert_eq!(set.color(0, &input([0.0; 3])).unwrap(), [0.25, 10.625, 0.0]);
 }
 

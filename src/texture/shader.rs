@@ -49,7 +49,7 @@ fn entry_for(decal: DecalMode) -> Option<&'static str> {
 }
 
 /// The name errors give a shader: its script's file name without extension.
-fn shader_name(path: &std::path::Path) -> String {
+pub(crate) fn shader_name(path: &std::path::Path) -> String {
     path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned())
 }
 
@@ -75,10 +75,7 @@ pub fn compile(
     if sources.is_empty() {
         return Ok(None);
     }
-    let make = |sources: Vec<ShaderSource>| match &images {
-        Some(images) => ShaderSet::with_images(sources, timeout, images.clone()),
-        None => ShaderSet::new(sources, timeout),
-    };
+    let make = |sources: Vec<ShaderSource>| ShaderSet::with_images(sources, timeout, images.clone());
     let set = match make(sources.clone()) {
         Ok(set) => set,
         // The set reports the first script that fails; compile them one by

@@ -5,7 +5,7 @@
 //! renormalizing, so the ray parameter `t` means the same in both spaces.
 
 use crate::geometry::Sphere;
-use crate::math::{Aabb, Ray, Transform, Vec3};
+use crate::math::{Aabb, Mat4, Ray, Transform, Vec3};
 use crate::scene::description::BoundDesc;
 use crate::texture::TexFrame;
 
@@ -32,9 +32,11 @@ impl Bound {
             BoundDesc::Sphere { center, radius } => (Shape::Ball { center, radius }, None),
             BoundDesc::Box { min, max } => (Shape::Box { min, max }, None),
             BoundDesc::Ellipsoid { center, radii, rotation } => {
-                // Radii are checked positive when the scene is read.
+                // Radii are checked positive (and not subnormal) when the
+                // scene is read, so the scaling is invertible.
                 let scale = Transform::scaling(radii).unwrap_or(Transform::IDENTITY);
-                let xf = scale.then(&rotation).then(&Transform::translation(center));
+                let turn = Transform::from_matrix(Mat4::from_quat(rotation)).unwrap_or(Transform::IDENTITY);
+                let xf = scale.then(&turn).then(&Transform::translation(center));
                 (Shape::Ball { center: Vec3::ZERO, radius: 1.0 }, Some(xf))
             }
         };
@@ -172,6 +174,7 @@ impl Bound {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::Quat;
 
     #[test]
     fn ball_and_box_intervals() {
@@ -190,7 +193,7 @@ mod tests {
 
     #[test]
     fn an_ellipsoid_is_a_scaled_rotated_ball() {
-        let rotation = Transform::rotation(90.0, Vec3::Z).unwrap();
+        let rotation = Quat::from_rotation_z(90f32.to_radians());
         let e = BoundDesc::Ellipsoid {
             center: Vec3::new(0.0, 1.0, 0.0),
             radii: Vec3::new(3.0, 1.0, 1.0),

@@ -26,6 +26,7 @@ use crate::math::{Aabb, Vec3};
 use crate::scene::description::{Description, VolumeDesc, VolumeKind};
 use crate::scene::SceneError;
 use crate::shader::{ShadeInput, ShaderError, ShaderErrorKind, ShaderImages, ShaderSet, ShaderSource};
+use crate::texture::shader::shader_name;
 use crate::texture::{TexList, Textures};
 use std::time::Duration;
 
@@ -149,15 +150,10 @@ impl Volume {
         })
     }
 
-    /// Whether the density is the same everywhere in the bound (so
-    /// transmittance through it is exact without marching).
-    pub fn is_homogeneous(&self) -> bool {
-        matches!(self.field, Field::Constant)
-    }
-
-    /// The constant density of a homogeneous volume.
+    /// The density of a volume whose density is the same everywhere in its
+    /// bound (so transmittance through it is exact without marching).
     pub fn constant_density(&self) -> Option<f32> {
-        self.is_homogeneous().then_some(self.scale)
+        matches!(self.field, Field::Constant).then_some(self.scale)
     }
 }
 
@@ -198,29 +194,23 @@ impl Volumes {
         let err = |v: &VolumeDesc, msg: String| SceneError::at(&desc.file, &v.loc, msg);
         // Script k of the set belongs to the k-th volume with a script.
         let mut sources = Vec::new();
+        // (volume index, shader name) of each source.
         let mut owners = Vec::new();
         for (i, v) in desc.volumes.iter().enumerate() {
             if let Some(s) = &v.script {
-                let name = s
-                    .path
-                    .file_stem()
-                    .map_or_else(|| s.path.display().to_string(), |n| n.to_string_lossy().into());
+                let name = shader_name(&s.path);
+                owners.push((i, name.clone()));
                 let mut src = ShaderSource::new(name, s.path.clone(), s.code.clone());
                 src.params = s.params.clone();
                 sources.push(src);
-                owners.push(i);
             }
         }
         let shaders = if sources.is_empty() {
             None
         } else {
-            let set = match images {
-                Some(images) => ShaderSet::with_images(sources.clone(), timeout, images),
-                None => ShaderSet::new(sources.clone(), timeout),
-            };
-            Some(set.map_err(|e| {
+            Some(ShaderSet::with_images(sources, timeout, images).map_err(|e| {
                 // The set names the failing shader; find its volume for the location.
-                let at = sources.iter().position(|s| s.name == e.shader).map_or(owners[0], |k| owners[k]);
+                let at = owners.iter().find(|(_, n)| *n == e.shader).map_or(owners[0].0, |o| o.0);
                 err(&desc.volumes[at], e.to_string())
             })?)
         };

@@ -280,6 +280,14 @@ fn ellipsoid(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, Sce
     );
     let c = r.required(el, "Center")?;
     let center = vertex(ctx, c, r.uint(c)?)?;
+    let (radii, rotation) = radii_and_rotation(r, el)?;
+    Ok(Shape::Ellipsoid { center, radii, rotation })
+}
+
+/// An ellipsoid's `Radii` (three positive numbers) and optional `Rotation`
+/// (degrees about an axis, as the `Rotation` transform), for objects and
+/// for volume bounds alike.
+pub fn radii_and_rotation(r: &Reader, el: &Element) -> Result<(Vec3, Quat), SceneError> {
     let re = r.required(el, "Radii")?;
     let radii = r.vec3(re)?;
     // A subnormal radius passes `> 0` but its reciprocal, which intersection
@@ -305,7 +313,7 @@ fn ellipsoid(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, Sce
             Quat::from_axis_angle((axis / largest).normalize(), v[0].to_radians())
         }
     };
-    Ok(Shape::Ellipsoid { center, radii, rotation })
+    Ok((radii, rotation))
 }
 
 fn vertex(ctx: &Context, el: &Element, i: u32) -> Result<Vec3, SceneError> {

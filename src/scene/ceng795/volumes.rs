@@ -35,6 +35,7 @@
 //! | `ScatteringOctaves` (media) | terms of the multiple-scattering approximation, 1 to 8 (1: single scattering) | 1 |
 //! | `Material`, `Threshold`, `Textures` (hypertextures) | the surface's material, the density of the surface, its texture maps | required, 0.5, none |
 
+use super::objects::radii_and_rotation;
 use super::shader_map;
 use super::textures::object_textures;
 use super::transforms::compose;
@@ -217,14 +218,6 @@ fn bound(r: &Reader, v: &Element) -> Result<BoundDesc, SceneError> {
         [] => return Err(r.err(v, format!("<{}> needs a bound: <Sphere>, <Box> or <Ellipsoid>", v.name))),
         _ => return Err(r.err(found[1], format!("<{}> has more than one bound", v.name))),
     };
-    let positive = |name: &str| -> Result<Vec3, SceneError> {
-        let el = r.required(b, name)?;
-        let x = r.vec3(el)?;
-        if !(x.min_element() > 0.0 && x.is_finite()) {
-            return Err(r.err(el, format!("<{name}> must be positive")));
-        }
-        Ok(x)
-    };
     Ok(match b.name.as_str() {
         "Sphere" => {
             let re = r.required(b, "Radius")?;
@@ -243,19 +236,8 @@ fn bound(r: &Reader, v: &Element) -> Result<BoundDesc, SceneError> {
             BoundDesc::Box { min, max }
         }
         _ => {
-            let rotation = match b.child("Rotation") {
-                Some(el) => {
-                    let f = r.floats_n(el, 4)?;
-                    Transform::rotation(f[0], Vec3::new(f[1], f[2], f[3]))
-                        .ok_or_else(|| r.err(el, "the <Rotation> axis is zero"))?
-                }
-                None => Transform::IDENTITY,
-            };
-            BoundDesc::Ellipsoid {
-                center: r.vec3(r.required(b, "Center")?)?,
-                radii: positive("Radii")?,
-                rotation,
-            }
+            let (radii, rotation) = radii_and_rotation(r, b)?;
+            BoundDesc::Ellipsoid { center: r.vec3(r.required(b, "Center")?)?, radii, rotation }
         }
     })
 }
