@@ -55,7 +55,7 @@ const CASES: &[(&str, &[&str])] = &[
     // PLY files.
     ("ply_missing.xml", &["PLY", "no_such_mesh.ply", "no such file"]),
     ("ply_empty_file_name.json", &["<Faces>", "empty plyFile"]),
-    ("ply_is_a_folder.xml", &["cannot read PLY file", "directory"]),
+    ("ply_is_a_folder.xml", &["cannot read PLY file", "folder"]),
     ("ply_garbage.xml", &["garbage.ply", "not a PLY file"]),
     ("ply_truncated_binary.json", &["truncated_binary.ply", "face 1", "file ends before"]),
     ("ply_absurd_counts.xml", &["absurd_counts.ply", "4000000000 'vertex'", "only 74 bytes"]),

@@ -143,10 +143,11 @@ impl PrimRef {
     fn index(&self) -> u32 {
         self.lo.w.to_bits()
     }
-    /// Twice the centroid: binning is scale-free, so the halving is skipped.
+    /// The centroid, halved before the sum so that boxes near ±f32::MAX do
+    /// not overflow to infinity (halving is exact, so bins are as before).
     #[inline]
-    fn centroid2(&self) -> Vec3A {
-        self.min() + self.max()
+    fn centroid(&self) -> Vec3A {
+        self.min() * 0.5 + self.max() * 0.5
     }
 }
 
@@ -161,7 +162,7 @@ type Bins = [[Bin; BINS]; 3];
 
 const EMPTY_BINS: Bins = [[Bin { bounds: Bounds::EMPTY, count: 0 }; BINS]; 3];
 
-/// Maps a (doubled) centroid to bin indices on the three axes.
+/// Maps a centroid to bin indices on the three axes.
 #[derive(Clone, Copy)]
 struct Binner {
     origin: Vec3A,
@@ -200,7 +201,7 @@ fn bin_refs(refs: &[PrimRef], binner: &Binner) -> Bins {
     let mut bins = EMPTY_BINS;
     for r in refs {
         let b = Bounds { min: r.min(), max: r.max() };
-        let idx = binner.bins(r.centroid2());
+        let idx = binner.bins(r.centroid());
         for axis in 0..3 {
             let bin = &mut bins[axis][idx[axis]];
             bin.bounds = bin.bounds.union(b);
@@ -223,7 +224,7 @@ fn merge_bins(mut a: Bins, b: &Bins) -> Bins {
 /// Box and centroid box of a set of references.
 fn ref_bounds(refs: &[PrimRef]) -> (Bounds, Bounds) {
     let fold = |(b, c): (Bounds, Bounds), r: &PrimRef| {
-        (b.union(Bounds { min: r.min(), max: r.max() }), c.grow(r.centroid2()))
+        (b.union(Bounds { min: r.min(), max: r.max() }), c.grow(r.centroid()))
     };
     if refs.len() >= PAR_BIN_MIN {
         use rayon::prelude::*;
@@ -287,7 +288,7 @@ fn partition(refs: &mut [PrimRef], mut left: impl FnMut(Vec3A) -> bool) -> (usiz
     // Each reference is classified exactly once: the one swapped to `j` is
     // already known to go right.
     while i < j {
-        let c = refs[i].centroid2();
+        let c = refs[i].centroid();
         if left(c) {
             lc = lc.grow(c);
             i += 1;
@@ -383,6 +384,11 @@ impl Builder {
             return None;
         }
         let (mid, lcb, rcb) = partition(refs, |c| binner.bin(c, s.axis) < s.bin);
+        if mid == 0 || mid == n {
+            // Binning and partition disagree, which only extreme coordinates
+            // can cause; an empty child would be a leaf of no primitives.
+            return (n > MAX_LEAF).then(|| Self::median_split(refs, cbounds));
+        }
         Some((mid, s.left, lcb, s.right, rcb))
     }
 
@@ -394,7 +400,7 @@ impl Builder {
         // Ties broken by input index, so the result does not depend on the
         // selection algorithm's internals.
         refs.select_nth_unstable_by(mid, |a, b| {
-            a.centroid2()[axis].total_cmp(&b.centroid2()[axis]).then(a.index().cmp(&b.index()))
+            a.centroid()[axis].total_cmp(&b.centroid()[axis]).then(a.index().cmp(&b.index()))
         });
         let (l, r) = refs.split_at(mid);
         let ((lb, lcb), (rb, rcb)) = (ref_bounds(l), ref_bounds(r));

@@ -42,8 +42,8 @@ enum Command {
         /// Folder for the images (created if needed).
         #[arg(short, long, default_value = ".")]
         outdir: PathBuf,
-        /// Worker threads (default: all cores).
-        #[arg(short, long)]
+        /// Worker threads (default: all cores; at most 1024).
+        #[arg(short, long, value_parser = threads_parser())]
         threads: Option<usize>,
         /// Print no progress bar and no summary, only errors and warnings.
         #[arg(short, long)]
@@ -77,7 +77,7 @@ enum Command {
         #[arg(required = true)]
         plys: Vec<PathBuf>,
         /// Thread counts to measure, comma-separated.
-        #[arg(long, value_delimiter = ',', default_value = "1,2")]
+        #[arg(long, value_delimiter = ',', default_value = "1,2", value_parser = threads_parser())]
         threads: Vec<usize>,
         /// Timed repetitions per thread count (the median is reported).
         #[arg(long, default_value_t = 5)]
@@ -137,7 +137,7 @@ enum Command {
         #[arg(long, value_name = "PATTERN")]
         only: Option<String>,
         /// Worker threads per scene (default: all cores, shared among the jobs).
-        #[arg(short, long, value_parser = clap::value_parser!(u16).range(1..))]
+        #[arg(short, long, value_parser = clap::value_parser!(u16).range(1..=MAX_THREADS as i64))]
         threads: Option<u16>,
         /// Exit 1 if any image failed or errored.
         #[arg(long)]
@@ -283,6 +283,15 @@ fn parse_distance(s: &str) -> Result<f32, String> {
 enum FilterArg {
     Box,
     Gaussian,
+}
+
+/// Most worker threads accepted: far beyond any machine's cores, and far
+/// below the point where starting threads exhausts the system.
+const MAX_THREADS: u64 = 1024;
+
+/// Thread counts from 1 to [`MAX_THREADS`].
+fn threads_parser() -> clap::builder::RangedU64ValueParser<usize> {
+    clap::builder::RangedU64ValueParser::<usize>::new().range(1..=MAX_THREADS)
 }
 
 /// A rayon pool of `threads` workers (all cores when `None`).

@@ -118,11 +118,21 @@ pub fn discover(root: &Path) -> Vec<Case> {
 }
 
 fn walk(dir: &Path, ext: &str, out: &mut Vec<PathBuf>) {
+    walk_once(dir, ext, out, &mut std::collections::HashSet::new());
+}
+
+/// Walks each folder once, however symbolic links lead back to it, so a link
+/// loop ends instead of recursing until the stack or the path length runs out.
+fn walk_once(dir: &Path, ext: &str, out: &mut Vec<PathBuf>, seen: &mut std::collections::HashSet<PathBuf>) {
+    let Ok(real) = std::fs::canonicalize(dir) else { return };
+    if !seen.insert(real) {
+        return;
+    }
     let Ok(entries) = std::fs::read_dir(dir) else { return };
     for e in entries.flatten() {
         let p = e.path();
         if p.is_dir() {
-            walk(&p, ext, out);
+            walk_once(&p, ext, out, seen);
         } else if p.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case(ext)) {
             out.push(p);
         }

@@ -107,13 +107,15 @@ impl Rgb32Image {
     /// unreadable, of an unsupported format, or corrupt.
     pub fn load(path: impl AsRef<Path>) -> Result<Self, ImageError> {
         let path = path.as_ref();
-        let file = std::fs::File::open(path).map_err(|e| ImageError::from_io(path, &e))?;
-        if file.metadata().is_ok_and(|m| m.is_dir()) {
-            return Err(ImageError::Unreadable {
-                path: path.to_path_buf(),
-                detail: "it is a directory".to_string(),
-            });
+        // Not a regular file (a folder, a FIFO, a device) or an absurd size:
+        // refused before opening, so nothing blocks or runs memory out.
+        if let Err(detail) = crate::scene::file::check_regular(path, crate::texture::image::MAX_IMAGE_BYTES) {
+            if std::fs::metadata(path).is_ok() {
+                let detail = if detail == "it is a folder" { "it is a directory".to_string() } else { detail };
+                return Err(ImageError::Unreadable { path: path.to_path_buf(), detail });
+            }
         }
+        let file = std::fs::File::open(path).map_err(|e| ImageError::from_io(path, &e))?;
         let mut reader = ImageReader::new(BufReader::new(file));
         if let Ok(format) = ImageFormat::from_path(path) {
             reader.set_format(format);

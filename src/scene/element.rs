@@ -6,7 +6,7 @@
 //! `_` are attributes, `_data` is the text, arrays are repeated children), so
 //! everything after this point is written once for both encodings.
 
-use super::error::{Loc, SceneError};
+use super::error::{shown_token, Loc, SceneError};
 use glam::Vec3;
 use std::path::Path;
 
@@ -71,12 +71,12 @@ impl<'a> Reader<'a> {
             .split_ascii_whitespace()
             .map(|tok| {
                 let v: f32 = tok.parse().map_err(|_| {
-                    self.err(el, format!("<{}> has \"{}\", which is not a number", el.name, short(tok)))
+                    self.err(el, format!("<{}> has {}, which is not a number", el.name, shown_token(tok)))
                 })?;
                 if v.is_finite() {
                     Ok(v)
                 } else {
-                    Err(self.err(el, format!("<{}> has a non-finite number \"{}\"", el.name, tok)))
+                    Err(self.err(el, format!("<{}> has a non-finite number {}", el.name, shown_token(tok))))
                 }
             })
             .collect()
@@ -110,7 +110,7 @@ impl<'a> Reader<'a> {
                 tok.parse::<u32>().map_err(|_| {
                     self.err(
                         el,
-                        format!("<{}> has \"{}\", which is not a non-negative integer", el.name, short(tok)),
+                        format!("<{}> has {}, which is not a non-negative integer", el.name, shown_token(tok)),
                     )
                 })
             })
@@ -151,15 +151,5 @@ impl<'a> Reader<'a> {
             Some(s) if s == "false" || s == "0" => Ok(false),
             Some(s) => Err(self.err(el, format!("attribute {name}=\"{s}\" must be true or false"))),
         }
-    }
-}
-
-/// A token cut short for an error message, so a megabyte of garbage does not
-/// end up on the terminal.
-fn short(tok: &str) -> String {
-    if tok.chars().count() > 24 {
-        format!("{}…", tok.chars().take(24).collect::<String>())
-    } else {
-        tok.to_string()
     }
 }

@@ -70,3 +70,29 @@ impl fmt::Display for Warning {
         write!(f, "{}: {}", self.loc, self.message)
     }
 }
+
+/// A token of a file for an error message: quoted when it looks like a word
+/// or a number (`"Kd"`, `"0,3"`), otherwise only its length, so an error about
+/// a file that is not what it should be (`mtllib /etc/passwd`) never shows
+/// what the file holds.
+pub fn shown_token(tok: &str) -> String {
+    let wordlike = |c: char| c.is_ascii_alphanumeric() || "_.+-,".contains(c);
+    if !tok.is_empty() && tok.len() <= 24 && tok.chars().all(wordlike) {
+        format!("\"{tok}\"")
+    } else {
+        format!("a token of {} characters", tok.chars().count())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tokens_that_could_be_secrets_are_not_quoted() {
+        assert_eq!(shown_token("0,3"), "\"0,3\"");
+        assert_eq!(shown_token("map_Kd"), "\"map_Kd\"");
+        assert_eq!(shown_token("root:x:0:0:root:/root:/bin/bash"), "a token of 31 characters");
+        assert_eq!(shown_token("$6$salt$hash"), "a token of 12 characters");
+    }
+}

@@ -7,11 +7,119 @@
 //! serde_json does not keep positions of values, so JSON errors locate an
 //! element by its path (`Scene/Objects/Mesh[id=3]/Faces`); syntax errors carry
 //! the line and column from the parser.
+//!
+//! Two things JSON allows are refused: a key given twice in one object (the
+//! file is read into [`Json`], which keeps every key, and the second one is
+//! an error with its line instead of silently replacing the first), and
+//! `null` for an element that is always an object ([`OBJECT_ELEMENTS`]).
+//! Nesting deeper than serde_json's limit of 128 is an error, never a stack
+//! overflow.
 
 use super::element::Element;
 use super::error::{Loc, SceneError};
-use serde_json::Value;
+use serde::de::{self, Deserialize, Deserializer, MapAccess, SeqAccess, Visitor};
 use std::path::Path;
+
+/// Elements that are always objects in the format: `null` for one of them is
+/// a mistake (an empty camera, an empty mesh), not an empty element.
+pub const OBJECT_ELEMENTS: &[&str] = &[
+    "Scene",
+    "Cameras",
+    "Camera",
+    "Lights",
+    "PointLight",
+    "AreaLight",
+    "DirectionalLight",
+    "SpotLight",
+    "SphericalDirectionalLight",
+    "Materials",
+    "Material",
+    "Transformations",
+    "Textures",
+    "Images",
+    "TextureMap",
+    "Objects",
+    "Mesh",
+    "MeshInstance",
+    "Triangle",
+    "Sphere",
+    "Plane",
+    "Ellipsoid",
+    "Volumes",
+    "Volume",
+];
+
+/// A JSON value that keeps its object's keys in order and refuses duplicates.
+enum Value {
+    Null,
+    Bool(bool),
+    Number(serde_json::Number),
+    String(String),
+    Array(Vec<Value>),
+    Object(Vec<(String, Value)>),
+}
+
+impl<'de> Deserialize<'de> for Value {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Value, D::Error> {
+        d.deserialize_any(ValueVisitor)
+    }
+}
+
+struct ValueVisitor;
+
+impl<'de> Visitor<'de> for ValueVisitor {
+    type Value = Value;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_unit<E>(self) -> Result<Value, E> {
+        Ok(Value::Null)
+    }
+    fn visit_none<E>(self) -> Result<Value, E> {
+        Ok(Value::Null)
+    }
+    fn visit_bool<E>(self, b: bool) -> Result<Value, E> {
+        Ok(Value::Bool(b))
+    }
+    fn visit_i64<E>(self, n: i64) -> Result<Value, E> {
+        Ok(Value::Number(n.into()))
+    }
+    fn visit_u64<E>(self, n: u64) -> Result<Value, E> {
+        Ok(Value::Number(n.into()))
+    }
+    fn visit_f64<E: de::Error>(self, n: f64) -> Result<Value, E> {
+        serde_json::Number::from_f64(n).map(Value::Number).ok_or_else(|| E::custom("a number is not finite"))
+    }
+    fn visit_str<E>(self, s: &str) -> Result<Value, E> {
+        Ok(Value::String(s.to_string()))
+    }
+    fn visit_string<E>(self, s: String) -> Result<Value, E> {
+        Ok(Value::String(s))
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Value, A::Error> {
+        let mut items = Vec::new();
+        while let Some(v) = seq.next_element()? {
+            items.push(v);
+        }
+        Ok(Value::Array(items))
+    }
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Value, A::Error> {
+        let mut entries: Vec<(String, Value)> = Vec::new();
+        let mut seen = std::collections::HashSet::new();
+        while let Some(key) = map.next_key::<String>()? {
+            if !seen.insert(key.clone()) {
+                return Err(de::Error::custom(format!(
+                    "the key {} is given twice in one object",
+                    super::error::shown_token(&key)
+                )));
+            }
+            let v = map.next_value()?;
+            entries.push((key, v));
+        }
+        Ok(Value::Object(entries))
+    }
+}
 
 /// Parses JSON text into an element tree rooted at the `Scene` element.
 pub fn parse(file: &Path, text: &str) -> Result<Element, SceneError> {
@@ -31,7 +139,7 @@ pub fn parse(file: &Path, text: &str) -> Result<Element, SceneError> {
             "the top level of a scene must be an object with a \"Scene\" key",
         ));
     };
-    let (name, body) = match top.iter().next() {
+    let (name, body) = match top.first() {
         Some((k, body)) if top.len() == 1 => (k.as_str(), body),
         _ => {
             return Err(SceneError::file(
@@ -53,6 +161,14 @@ fn convert(
     let mut el = Element { name: name.to_string(), ..Default::default() };
     let mut kids: Vec<(&str, &Value)> = Vec::new();
     match v {
+        Value::Null if OBJECT_ELEMENTS.contains(&name) => {
+            let path = if parent.is_empty() { name.to_string() } else { format!("{parent}/{name}") };
+            return Err(SceneError::at(
+                file,
+                &Loc { line: None, path },
+                format!("<{name}> is null; it must be an object"),
+            ));
+        }
         Value::Null => {}
         Value::String(s) => el.text = s.trim().to_string(),
         Value::Number(n) => el.text = n.to_string(),
@@ -96,7 +212,9 @@ fn scalar(v: &Value) -> String {
     match v {
         Value::String(s) => s.clone(),
         Value::Null => String::new(),
-        other => other.to_string(),
+        Value::Bool(b) => b.to_string(),
+        Value::Number(n) => n.to_string(),
+        Value::Array(_) | Value::Object(_) => String::new(),
     }
 }
 
@@ -118,6 +236,18 @@ mod tests {
         assert_eq!(meshes[1].child("Faces").unwrap().attr("plyFile"), Some("a.ply"));
         assert_eq!(meshes[1].child("Material").unwrap().loc.path, "Scene/Objects/Mesh[id=2]/Material");
         assert_eq!(root.child("VertexData").unwrap().text, "");
+    }
+
+    #[test]
+    fn duplicate_keys_null_objects_and_deep_nesting_are_refused() {
+        let dup = "{\"Scene\": {\n\"Cameras\": {},\n\"Cameras\": {}}}";
+        let e = parse(Path::new("d.json"), dup).unwrap_err().to_string();
+        assert!(e.starts_with("d.json: line 3") && e.contains("\"Cameras\" is given twice"), "{e}");
+        let e = parse(Path::new("n.json"), r#"{"Scene": {"Cameras": {"Camera": null}}}"#).unwrap_err();
+        assert_eq!(e.to_string(), "n.json: Scene/Cameras/Camera: <Camera> is null; it must be an object");
+        let deep = format!("{{\"Scene\": {}{}}}", "[".repeat(100_000), "]".repeat(100_000));
+        let e = parse(Path::new("deep.json"), &deep).unwrap_err().to_string();
+        assert!(e.contains("recursion limit"), "{e}");
     }
 
     #[test]

@@ -5,6 +5,7 @@ pub mod ceng795;
 pub mod description;
 pub mod element;
 pub mod error;
+pub mod file;
 pub mod json;
 pub mod obj;
 pub mod ply;
@@ -26,26 +27,12 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
     if is_obj(path) {
         return obj::model_scene(path, &obj::ModelView::default());
     }
-    let meta = std::fs::metadata(path)
-        .map_err(|e| SceneError::file(path, format!("cannot read the scene: {}", io_reason(&e))))?;
-    if meta.is_dir() {
-        return Err(SceneError::file(path, "is a folder, not a scene file"));
-    }
-    if meta.len() > MAX_SCENE_BYTES {
-        return Err(SceneError::file(
-            path,
-            format!("the scene file is {} bytes, more than the {} accepted", meta.len(), MAX_SCENE_BYTES),
-        ));
-    }
-    let bytes = std::fs::read(path)
-        .map_err(|e| SceneError::file(path, format!("cannot read the scene: {}", io_reason(&e))))?;
-    let text = String::from_utf8(bytes).map_err(|e| {
-        let at = e.utf8_error().valid_up_to();
-        let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
-        SceneError::file(
-            path,
-            format!("the scene is not UTF-8 text (invalid byte on line {line}, at offset {at})"),
-        )
+    let text = file::read_text(path, MAX_SCENE_BYTES).map_err(|why| {
+        if why == "it is a folder" {
+            SceneError::file(path, "is a folder, not a scene file")
+        } else {
+            SceneError::file(path, format!("cannot read the scene: {why}"))
+        }
     })?;
     if text.trim().is_empty() {
         return Err(SceneError::file(path, "the scene file is empty"));

@@ -31,8 +31,17 @@
 //! starting with `__luster` are refused, so a script cannot shadow or replace
 //! the tick.
 //!
-//! Malformed input (an unterminated string or comment) is passed through
-//! unchanged from that point: Lua's own parser then reports it with its line.
+//! The scanner follows LuaJIT's lexer (`lj_lex.c`) exactly where it matters
+//! for finding keywords: a newline is `\n`, `\r`, `\r\n` or `\n\r`; a line
+//! comment ends at either `\r` or `\n`; a short string ends at its quote and
+//! fails at a bare newline; a backslash escapes the next character, a newline
+//! (of any of the four forms), or with `\z` all whitespace that follows,
+//! newlines included; long strings and comments close only at a bracket of
+//! their own level; a numeral takes a sign only right after its exponent
+//! letter (`e` for decimal, `p` for hexadecimal); and bytes from 0x80 up are
+//! identifier characters. Where the scanner and Lua could still disagree (an
+//! unterminated string or comment), instrumenting fails: the caller reports
+//! Lua's own syntax error, or refuses the script if Lua would accept it.
 
 /// The name the inserted checks call.
 pub(crate) const TICK: &str = "__luster_tick";
@@ -40,17 +49,17 @@ pub(crate) const TICK: &str = "__luster_tick";
 /// Names with this prefix are reserved for the runtime.
 const RESERVED: &str = "__luster";
 
-/// A script used a reserved name.
+/// Why a script could not be instrumented.
 #[derive(Debug, Clone, PartialEq)]
-pub(crate) struct ReservedName {
-    /// 1-based line of the name.
-    pub line: usize,
-    /// The name itself.
-    pub name: String,
+pub(crate) enum ScanError {
+    /// A script used a reserved name: its 1-based line and the name.
+    Reserved { line: usize, name: String },
+    /// A string or comment opened on this line never closes.
+    Unterminated { line: usize },
 }
 
 /// Returns `code` with deadline checks inserted (see the module doc).
-pub(crate) fn instrument(code: &str) -> Result<String, ReservedName> {
+pub(crate) fn instrument(code: &str) -> Result<String, ScanError> {
     let b = code.as_bytes();
     let mut out = String::with_capacity(code.len() + code.len() / 8 + 64);
     let insert = format!(" {TICK}(); ");
@@ -72,49 +81,42 @@ pub(crate) fn instrument(code: &str) -> Result<String, ReservedName> {
     while i < b.len() {
         let c = b[i];
         match c {
-            b'\n' => {
-                line += 1;
-                i += 1;
-            }
-            b' ' | b'\t' | b'\r' | 0x0b | 0x0c => i += 1,
+            b'\n' | b'\r' => i = newline(b, i, &mut line),
+            b' ' | b'\t' | 0x0b | 0x0c => i += 1,
             b'-' if b.get(i + 1) == Some(&b'-') => {
+                let open = line;
                 i += 2;
                 if let Some(level) = long_bracket_level(b, i) {
-                    match skip_long(b, i, level, &mut line) {
-                        Some(end) => i = end,
-                        None => break,
-                    }
+                    i = skip_long(b, i, level, &mut line).ok_or(ScanError::Unterminated { line: open })?;
                 } else {
-                    while i < b.len() && b[i] != b'\n' {
+                    while i < b.len() && b[i] != b'\n' && b[i] != b'\r' {
                         i += 1;
                     }
                 }
             }
             b'[' if long_bracket_level(b, i).is_some() => {
                 let level = long_bracket_level(b, i).unwrap_or(0);
-                match skip_long(b, i, level, &mut line) {
-                    Some(end) => i = end,
-                    None => break,
-                }
+                let open = line;
+                i = skip_long(b, i, level, &mut line).ok_or(ScanError::Unterminated { line: open })?;
             }
-            b'"' | b'\'' => match skip_short_string(b, i, &mut line) {
-                Some(end) => i = end,
-                None => break,
-            },
+            b'"' | b'\'' => {
+                let open = line;
+                i = skip_short_string(b, i, &mut line).ok_or(ScanError::Unterminated { line: open })?;
+            }
             b'0'..=b'9' => {
                 i = skip_number(b, i);
             }
             b'.' if b.get(i + 1).is_some_and(u8::is_ascii_digit) => {
                 i = skip_number(b, i);
             }
-            c if c == b'_' || c.is_ascii_alphabetic() => {
+            c if is_ident(c) => {
                 let start = i;
-                while i < b.len() && (b[i] == b'_' || b[i].is_ascii_alphanumeric()) {
+                while i < b.len() && (is_ident(b[i]) || b[i].is_ascii_digit()) {
                     i += 1;
                 }
                 let word = &code[start..i];
                 if word.starts_with(RESERVED) {
-                    return Err(ReservedName { line, name: word.to_string() });
+                    return Err(ScanError::Reserved { line, name: word.to_string() });
                 }
                 match word {
                     "do" | "repeat" => {
@@ -137,24 +139,28 @@ pub(crate) fn instrument(code: &str) -> Result<String, ReservedName> {
                     out.push_str(&insert);
                 }
             }
-            _ => {
-                // Any other byte is an operator or punctuation (or, in invalid
-                // code, something Lua will report); none of them matters here.
-                // Multi-byte UTF-8 is stepped over whole to keep slicing valid.
-                i += utf8_len(c);
-            }
+            // Any other byte is an operator or punctuation (or, in invalid
+            // code, something Lua will report); none of them matters here.
+            _ => i += 1,
         }
     }
     out.push_str(&code[copied..]);
     Ok(out)
 }
 
-fn utf8_len(first: u8) -> usize {
-    match first {
-        0xf0..=0xff => 4,
-        0xe0..=0xef => 3,
-        0xc0..=0xdf => 2,
-        _ => 1,
+/// A byte that starts or continues a name: LuaJIT takes every byte from 0x80
+/// up as a letter, so UTF-8 names are single words.
+fn is_ident(c: u8) -> bool {
+    c == b'_' || c.is_ascii_alphabetic() || c >= 0x80
+}
+
+/// Skips the newline at `i` (`\n`, `\r`, or a `\r\n` / `\n\r` pair, as Lua
+/// counts them) and counts it.
+fn newline(b: &[u8], i: usize, line: &mut usize) -> usize {
+    *line += 1;
+    match (b[i], b.get(i + 1)) {
+        (b'\n', Some(b'\r')) | (b'\r', Some(b'\n')) => i + 2,
+        _ => i + 1,
     }
 }
 
@@ -176,7 +182,7 @@ fn skip_long(b: &[u8], i: usize, level: usize, line: &mut usize) -> Option<usize
     let mut j = i + level + 2;
     while j < b.len() {
         match b[j] {
-            b'\n' => *line += 1,
+            b'\n' | b'\r' => j = newline(b, j, line),
             b']' => {
                 let mut k = j + 1;
                 while k < b.len() && b[k] == b'=' {
@@ -185,10 +191,11 @@ fn skip_long(b: &[u8], i: usize, level: usize, line: &mut usize) -> Option<usize
                 if k - j - 1 == level && b.get(k) == Some(&b']') {
                     return Some(k + 1);
                 }
+                // The `]` that ended this run may open the closing bracket.
+                j = k;
             }
-            _ => {}
+            _ => j += 1,
         }
-        j += 1;
     }
     None
 }
@@ -200,15 +207,27 @@ fn skip_short_string(b: &[u8], i: usize, line: &mut usize) -> Option<usize> {
     while j < b.len() {
         match b[j] {
             c if c == quote => return Some(j + 1),
-            // An unescaped newline ends the string in error; let Lua say so.
-            b'\n' => return None,
+            // An unescaped newline ends the string in error.
+            b'\n' | b'\r' => return None,
             b'\\' => {
-                // The escaped byte may be a newline (a continued string) or,
-                // after `\z`, whitespace; either way it is inside the string.
-                if b.get(j + 1) == Some(&b'\n') {
-                    *line += 1;
+                j += 1;
+                match b.get(j) {
+                    None => return None,
+                    // A continued string: the newline (either pair) is inside.
+                    Some(b'\n' | b'\r') => j = newline(b, j, line),
+                    // `\z` skips all whitespace that follows, newlines included.
+                    Some(b'z') => {
+                        j += 1;
+                        while j < b.len() {
+                            match b[j] {
+                                b'\n' | b'\r' => j = newline(b, j, line),
+                                b' ' | b'\t' | 0x0b | 0x0c => j += 1,
+                                _ => break,
+                            }
+                        }
+                    }
+                    Some(_) => j += 1,
                 }
-                j += 2;
             }
             _ => j += 1,
         }
@@ -216,14 +235,17 @@ fn skip_short_string(b: &[u8], i: usize, line: &mut usize) -> Option<usize> {
     None
 }
 
-/// Skips a numeral as Lua's lexer reads it: digits, letters, `_`, `.`, and a
-/// sign right after an exponent letter (`1e-5`, `0x1p+4`, `1ULL`).
-fn skip_number(b: &[u8], mut i: usize) -> usize {
+/// Skips a numeral as LuaJIT's lexer reads it: name characters, `.`, and a
+/// sign right after the exponent letter (`e` for decimal, `p` once the numeral
+/// starts with `0x`), as in `1e-5`, `0x1p+4`, `1ULL`.
+fn skip_number(b: &[u8], start: usize) -> usize {
+    let hex = b.get(start) == Some(&b'0') && matches!(b.get(start + 1), Some(b'x' | b'X'));
+    let exp = if hex { b'p' } else { b'e' };
+    let mut i = start;
     while i < b.len() {
         let c = b[i];
-        let exponent_sign =
-            (c == b'+' || c == b'-') && i > 0 && matches!(b[i - 1], b'e' | b'E' | b'p' | b'P');
-        if c.is_ascii_alphanumeric() || c == b'_' || c == b'.' || exponent_sign {
+        let exponent_sign = (c == b'+' || c == b'-') && i > start && b[i - 1].to_ascii_lowercase() == exp;
+        if is_ident(c) || c.is_ascii_digit() || c == b'.' || exponent_sign {
             i += 1;
         } else {
             break;
@@ -278,14 +300,80 @@ mod tests {
     #[test]
     fn reserved_names_are_refused_with_their_line() {
         let e = instrument("x = 1\n__luster_tick = function() end").unwrap_err();
-        assert_eq!(e, ReservedName { line: 2, name: "__luster_tick".into() });
+        assert_eq!(e, ScanError::Reserved { line: 2, name: "__luster_tick".into() });
+        let e = instrument("x = 1\r\ny = '\\z\r\n\r\n  '\r__luster_x = 1").unwrap_err();
+        assert_eq!(e, ScanError::Reserved { line: 5, name: "__luster_x".into() });
         assert!(instrument("local s = '__luster_tick'").is_ok());
     }
 
     #[test]
-    fn unterminated_input_is_passed_through() {
-        assert!(body("x = 'abc\nwhile true do end").ends_with("while true do end"));
-        assert!(body("x = [[ abc").ends_with("[[ abc"));
+    fn unterminated_input_is_an_error_with_its_line() {
+        assert_eq!(instrument("x = 1\nx = 'abc\nwhile true do end"), Err(ScanError::Unterminated { line: 2 }));
+        assert_eq!(instrument("x = [[ abc"), Err(ScanError::Unterminated { line: 1 }));
+        assert_eq!(instrument("\n\n--[==[ ]] ]=]"), Err(ScanError::Unterminated { line: 3 }));
+        assert_eq!(instrument("x = 'a\\"), Err(ScanError::Unterminated { line: 1 }));
+        assert_eq!(instrument("x = 'a\rb'"), Err(ScanError::Unterminated { line: 1 }));
+    }
+
+    /// Every string and comment form of Lua, each followed by a loop that
+    /// must get its tick: if the scanner lost track anywhere, the loop after
+    /// it would run unchecked.
+    #[test]
+    fn every_string_and_comment_form_is_followed_by_a_checked_loop() {
+        let t = format!(" {TICK}(); ");
+        let forms = [
+            "'plain'",
+            "\"plain\"",
+            "'it''s'",
+            "'esc \\' \\\" \\\\ \\n \\t \\a \\b \\f \\v \\r'",
+            "'dec \\65\\066\\0 hex \\x41 utf \\u{48}'",
+            "'cont \\\n line'",
+            "'cont \\\r\n crlf'",
+            "'cont \\\n\r lfcr'",
+            "'cont \\\r cr'",
+            "'z \\z    \n\n  \r\n  \t done'",
+            "\"z \\z\"",
+            "'quote inside \"double\"'",
+            "\"quote inside 'single'\"",
+            "'do end while repeat function goto'",
+            "[[long do]]",
+            "[[\nmulti\r\nline]]",
+            "[==[ ]] ]=] ]===] ]==]",
+            "[=[ ]]]=]",
+            "[[ ]=] ]]",
+            "-- line comment do\n",
+            "-- line comment ended by CR do\r",
+            "--[[ long comment do ]]",
+            "--[==[ long\n comment ]] ]==]",
+            "--[= not long, so a line comment do\n",
+            "--[ not long either do\n",
+            "--\n",
+            "0x1e+1",
+            "1e+10",
+            "0x1p-4",
+            "3.14e-2",
+            "123ULL",
+        ];
+        for form in forms {
+            let code = format!("x = {form}\nwhile true do end");
+            let got = body(&code);
+            assert!(got.ends_with(&format!("while true do{t} end")), "{form:?} -> {got:?}");
+            assert_eq!(got.matches(TICK).count(), 1, "{form:?} -> {got:?}");
+        }
+    }
+
+    #[test]
+    fn numbers_take_a_sign_only_after_their_own_exponent_letter() {
+        let t = format!(" {TICK}(); ");
+        // In hex, `e` is a digit: `0x1e+function` is 0x1e plus a function.
+        assert_eq!(body("x = 0x1e+function() end"), format!("x = 0x1e+function(){t} end"));
+        assert_eq!(body("x = 1e+5"), "x = 1e+5");
+    }
+
+    #[test]
+    fn utf8_names_are_single_words() {
+        assert_eq!(body("local xédo = 1"), "local xédo = 1");
+        assert_eq!(body("local é = 1 while é do end"), format!("local é = 1 while é do{} end", format!(" {TICK}(); ")));
     }
 
     #[test]

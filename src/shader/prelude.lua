@@ -303,6 +303,34 @@ local function safe_rep(s, n, sep)
   end
   return rep(s, n, sep)
 end
+-- Lua patterns backtrack inside C, where the time limit cannot reach:
+-- string.find(string.rep("a", 1e5), ".-.-.-.-b") runs for hours. So the
+-- pattern functions take only literal patterns (no magic character), whose
+-- matching is bounded by the lengths of subject and pattern; string.find with
+-- plain = true takes anything. See docs/robustness.md.
+local MAGIC = "[%^%$%*%+%?%.%(%)%[%]%%%-]"
+local real_find = string.find
+local function literal(fname, pattern)
+  if type(pattern) == "string" and real_find(pattern, MAGIC) then
+    error(format("string.%s: patterns with magic characters (^$*+?.()[]%%-) are not available in shaders, "
+      .. "since matching them can run unboundedly long; use a literal pattern or string.find(s, p, 1, true)",
+      fname), 3)
+  end
+end
+local function guard(fname, real)
+  return function(s, pattern, ...)
+    literal(fname, pattern)
+    return real(s, pattern, ...)
+  end
+end
+local real_match, real_gmatch, real_gsub = string.match, string.gmatch, string.gsub
+string.find = function(s, pattern, init, plain)
+  if not plain then literal("find", pattern) end
+  return real_find(s, pattern, init, plain)
+end
+string.match = guard("match", real_match)
+string.gmatch = guard("gmatch", real_gmatch)
+string.gsub = guard("gsub", real_gsub)
 string.dump = nil
 string.rep = safe_rep
 getmetatable("").__metatable = false
@@ -368,8 +396,14 @@ end
 -- wrapper with no arguments, and reads `out`. Results are checked here, where
 -- their Lua types are still known.
 ---------------------------------------------------------------------------
+-- NaN and the infinities fail `v - v == 0`; every other number passes.
+local function finite(v)
+  return type(v) == "number" and v - v == 0
+end
 local function describe(v)
   if v ~= v then return "NaN" end
+  if v == math.huge then return "inf" end
+  if v == -math.huge then return "-inf" end
   if v == nil then return "nothing (nil)" end
   if type(v) == "number" then return tostring(v) end
   return "a " .. type(v)
@@ -382,15 +416,15 @@ local function color_entry(f, shader_name, entry)
   return function()
     local r, g, b = f(shade)
     if isvec(r) and g == nil then r, g, b = r.x, r.y, r.z end
-    if type(r) == "number" and type(g) == "number" and type(b) == "number" and r == r and g == g and b == b then
+    if finite(r) and finite(g) and finite(b) then
       out.r, out.g, out.b = r, g, b
       return
     end
     local names = { "red", "green", "blue" }
     for i = 1, 3 do
       local v = select(i, r, g, b)
-      if type(v) ~= "number" or v ~= v then
-        bad(shader_name, entry, format("%s as its %s value (expected r, g, b numbers or a vec3)", describe(v), names[i]))
+      if not finite(v) then
+        bad(shader_name, entry, format("%s as its %s value (expected finite r, g, b numbers or a vec3)", describe(v), names[i]))
       end
     end
   end
@@ -399,11 +433,11 @@ end
 local function scalar_entry(f, shader_name, entry)
   return function()
     local h = f(shade)
-    if type(h) == "number" and h == h then
+    if finite(h) then
       out.r = h
       return
     end
-    bad(shader_name, entry, describe(h) .. " (expected a number)")
+    bad(shader_name, entry, describe(h) .. " (expected a finite number)")
   end
 end
 -- The bump wrapper: height() at the three points of shade3, into out.r, g, b.
@@ -415,8 +449,8 @@ local function height3_entry(f, shader_name)
     for i = 0, 2 do
       ffi.copy(shade, shade3[i], shade_size)
       local v = f(shade)
-      if type(v) ~= "number" or v ~= v then
-        bad(shader_name, "height", describe(v) .. " (expected a number)")
+      if not finite(v) then
+        bad(shader_name, "height", describe(v) .. " (expected a finite number)")
       end
       if i == 0 then out.r = v elseif i == 1 then out.g = v else out.b = v end
     end

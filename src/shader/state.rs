@@ -8,7 +8,7 @@ use mlua::{Function, LightUserData, Lua, LuaOptions, StdLib, Table, Value};
 
 use super::error::{ShaderError, ShaderErrorKind};
 use super::ffi::{self, IoBlock, Shade};
-use super::instrument::instrument;
+use super::instrument::{instrument, ScanError};
 use super::{Entry, ImageSampler, ParamValue, ShadeInput, ShaderSource, Shared, ENTRIES};
 use std::sync::Arc;
 
@@ -124,14 +124,27 @@ impl ThreadState {
     ) -> Result<Compiled, ShaderError> {
         let name = src.name.as_str();
         let file = src.path.display().to_string();
-        let code = instrument(&src.code).map_err(|r| {
-            ShaderError::new(
-                ShaderErrorKind::Syntax,
-                name,
-                format!("{file}:{}: the name '{}' is reserved for the shader runtime", r.line, r.name),
-            )
-        })?;
         let lua_err = |e: mlua::Error| self.error(name, &e);
+        let code = match instrument(&src.code) {
+            Ok(code) => code,
+            Err(ScanError::Reserved { line, name: word }) => {
+                return Err(ShaderError::new(
+                    ShaderErrorKind::Syntax,
+                    name,
+                    format!("{file}:{line}: the name '{word}' is reserved for the shader runtime"),
+                ))
+            }
+            Err(ScanError::Unterminated { line }) => {
+                // Lua's own message is the better one; the scanner's is the
+                // fallback should Lua ever accept what the scanner cannot close.
+                self.lua.load(&src.code).set_name(format!("@{file}")).into_function().map_err(lua_err)?;
+                return Err(ShaderError::new(
+                    ShaderErrorKind::Syntax,
+                    name,
+                    format!("{file}:{line}: a string or comment opened here does not close"),
+                ));
+            }
+        };
 
         let params = self.lua.create_table().map_err(lua_err)?;
         for (key, value) in &src.params {
@@ -153,6 +166,7 @@ impl ThreadState {
             .map_err(lua_err)?;
         self.io.begin(&Shade::default());
         chunk.call::<()>(tick.clone()).map_err(lua_err)?;
+        self.check_deadline(name)?;
 
         let mut entries: [Option<Function>; ENTRIES] = Default::default();
         for entry in Entry::ALL {
@@ -167,6 +181,24 @@ impl ThreadState {
         }
         let height3 = make_height3.call((env, name)).map_err(lua_err)?;
         Ok(Compiled { name: name.to_string(), entries, height3 })
+    }
+
+    /// A call that ran past its deadline fails even when the script caught
+    /// the timeout error (with `pcall`) and returned normally: otherwise every
+    /// later call could spend the whole limit again.
+    fn check_deadline(&self, shader: &str) -> Result<(), ShaderError> {
+        if !self.io.timed_out() {
+            return Ok(());
+        }
+        Err(ShaderError::new(
+            ShaderErrorKind::Timeout,
+            shader,
+            format!(
+                "stopped: the shader ran past its time limit and caught the error ({:.3} s per call; \
+                 the limit is set with --shader-timeout)",
+                self.timeout.as_secs_f64()
+            ),
+        ))
     }
 
     fn error(&self, shader: &str, e: &mlua::Error) -> ShaderError {
@@ -197,6 +229,7 @@ impl ThreadState {
         self.io.begin(&shade_of(input));
         match f.call::<()>(()) {
             Ok(()) => {
+                self.check_deadline(&shader.name)?;
                 let o = self.io.out();
                 Ok([o.r, o.g, o.b])
             }
@@ -228,6 +261,7 @@ impl ThreadState {
         self.io.begin3(&[shade_of(&inputs[0]), shade_of(&inputs[1]), shade_of(&inputs[2])]);
         match f.call::<()>(()) {
             Ok(()) => {
+                self.check_deadline(&shader.name)?;
                 let o = self.io.out();
                 Ok([o.r, o.g, o.b])
             }

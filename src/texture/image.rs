@@ -118,11 +118,19 @@ pub struct Image {
 /// small enough that a corrupt header cannot ask for gigabytes.
 pub const MAX_EDGE: u32 = 32768;
 
+/// Largest image file accepted, in bytes.
+pub const MAX_IMAGE_BYTES: u64 = 1 << 30;
+
 impl Image {
     /// Decodes an image file (PNG, JPEG, EXR, HDR; anything the `image` crate reads).
     pub fn load(path: &Path) -> Result<Image, String> {
-        let reader = ::image::ImageReader::open(path)
-            .map_err(|e| format!("cannot open {}: {}", path.display(), crate::scene::io_reason(&e)))?
+        let (file, _) = crate::scene::file::open_regular(path, MAX_IMAGE_BYTES)
+            .map_err(|why| format!("cannot open {}: {why}", path.display()))?;
+        let mut reader = ::image::ImageReader::new(std::io::BufReader::new(file));
+        if let Ok(format) = ::image::ImageFormat::from_path(path) {
+            reader.set_format(format);
+        }
+        let reader = reader
             .with_guessed_format()
             .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
         let img = reader.decode().map_err(|e| format!("cannot decode image {}: {e}", path.display()))?;

@@ -41,6 +41,11 @@ pub const SURFACE_STEPS: f32 = 256.0;
 /// more is refused when the scene is built (it would stall the render).
 pub const MAX_STEPS: f32 = 100_000.0;
 
+/// Largest volume box accepted, corner to corner: beyond it the f32 positions
+/// of the march are too coarse for any step size (and a box of 1e30 has an
+/// infinite diagonal in f32).
+pub const MAX_EXTENT: f32 = 1e7;
+
 /// How many equal steps of at most `step` cover `len` (at least 1, at most
 /// [`MAX_STEPS`]).
 #[inline]
@@ -241,8 +246,18 @@ impl Volumes {
             }
             let per_bound =
                 if matches!(v.kind, VolumeKind::Surface { .. }) { SURFACE_STEPS } else { MEDIUM_STEPS };
+            if !bound.diagonal().is_finite() || bound.diagonal() > MAX_EXTENT {
+                return Err(err(
+                    v,
+                    format!(
+                        "its box is {:.3e} across; at most {MAX_EXTENT:e} is supported (f32 positions that far out cannot be marched)",
+                        bound.diagonal()
+                    ),
+                ));
+            }
             let step = v.step.unwrap_or(bound.diagonal() / per_bound);
-            if bound.diagonal() / step > MAX_STEPS {
+            let count = bound.diagonal() / step;
+            if count.is_nan() || count > MAX_STEPS {
                 return Err(err(
                     v,
                     format!(

@@ -101,6 +101,15 @@ impl Scene {
             prims.push(Prim { geom, material, motion: o.motion, xf, textures: tex, object: i as u32 });
         }
         let bounds: Vec<Aabb> = prims.iter().map(|p| prim_bounds(p, &meshes, &ellipsoids)).collect();
+        // Finite input can still overflow f32 once transformed (3e38 under a
+        // scaling); such an object could never be hit, so say so instead.
+        if let Some((p, _)) = prims.iter().zip(&bounds).find(|(_, b)| !b.is_finite()) {
+            return Err(SceneError::at(
+                &desc.file,
+                &desc.objects[p.object as usize].loc,
+                "the object reaches beyond the range of 32-bit floating-point numbers (after its transformations)",
+            ));
+        }
         let tlas = Bvh::build(&bounds);
         // Put primitives in the BVH's leaf order so a leaf is a contiguous range.
         let mut slots: Vec<Option<Prim>> = prims.into_iter().map(Some).collect();

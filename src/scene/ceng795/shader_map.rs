@@ -27,7 +27,6 @@
 use crate::scene::description::{ScriptDesc, TextureSource};
 use crate::scene::element::{Element, Reader};
 use crate::scene::error::SceneError;
-use crate::scene::io_reason;
 use crate::shader::ParamValue;
 use std::path::Path;
 
@@ -69,15 +68,13 @@ pub fn script(r: &Reader, el: &Element, base_dir: &Path) -> Result<ScriptDesc, S
 /// A shader script's text, or why it cannot be read (a sentence fragment:
 /// "no such file", "it is a folder", ...).
 pub fn read_script(path: &Path) -> Result<String, String> {
-    let meta = std::fs::metadata(path).map_err(|e| io_reason(&e))?;
-    if meta.is_dir() {
-        return Err("it is a folder".to_string());
-    }
-    if meta.len() > MAX_SCRIPT_BYTES {
-        return Err(format!("{} bytes, more than the {MAX_SCRIPT_BYTES} accepted", meta.len()));
-    }
-    let bytes = std::fs::read(path).map_err(|e| io_reason(&e))?;
-    String::from_utf8(bytes).map_err(|_| "it is not UTF-8 text".to_string())
+    crate::scene::file::read_text(path, MAX_SCRIPT_BYTES).map_err(|why| {
+        if why.starts_with("it is not UTF-8") {
+            "it is not UTF-8 text".to_string()
+        } else {
+            why
+        }
+    })
 }
 
 /// One `<Parameter name="...">value</Parameter>`.

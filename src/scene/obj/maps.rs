@@ -119,21 +119,8 @@ pub fn read(file: &MtlFile, m: usize, warnings: &mut Vec<Warning>) -> Result<Vec
         let id = format!("{}/{key}", mat.name);
         let (source, image) = match kind {
             Kind::Image => {
-                std::fs::metadata(&path)
-                    .and_then(|meta| {
-                        if meta.is_dir() {
-                            Err(std::io::ErrorKind::IsADirectory.into())
-                        } else {
-                            Ok(())
-                        }
-                    })
-                    .map_err(|e| {
-                        file.err(
-                            m,
-                            key,
-                            format!("{key}: cannot read image {}: {}", st.file, crate::scene::io_reason(&e)),
-                        )
-                    })?;
+                crate::scene::file::check_regular(&path, crate::texture::image::MAX_IMAGE_BYTES)
+                    .map_err(|why| file.err(m, key, format!("{key}: cannot read image {}: {why}", st.file)))?;
                 let source = TextureSource::Image {
                     image: 0,
                     interpolation: Interpolation::Bilinear,

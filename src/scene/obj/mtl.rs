@@ -23,8 +23,7 @@
 use super::{at, PartMap};
 use crate::math::Vec3;
 use crate::scene::description::{MaterialDesc, MaterialKind};
-use crate::scene::error::{Loc, SceneError, Warning};
-use crate::scene::io_reason;
+use crate::scene::error::{shown_token, Loc, SceneError, Warning};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -98,19 +97,7 @@ pub fn read(path: &Path) -> Result<MtlFile, SceneError> {
 
 /// A text file's contents, or why it cannot be read.
 pub fn read_text(path: &Path, max: u64) -> Result<String, String> {
-    let meta = std::fs::metadata(path).map_err(|e| io_reason(&e))?;
-    if meta.is_dir() {
-        return Err("it is a folder".to_string());
-    }
-    if meta.len() > max {
-        return Err(format!("{} bytes, more than the {max} accepted", meta.len()));
-    }
-    let bytes = std::fs::read(path).map_err(|e| io_reason(&e))?;
-    String::from_utf8(bytes).map_err(|e| {
-        let at = e.utf8_error().valid_up_to();
-        let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
-        format!("it is not UTF-8 text (invalid byte on line {line})")
-    })
+    crate::scene::file::read_text(path, max)
 }
 
 type Checked = (String, Vec<HashMap<String, u32>>, Vec<Warning>);
@@ -142,14 +129,13 @@ fn check(path: &Path, text: &str) -> Result<Checked, SceneError> {
         } else if let Some(current) = lines.last_mut() {
             current.insert(key.to_string(), line);
         } else {
-            let shown: String = key.chars().take(24).collect();
-            return Err(err(format!("\"{}\" before any newmtl", shown.escape_debug())));
+            return Err(err(format!("{} before any newmtl", shown_token(key))));
         }
         let rewritten = if COLORS.contains(&key) {
             if matches!(args.first(), Some(&"spectral") | Some(&"xyz")) {
                 return Err(err(format!("{key} {} colours are not supported; give r g b", args[0])));
             }
-            let v = floats(&args).map_err(|w| err(format!("{key} has \"{w}\", which is not a number")))?;
+            let v = floats(&args).map_err(|w| err(format!("{key} has {}, which is not a number", shown_token(&w))))?;
             match v[..] {
                 [g] if g >= 0.0 => Some(format!("{key} {g} {g} {g}")),
                 [r, g, b] if r >= 0.0 && g >= 0.0 && b >= 0.0 => None,
@@ -166,7 +152,7 @@ fn check(path: &Path, text: &str) -> Result<Checked, SceneError> {
             } else {
                 &args[..]
             };
-            let v = floats(args).map_err(|w| err(format!("{key} has \"{w}\", which is not a number")))?;
+            let v = floats(args).map_err(|w| err(format!("{key} has {}, which is not a number", shown_token(&w))))?;
             if v.len() != 1 {
                 return Err(err(format!("{key} needs 1 number, found {}", v.len())));
             }
@@ -176,8 +162,8 @@ fn check(path: &Path, text: &str) -> Result<Checked, SceneError> {
                 [n] if n.parse::<u8>().is_ok_and(|n| n <= 10) => None,
                 _ => {
                     return Err(err(format!(
-                        "illum needs a model number 0 to 10, found \"{}\"",
-                        args.join(" ")
+                        "illum needs a model number 0 to 10, found {}",
+                        shown_token(&args.join(" "))
                     )))
                 }
             }

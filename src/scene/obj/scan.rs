@@ -18,6 +18,8 @@
 //! | `l`, `p`, free-form geometry, display attributes | ignored with one warning per statement |
 //! | anything else | an error: the file is not what it claims to be |
 
+use crate::scene::error::shown_token;
+
 /// One `mtllib` or `usemtl` statement: its line and its argument.
 #[derive(Clone, Debug)]
 pub struct Named {
@@ -146,8 +148,7 @@ pub fn scan(text: &str) -> Result<Scan, LineError> {
                 }
             }
             other => {
-                let shown: String = other.chars().take(24).collect();
-                return err(format!("\"{}\" is not an OBJ statement", shown.escape_debug()));
+                return err(format!("{} is not an OBJ statement", shown_token(other)));
             }
         }
     }
@@ -171,9 +172,9 @@ fn numbers(line: u32, key: &str, rest: &str) -> Result<usize, LineError> {
     for w in rest.split_whitespace() {
         match w.parse::<f32>() {
             Ok(x) if x.is_finite() => n += 1,
-            Ok(_) => return Err((line, format!("{key} has a non-finite number \"{w}\""))),
+            Ok(_) => return Err((line, format!("{key} has a non-finite number {}", shown_token(w)))),
             Err(_) => {
-                return Err((line, format!("{key} has \"{}\", which is not a number", w.escape_debug())))
+                return Err((line, format!("{key} has {}, which is not a number", shown_token(w))))
             }
         }
     }
@@ -185,20 +186,21 @@ fn corner(line: u32, c: &str, counts: [usize; 3], max_ref: &mut [(usize, u32); 3
     const KIND: [&str; 3] = ["vertex", "texture coordinate", "normal"];
     let parts: Vec<&str> = c.split('/').collect();
     if parts.len() > 3 || parts[0].is_empty() {
-        return Err((line, format!("face corner \"{c}\" is not v, v/vt, v//vn or v/vt/vn")));
+        return Err((line, format!("face corner {} is not v, v/vt, v//vn or v/vt/vn", shown_token(c))));
     }
     for (k, p) in parts.iter().enumerate() {
         if p.is_empty() {
             continue;
         }
         let Ok(i) = p.parse::<i64>() else {
-            return Err((line, format!("face corner \"{c}\": \"{p}\" is not an index")));
+            return Err((line, format!("face corner {}: {} is not an index", shown_token(c), shown_token(p))));
         };
         if i == 0 {
             return Err((
                 line,
                 format!(
-                    "face corner \"{c}\": {} index 0 (OBJ numbers from 1, or from -1 backwards)",
+                    "face corner {}: {} index 0 (OBJ numbers from 1, or from -1 backwards)",
+                    shown_token(c),
                     KIND[k]
                 ),
             ));
@@ -208,8 +210,10 @@ fn corner(line: u32, c: &str, counts: [usize; 3], max_ref: &mut [(usize, u32); 3
                 return Err((
                     line,
                     format!(
-                        "face corner \"{c}\": {} {i} reaches before the first ({} defined so far)",
-                        KIND[k], counts[k]
+                        "face corner {}: {} {i} reaches before the first ({} defined so far)",
+                        shown_token(c),
+                        KIND[k],
+                        counts[k]
                     ),
                 ));
             }

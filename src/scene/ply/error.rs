@@ -14,6 +14,15 @@ pub enum PlyError {
         /// What the operating system said.
         source: io::Error,
     },
+    /// The path is not a regular file of acceptable size (a folder, a FIFO, a
+    /// device, a file over the cap).
+    #[error("cannot read PLY file {}: {why}", path.display())]
+    Unreadable {
+        /// The file.
+        path: PathBuf,
+        /// Why, as a sentence fragment.
+        why: String,
+    },
     /// The file does not begin with the `ply` magic line.
     #[error("{} is not a PLY file: it does not begin with the line \"ply\"", path.display())]
     NotPly {

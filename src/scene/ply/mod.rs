@@ -80,8 +80,8 @@ pub struct PlyMesh {
 /// is supported.
 pub fn read_ply(path: &Path) -> Result<PlyMesh, PlyError> {
     let io_error = |source| PlyError::Io { path: path.to_owned(), source };
-    let file = File::open(path).map_err(io_error)?;
-    let file_len = file.metadata().map_err(io_error)?.len();
+    let (file, file_len) = crate::scene::file::open_regular(path, MAX_PLY_BYTES)
+        .map_err(|why| PlyError::Unreadable { path: path.to_owned(), why })?;
     let mut reader = Reader::new(BufReader::with_capacity(1 << 16, file));
 
     check_magic(reader.get_mut(), path)?;
@@ -209,6 +209,10 @@ struct Layout {
     normals: bool,
     uvs: bool,
 }
+
+/// Largest PLY file accepted: far beyond the course's largest meshes, and a
+/// bound on what a wrong path (a device, a disk image) can make us read.
+pub const MAX_PLY_BYTES: u64 = 8 << 30;
 
 const UV_NAMES: [(&str, &str); 4] =
     [("u", "v"), ("s", "t"), ("texture_u", "texture_v"), ("texture_s", "texture_t")];

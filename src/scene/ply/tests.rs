@@ -190,8 +190,9 @@ fn degenerate_triangles_are_skipped_and_counted() {
 #[test]
 fn missing_file_and_non_ply_files_are_errors() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let e = err(&dir.path().join("absent.ply"), &["cannot read"]);
-    assert!(matches!(e, PlyError::Io { .. }));
+    let e = err(&dir.path().join("absent.ply"), &["cannot read", "no such file"]);
+    assert!(matches!(e, PlyError::Unreadable { .. }));
+    err(Path::new("/dev/zero"), &["cannot read", "a device"]);
     err(&write(&dir, "mesh.obj", b"v 0 0 0\nf 1 2 3\n"), &["not a PLY file"]);
     err(&write(&dir, "empty.ply", b""), &["not a PLY file"]);
     err(&write(&dir, "plywood.ply", b"plywood\n"), &["not a PLY file"]);
