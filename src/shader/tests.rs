@@ -383,3 +383,76 @@ fn texture_without_images_is_an_error_naming_none() {
     assert_eq!(e.kind, ShaderErrorKind::Runtime);
     assert!(e.message.contains("test.lua:2") && e.message.contains("(its images: none)"), "{e}");
 }
+
+#[test]
+fn a_caught_timeout_still_fails_the_call_and_costs_the_limit_only_once_per_call() {
+    let timeout = Duration::from_millis(200);
+    let code = "function color(s) pcall(function() while true do end end) return 1, 1, 1 end";
+    let set = ShaderSet::new(vec![ShaderSource::new("spin", "spin.lua", code)], timeout).unwrap();
+    for _ in 0..2 {
+        let start = Instant::now();
+        let e = set.color(0, &input([0.0; 3])).expect_err("a caught timeout must still fail");
+        assert_eq!(e.kind, ShaderErrorKind::Timeout, "{e}");
+        assert!(e.message.contains("caught the error"), "{e}");
+        assert!(start.elapsed() < timeout + Duration::from_millis(700), "took {:?}", start.elapsed());
+    }
+    // Catching it inside the loop does not help either: every later tick raises again.
+    assert_stops("function color(s) while true do pcall(error, 'x') pcall(function() while true do end end) end end");
+}
+
+#[test]
+fn string_and_comment_tricks_do_not_hide_loops_from_the_time_checks() {
+    for prefix in [
+        "local a = 'x\\z\n   '\n",
+        "local a = 'x\\z\r\n   '\r\n",
+        "local a = 'x\\\r\ny'\r\n",
+        "local a = 'x\\\n\ry'\n",
+        "local a = \"x\\z\n\n\"\n",
+        "-- comment\rlocal b = 1\r",
+        "local a = [==[ ]] ]=] ]==]\n",
+        "--[=[ ]] ]=]\n",
+    ] {
+        assert_stops(&format!("{prefix}function color(s) while true do end end"));
+    }
+}
+
+#[test]
+fn pattern_functions_take_only_literal_patterns() {
+    let ok = set_of(
+        "function color(s)
+           local a = string.find('a.b', '.', 1, true)
+           local b = ('abcabc'):find('ca')
+           local c = select(2, string.gsub('a-b-c', 'b', 'x'))
+           local n = 0
+           for w in string.gmatch('xyxyx', 'xy') do n = n + 1 end
+           return a, b + (string.match('hello', 'll') == 'll' and 10 or 0), c + n
+         end",
+    )
+    .unwrap();
+    assert_eq!(ok.color(0, &input([0.0; 3])).unwrap(), [2.0, 13.0, 3.0]);
+    for call in [
+        "string.find(string.rep('a', 1e5), '.-.-.-.-b')",
+        "('aaaa'):match('(a*)*b')",
+        "string.gsub('abc', '%a', 'x')",
+        "string.gmatch('abc', '[a-c]')",
+    ] {
+        let e = color_err(&format!("function color(s) local r = {call} return 0, 0, 0 end"));
+        assert_eq!(e.kind, ShaderErrorKind::Runtime, "{call}: {e}");
+        assert!(e.message.contains("test.lua:1") && e.message.contains("magic characters"), "{call}: {e}");
+    }
+}
+
+#[test]
+fn infinite_results_are_refused() {
+    for (code, what) in [
+        ("function color(s) return 1/0, 0, 0 end", "inf as its red value"),
+        ("function color(s) return vec3(0, -1/0, 0) end", "-inf as its green value"),
+    ] {
+        let e = color_err(code);
+        assert_eq!(e.kind, ShaderErrorKind::BadResult, "{code}: {e}");
+        assert!(e.message.contains(what), "{code}: {e}");
+    }
+    let set = set_of("function height(s) return -1/0 end").unwrap();
+    let e = set.height(0, &input([0.0; 3])).unwrap_err();
+    assert!(e.message.contains("height() returned -inf (expected a finite number)"), "{e}");
+}
