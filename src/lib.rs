@@ -15,6 +15,7 @@
 pub mod accel;
 pub mod bench;
 pub mod conformance;
+pub mod fuzzing;
 pub mod geometry;
 pub mod image;
 pub mod math;

@@ -52,6 +52,8 @@
 mod error;
 mod ffi;
 mod instrument;
+/// The instrumenter, for the fuzz entry points.
+pub(crate) use instrument::instrument as instrument_script;
 mod state;
 #[cfg(test)]
 mod tests;

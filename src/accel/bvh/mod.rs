@@ -343,7 +343,11 @@ impl Bvh {
         let mut hit = false;
         loop {
             if cur & LEAF != 0 {
-                hit |= leaf(leaf_range(cur), &mut t_max);
+                // An unused slot is never a leaf, even if the box test let it
+                // through (a NaN ray passes every comparison as a hit).
+                if cur != EMPTY {
+                    hit |= leaf(leaf_range(cur), &mut t_max);
+                }
             } else {
                 let n = &nodes[cur as usize];
                 let (tn, mut mask) = r.hit(n, t_max);
@@ -423,7 +427,7 @@ impl Bvh {
         let mut sp = 0;
         loop {
             if cur & LEAF != 0 {
-                if leaf(leaf_range(cur), t_max) {
+                if cur != EMPTY && leaf(leaf_range(cur), t_max) {
                     return true;
                 }
             } else {

@@ -261,3 +261,31 @@ fn sah_beats_one_leaf_per_primitive() {
     let used = leaves + bvh.node_count() - 1;
     assert!(used as f32 > 0.7 * slots as f32, "{used} of {slots} child slots used");
 }
+
+#[test]
+fn huge_coordinates_and_nan_rays_stay_in_range() {
+    // Boxes at up to ±f32::MAX: centroid sums once overflowed to infinity,
+    // which emptied a child and made a leaf of no primitives.
+    let m = f32::MAX;
+    let mut boxes: Vec<Aabb> = (0..9)
+        .map(|i| {
+            let x = [-m, -1e38, -1.0, 0.0, 1.0, 1e30, 1e38, 3e38, m][i];
+            Aabb::new(Vec3::new(x.min(m / 2.0), 0.0, 0.0), Vec3::new(x, 1.0, 1.0))
+        })
+        .collect();
+    boxes.extend((0..40).map(|i| Aabb::new(Vec3::splat(i as f32 * 1e37), Vec3::splat(i as f32 * 1e37 + 1e36))));
+    let bvh = Bvh::build(&boxes);
+    check_structure(&bvh, &boxes);
+    let in_range = |r: std::ops::Range<usize>| r.end <= bvh.prim_order().len();
+    // A NaN ray passes every box test, unused child slots included.
+    for ray in [Ray::new(Vec3::splat(f32::NAN), Vec3::X), Ray::new(Vec3::ZERO, Vec3::splat(f32::NAN))] {
+        bvh.closest(&ray, f32::INFINITY, |r, _| {
+            assert!(in_range(r));
+            false
+        });
+        bvh.any(&ray, f32::INFINITY, |r, _| {
+            assert!(in_range(r));
+            false
+        });
+    }
+}
