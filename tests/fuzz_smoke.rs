@@ -19,7 +19,7 @@ use std::time::{Duration, Instant};
 const ITERATIONS: usize = 20_000;
 
 /// Time per target.
-const BUDGET: Duration = Duration::from_secs(12);
+const BUDGET: Duration = Duration::from_secs(8);
 
 /// A small deterministic generator (xorshift64*).
 struct Rng(u64);
@@ -75,7 +75,7 @@ fn seeds(t: Target) -> (Vec<Vec<u8>>, &'static [&'static str]) {
         ),
         Target::Ply => (
             &[".ply"],
-            &["element vertex 4294967295\n", "element face 3\n", "property list uchar int vertex_indices\n", "end_header\n", "format binary_little_endian 1.0\n", "nan ", "1e39 ", "255 ", "\xff\xff\xff\x7f"],
+            &["element vertex 4294967295\n", "element face 3\n", "property list uchar int vertex_indices\n", "end_header\n", "format binary_little_endian 1.0\n", "nan ", "1e39 ", "255 ", "\u{ff}\u{ff}\u{7f}\u{0}"],
         ),
         Target::Obj => (
             &[".obj"],

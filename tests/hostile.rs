@@ -257,7 +257,7 @@ fn numbers() -> Vec<Case> {
 
 fn shaders() -> Vec<Case> {
     let r = |name, code: &str, expect: &[&'static str]| {
-        Case::render(name, "s.xml", &[&["s.xml: shader 'x'"][..], expect].concat())
+        Case::render(name, "s.xml", &[&["s.xml: ", "shader 'x'"][..], expect].concat())
             .text("s.xml", shaded("x.lua"))
             .text("x.lua", code.to_string())
     };
