@@ -51,8 +51,8 @@ impl Target {
     /// Feeds `data` to the target's loader.
     pub fn run(self, data: &[u8]) {
         match self {
-            Target::SceneXml => scene(data, "scene.xml", |p, t| xml::parse(p, t)),
-            Target::SceneJson => scene(data, "scene.json", |p, t| json::parse(p, t)),
+            Target::SceneXml => scene(data, "scene.xml", xml::parse),
+            Target::SceneJson => scene(data, "scene.json", json::parse),
             Target::Ply => {
                 let _ = ply::read_ply(&write("mesh.ply", data));
             }
@@ -87,7 +87,11 @@ fn write(name: &str, data: &[u8]) -> PathBuf {
     })
 }
 
-fn scene(data: &[u8], name: &str, parse: impl Fn(&Path, &str) -> Result<crate::scene::element::Element, crate::scene::SceneError>) {
+fn scene(
+    data: &[u8],
+    name: &str,
+    parse: impl Fn(&Path, &str) -> Result<crate::scene::element::Element, crate::scene::SceneError>,
+) {
     let Ok(text) = std::str::from_utf8(data) else { return };
     let path = write(name, data);
     let Ok(root) = parse(&path, text) else { return };
@@ -100,7 +104,8 @@ fn shader(data: &[u8]) {
     let _ = crate::shader::instrument_script(code);
     let src = ShaderSource::new("fuzz", "fuzz.lua", code);
     let Ok(set) = ShaderSet::new(vec![src], Duration::from_millis(20)) else { return };
-    let input = ShadeInput { p: [0.1, 0.2, 0.3], pw: [1.0, 2.0, 3.0], n: [0.0, 0.0, 1.0], uv: [0.5, 0.5], time: 0.0 };
+    let input =
+        ShadeInput { p: [0.1, 0.2, 0.3], pw: [1.0, 2.0, 3.0], n: [0.0, 0.0, 1.0], uv: [0.5, 0.5], time: 0.0 };
     if set.has_color(0) {
         let _ = set.color(0, &input);
     }

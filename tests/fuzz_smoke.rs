@@ -67,24 +67,92 @@ fn seeds(t: Target) -> (Vec<Vec<u8>>, &'static [&'static str]) {
     let (exts, tokens): (&[&str], &[&str]) = match t {
         Target::SceneXml => (
             &[".xml"],
-            &["<Mesh id=\"1\">", "</", "<![CDATA[", "&amp;", "<!--", "1e39", "3.4e38", "-0", "nan", "4294967296", "<Faces plyFile=\"m.ply\"/>", "<Scaling id=\"1\">1e30 1e30 1e30</Scaling>"],
+            &[
+                "<Mesh id=\"1\">",
+                "</",
+                "<![CDATA[",
+                "&amp;",
+                "<!--",
+                "1e39",
+                "3.4e38",
+                "-0",
+                "nan",
+                "4294967296",
+                "<Faces plyFile=\"m.ply\"/>",
+                "<Scaling id=\"1\">1e30 1e30 1e30</Scaling>",
+            ],
         ),
         Target::SceneJson => (
             &[".json"],
-            &["null", "{", "}", "[", "]", "\"_id\": \"1\", ", "1e400", "\"\\ud800\"", "3.4e38", "\"Sphere\": ", ",", "-1"],
+            &[
+                "null",
+                "{",
+                "}",
+                "[",
+                "]",
+                "\"_id\": \"1\", ",
+                "1e400",
+                "\"\\ud800\"",
+                "3.4e38",
+                "\"Sphere\": ",
+                ",",
+                "-1",
+            ],
         ),
         Target::Ply => (
             &[".ply"],
-            &["element vertex 4294967295\n", "element face 3\n", "property list uchar int vertex_indices\n", "end_header\n", "format binary_little_endian 1.0\n", "nan ", "1e39 ", "255 ", "\u{ff}\u{ff}\u{7f}\u{0}"],
+            &[
+                "element vertex 4294967295\n",
+                "element face 3\n",
+                "property list uchar int vertex_indices\n",
+                "end_header\n",
+                "format binary_little_endian 1.0\n",
+                "nan ",
+                "1e39 ",
+                "255 ",
+                "\u{ff}\u{ff}\u{7f}\u{0}",
+            ],
         ),
         Target::Obj => (
             &[".obj"],
-            &["f 1 2 3\n", "v 1e39 0 0\n", "v 1e9 1e9 1e9\n", "f -1 -2 -3\n", "f 0 1 2\n", "mtllib m.mtl\n", "usemtl m\n", "\n#-mtl-\nnewmtl m\n", "map_Kd /dev/zero\n", "Kd 1\n", "d -halo 0.5\n"],
+            &[
+                "f 1 2 3\n",
+                "v 1e39 0 0\n",
+                "v 1e9 1e9 1e9\n",
+                "f -1 -2 -3\n",
+                "f 0 1 2\n",
+                "mtllib m.mtl\n",
+                "usemtl m\n",
+                "\n#-mtl-\nnewmtl m\n",
+                "map_Kd /dev/zero\n",
+                "Kd 1\n",
+                "d -halo 0.5\n",
+            ],
         ),
-        Target::Image => (&[".png", ".jpg", ".exr", ".hdr"], &["IHDR", "IDAT", "IEND", "\u{0}\u{0}\u{ff}\u{ff}"]),
+        Target::Image => {
+            (&[".png", ".jpg", ".exr", ".hdr"], &["IHDR", "IDAT", "IEND", "\u{0}\u{0}\u{ff}\u{ff}"])
+        }
         Target::Shader => (
             &[".lua"],
-            &["while true do end", "\\z", "\r\n", "\\\r\n", "[[", "]]", "--[==[", "]==]", "'", "\"", "0x1e+", "function(", "goto l ::l::", "pcall(", ":find('.-.-b')", "1/0", "return 0/0"],
+            &[
+                "while true do end",
+                "\\z",
+                "\r\n",
+                "\\\r\n",
+                "[[",
+                "]]",
+                "--[==[",
+                "]==]",
+                "'",
+                "\"",
+                "0x1e+",
+                "function(",
+                "goto l ::l::",
+                "pcall(",
+                ":find('.-.-b')",
+                "1/0",
+                "return 0/0",
+            ],
         ),
     };
     let mut out = Vec::new();
@@ -100,10 +168,17 @@ fn seeds(t: Target) -> (Vec<Vec<u8>>, &'static [&'static str]) {
         let img = image::DynamicImage::ImageRgb32F(image::ImageBuffer::from_fn(5, 3, |x, y| {
             image::Rgb([x as f32 / 4.0, y as f32 / 2.0, 0.5])
         }));
-        for format in [image::ImageFormat::Png, image::ImageFormat::Jpeg, image::ImageFormat::OpenExr, image::ImageFormat::Hdr] {
+        for format in [
+            image::ImageFormat::Png,
+            image::ImageFormat::Jpeg,
+            image::ImageFormat::OpenExr,
+            image::ImageFormat::Hdr,
+        ] {
             let mut bytes = std::io::Cursor::new(Vec::new());
             let encoded = match format {
-                image::ImageFormat::Png | image::ImageFormat::Jpeg => img.to_rgb8().write_to(&mut bytes, format),
+                image::ImageFormat::Png | image::ImageFormat::Jpeg => {
+                    img.to_rgb8().write_to(&mut bytes, format)
+                }
                 _ => img.write_to(&mut bytes, format),
             };
             encoded.expect("a small image encodes");

@@ -43,31 +43,47 @@ fn special_files() -> Vec<Case> {
         r("model /dev/zero", "m.obj", &["m.obj", "a device"]).special("m.obj", zero()),
         r("model of 2 GiB", "m.obj", &["m.obj", "bytes, more than"]).special("m.obj", Sparse(2 * GIB)),
         r("model folder", "m.obj", &["m.obj", "folder"]).special("m.obj", Dir),
-        r("PLY FIFO", "s.xml", &["m.ply", "FIFO"]).text("s.xml", mesh_from("plyFile", "m.ply")).special("m.ply", Fifo),
+        r("PLY FIFO", "s.xml", &["m.ply", "FIFO"])
+            .text("s.xml", mesh_from("plyFile", "m.ply"))
+            .special("m.ply", Fifo),
         r("PLY /dev/zero", "s.xml", &["m.ply", "a device"])
             .text("s.xml", mesh_from("plyFile", "m.ply"))
             .special("m.ply", zero()),
         r("PLY of 9 GiB", "s.xml", &["m.ply", "bytes, more than"])
             .text("s.xml", mesh_from("plyFile", "m.ply"))
             .special("m.ply", Sparse(9 * GIB)),
-        r("objFile FIFO", "s.xml", &["m.obj", "FIFO"]).text("s.xml", mesh_from("objFile", "m.obj")).special("m.obj", Fifo),
+        r("objFile FIFO", "s.xml", &["m.obj", "FIFO"])
+            .text("s.xml", mesh_from("objFile", "m.obj"))
+            .special("m.obj", Fifo),
         r("objFile /dev/zero", "s.xml", &["m.obj", "a device"])
             .text("s.xml", mesh_from("objFile", "m.obj"))
             .special("m.obj", zero()),
         r("texture FIFO", "s.xml", &["t.png", "FIFO"]).text("s.xml", imaged("t.png")).special("t.png", Fifo),
-        r("texture /dev/zero", "s.xml", &["t.png", "a device"]).text("s.xml", imaged("t.png")).special("t.png", zero()),
+        r("texture /dev/zero", "s.xml", &["t.png", "a device"])
+            .text("s.xml", imaged("t.png"))
+            .special("t.png", zero()),
         r("texture of 2 GiB", "s.xml", &["t.png", "bytes, more than"])
             .text("s.xml", imaged("t.png"))
             .special("t.png", Sparse(2 * GIB)),
-        r("texture folder", "s.xml", &["t.png", "folder"]).text("s.xml", imaged("t.png")).special("t.png", Dir),
+        r("texture folder", "s.xml", &["t.png", "folder"])
+            .text("s.xml", imaged("t.png"))
+            .special("t.png", Dir),
         r("shader FIFO", "s.xml", &["x.lua", "FIFO"]).text("s.xml", shaded("x.lua")).special("x.lua", Fifo),
-        r("shader /dev/zero", "s.xml", &["x.lua", "a device"]).text("s.xml", shaded("x.lua")).special("x.lua", zero()),
+        r("shader /dev/zero", "s.xml", &["x.lua", "a device"])
+            .text("s.xml", shaded("x.lua"))
+            .special("x.lua", zero()),
         r("shader of 5 MiB", "s.xml", &["x.lua", "bytes, more than"])
             .text("s.xml", shaded("x.lua"))
             .special("x.lua", Sparse(5 << 20)),
-        r("shader folder", "s.xml", &["x.lua", "folder"]).text("s.xml", shaded("x.lua")).special("x.lua", Dir),
-        r("mtllib FIFO", "m.obj", &["m.mtl", "FIFO"]).text("m.obj", obj(Some("m.mtl"))).special("m.mtl", Fifo),
-        r("mtllib /dev/zero", "m.obj", &["m.mtl", "a device"]).text("m.obj", obj(Some("m.mtl"))).special("m.mtl", zero()),
+        r("shader folder", "s.xml", &["x.lua", "folder"])
+            .text("s.xml", shaded("x.lua"))
+            .special("x.lua", Dir),
+        r("mtllib FIFO", "m.obj", &["m.mtl", "FIFO"])
+            .text("m.obj", obj(Some("m.mtl")))
+            .special("m.mtl", Fifo),
+        r("mtllib /dev/zero", "m.obj", &["m.mtl", "a device"])
+            .text("m.obj", obj(Some("m.mtl")))
+            .special("m.mtl", zero()),
         r("mtllib of 65 MiB", "m.obj", &["m.mtl", "bytes, more than"])
             .text("m.obj", obj(Some("m.mtl")))
             .special("m.mtl", Sparse(65 << 20)),
@@ -102,7 +118,9 @@ fn nesting_and_size() -> Vec<Case> {
             "<Sphere id=\"{i}\"><Material>1</Material><Center>1</Center><Radius>0.5</Radius></Sphere>\n"
         ));
     }
-    spheres.push_str("<Sphere id=\"100000\"><Material>1</Material><Center>1</Center><Radius>-1</Radius></Sphere>");
+    spheres.push_str(
+        "<Sphere id=\"100000\"><Material>1</Material><Center>1</Center><Radius>-1</Radius></Sphere>",
+    );
     let siblings = format!("<Scene>\n{}<Cameras>\n</Scene>", "<Unknown/>\n".repeat(100_000));
     let mut json_spheres = Vec::new();
     for i in 1..=100_000 {
@@ -114,12 +132,16 @@ fn nesting_and_size() -> Vec<Case> {
     let json_spheres = format!("{{\"Sphere\": [{}]}}", json_spheres.join(",\n"));
     vec![
         r("XML nested 100,000 deep", "s.xml", &["s.xml", "nested more than 64 deep"]).text("s.xml", deep_xml),
-        r("XML nested 65 deep", "s.xml", &["s.xml", "line 1", "nested more than 64 deep"]).text("s.xml", just_too_deep),
-        r("JSON arrays nested 100,000 deep", "s.json", &["s.json", "recursion limit"]).text("s.json", deep_json),
-        r("JSON objects nested 100,000 deep", "s.json", &["s.json", "recursion limit"]).text("s.json", deep_objects),
+        r("XML nested 65 deep", "s.xml", &["s.xml", "line 1", "nested more than 64 deep"])
+            .text("s.xml", just_too_deep),
+        r("JSON arrays nested 100,000 deep", "s.json", &["s.json", "recursion limit"])
+            .text("s.json", deep_json),
+        r("JSON objects nested 100,000 deep", "s.json", &["s.json", "recursion limit"])
+            .text("s.json", deep_objects),
         r("XML with 100,000 spheres", "s.xml", &["s.xml", "Sphere[id=100000]", "line 100020", "positive"])
             .text("s.xml", xml(&spheres, "")),
-        r("XML with 100,000 siblings", "s.xml", &["s.xml", "line 100003", "malformed XML"]).text("s.xml", siblings),
+        r("XML with 100,000 siblings", "s.xml", &["s.xml", "line 100003", "malformed XML"])
+            .text("s.xml", siblings),
         r("JSON with 100,000 spheres", "s.json", &["s.json", "Sphere[id=100000]", "positive"])
             .text("s.json", json(&json_spheres)),
     ]
@@ -162,7 +184,11 @@ fn malformed_json() -> Vec<Case> {
     };
     let sphere = r#"{"_id": "1", "Material": "1", "Center": "1", "Radius": "0.5"}"#;
     vec![
-        r("JSON duplicate top-level key", "{\"Scene\": {},\n\"Scene\": {}}", &["line 2", "\"Scene\" is given twice"]),
+        r(
+            "JSON duplicate top-level key",
+            "{\"Scene\": {},\n\"Scene\": {}}",
+            &["line 2", "\"Scene\" is given twice"],
+        ),
         r(
             "JSON duplicate element key",
             &json(&format!("{{\"Sphere\": {sphere},\n \"Sphere\": {sphere}}}")),
@@ -176,7 +202,11 @@ fn malformed_json() -> Vec<Case> {
         r("JSON null scene", r#"{"Scene": null}"#, &["<Scene> is null"]),
         r("JSON null objects", &json("null"), &["Scene/Objects", "<Objects> is null"]),
         r("JSON null sphere", &json(r#"{"Sphere": null}"#), &["<Sphere> is null"]),
-        r("JSON null in an array", &json(&format!("{{\"Sphere\": [{sphere}, null]}}")), &["<Sphere> is null"]),
+        r(
+            "JSON null in an array",
+            &json(&format!("{{\"Sphere\": [{sphere}, null]}}")),
+            &["<Sphere> is null"],
+        ),
         r(
             "JSON null camera",
             &json(JSON_SPHERE).replacen(r#""Camera": {"_id": "1""#, r#""Camera": null, "X": {"_id": "1""#, 1),
@@ -207,7 +237,7 @@ fn numbers() -> Vec<Case> {
         &sphere("4", "1", "<Transformations>s1</Transformations>"),
         "<Transformations><Scaling id=\"1\">10 10 10</Scaling></Transformations>",
     )
-        .replace("<VertexData>0 0 -3 1 0 -3 0 1 -3", "<VertexData>0 0 -3 1 0 -3 0 1 -3 3.4e38 0 -3");
+    .replace("<VertexData>0 0 -3 1 0 -3 0 1 -3", "<VertexData>0 0 -3 1 0 -3 0 1 -3 3.4e38 0 -3");
     vec![
         r("vertex inf", "", "", &["<VertexData>", "non-finite"]).text("s.xml", xml("", "").replace("1 0 -3", "inf 0 -3")),
         r("vertex 1e39 (inf in f32)", "", "", &["<VertexData>", "non-finite"])
@@ -265,28 +295,80 @@ fn shaders() -> Vec<Case> {
     vec![
         r("endless loop", spin, &["time limit"]),
         r("endless loop at load", "while true do end", &["time limit"]),
-        r("pcall swallows the timeout", "function color(s) pcall(function() while true do end end) return 1, 1, 1 end", &["time limit", "caught"]),
-        r("pcall in the loop", "function color(s) while true do pcall(function() while true do end end) end end", &["time limit"]),
+        r(
+            "pcall swallows the timeout",
+            "function color(s) pcall(function() while true do end end) return 1, 1, 1 end",
+            &["time limit", "caught"],
+        ),
+        r(
+            "pcall in the loop",
+            "function color(s) while true do pcall(function() while true do end end) end end",
+            &["time limit"],
+        ),
         r("\\z hides a loop", &format!("local a = 'x\\z\n   '\n{spin}"), &["time limit"]),
         r("\\z with CRLF hides a loop", &format!("local a = 'x\\z\r\n  \r\n'\r\n{spin}"), &["time limit"]),
         r("backslash-CRLF hides a loop", &format!("local a = 'x\\\r\ny'\r\n{spin}"), &["time limit"]),
         r("backslash-LFCR hides a loop", &format!("local a = 'x\\\n\ry'\n{spin}"), &["time limit"]),
         r("CR-ended comment hides a loop", &format!("-- note\rlocal b = 1\r{spin}"), &["time limit"]),
         r("long bracket levels hide a loop", &format!("local a = [==[ ]] ]=] ]==]\n{spin}"), &["time limit"]),
-        r("hex exponent hides a function", "local f = 0x1e+function() while true do end end\nfunction color(s) return 1, 1, 1 end", &["arithmetic"]),
-        r("coroutine loop", "function color(s) coroutine.wrap(function() while true do end end)() end", &["time limit"]),
-        r("backtracking find", "function color(s) string.find(string.rep('a', 1e5), '.-.-.-.-b') return 1, 1, 1 end", &["x.lua:1", "magic characters"]),
-        r("backtracking match method", "function color(s) ('a'):rep(5e4):match('(a*)*b') return 1, 1, 1 end", &["magic characters"]),
-        r("pattern gsub", "function color(s) string.gsub('abc', '%a+', 'x') return 1, 1, 1 end", &["string.gsub", "magic characters"]),
-        r("pattern gmatch", "function color(s) for w in string.gmatch('abc', '.') do end return 1, 1, 1 end", &["string.gmatch", "magic characters"]),
+        r(
+            "hex exponent hides a function",
+            "local f = 0x1e+function() while true do end end\nfunction color(s) return 1, 1, 1 end",
+            &["arithmetic"],
+        ),
+        r(
+            "coroutine loop",
+            "function color(s) coroutine.wrap(function() while true do end end)() end",
+            &["time limit"],
+        ),
+        r(
+            "backtracking find",
+            "function color(s) string.find(string.rep('a', 1e5), '.-.-.-.-b') return 1, 1, 1 end",
+            &["x.lua:1", "magic characters"],
+        ),
+        r(
+            "backtracking match method",
+            "function color(s) ('a'):rep(5e4):match('(a*)*b') return 1, 1, 1 end",
+            &["magic characters"],
+        ),
+        r(
+            "pattern gsub",
+            "function color(s) string.gsub('abc', '%a+', 'x') return 1, 1, 1 end",
+            &["string.gsub", "magic characters"],
+        ),
+        r(
+            "pattern gmatch",
+            "function color(s) for w in string.gmatch('abc', '.') do end return 1, 1, 1 end",
+            &["string.gmatch", "magic characters"],
+        ),
         r("returns inf", "function color(s) return 1/0, 0, 0 end", &["color() returned inf"]),
-        r("returns -inf in a vec3", "function color(s) return vec3(0, -1/0, 0) end", &["returned -inf as its green value"]),
+        r(
+            "returns -inf in a vec3",
+            "function color(s) return vec3(0, -1/0, 0) end",
+            &["returned -inf as its green value"],
+        ),
         r("returns NaN", "function color(s) return 0/0, 0, 0 end", &["NaN"]),
-        r("memory bomb", "function color(s) local s = 'x' for i = 1, 40 do s = s .. s end return 1, 1, 1 end", &["ran out of memory"]),
+        r(
+            "memory bomb",
+            "function color(s) local s = 'x' for i = 1, 40 do s = s .. s end return 1, 1, 1 end",
+            &["ran out of memory"],
+        ),
         r("string.rep bomb", "function color(s) return #string.rep('x', 1e12), 0, 0 end", &["string.rep"]),
-        r("reserved name", "__luster_tick = nil\nfunction color(s) return 1, 1, 1 end", &["x.lua:1", "reserved"]),
-        r("unterminated string", "local a = 'abc\nfunction color(s) return 1, 1, 1 end", &["x.lua:1", "unfinished string"]),
-        r("unterminated long comment", "--[==[ ]]\nfunction color(s) return 1, 1, 1 end", &["unfinished long comment"]),
+        r(
+            "reserved name",
+            "__luster_tick = nil\nfunction color(s) return 1, 1, 1 end",
+            &["x.lua:1", "reserved"],
+        ),
+        r(
+            "unterminated string",
+            "local a = 'abc\nfunction color(s) return 1, 1, 1 end",
+            &["x.lua:1", "unfinished string"],
+        ),
+        r(
+            "unterminated long comment",
+            "--[==[ ]]\nfunction color(s) return 1, 1, 1 end",
+            &["unfinished long comment"],
+        ),
         r("os.execute", "os.execute('touch pwned')", &["os"]),
         r("io.open", "io.open('/etc/passwd')", &["io"]),
         r("require", "require('ffi')", &["require"]),
@@ -302,13 +384,19 @@ fn shaders() -> Vec<Case> {
 fn leaks() -> Vec<Case> {
     let passwd = "root:x:0:0:root:/root:/bin/bash\ndaemon:x:1:1:daemon:/usr/sbin:/usr/sbin/nologin\n";
     let r = |name, scene: &'static str, expect: &[&'static str]| {
-        Case::render(name, scene, expect).text("secret", passwd).absent(&["root", "daemon", "/bin", "nologin"])
+        Case::render(name, scene, expect)
+            .text("secret", passwd)
+            .absent(&["root", "daemon", "/bin", "nologin"])
     };
     vec![
-        r("mtllib a password file", "m.obj", &["m.obj", "secret", "line 1"]).text("m.obj", obj(Some("secret"))),
-        r("mtllib ../../etc/passwd", "m.obj", &["m.obj"]).text("m.obj", obj(Some("../../../../../../../../etc/passwd"))),
-        r("objFile a password file", "s.xml", &["secret", "line 1", "not an OBJ statement"]).text("s.xml", mesh_from("objFile", "secret")),
-        r("plyFile a password file", "s.xml", &["secret", "not a PLY file"]).text("s.xml", mesh_from("plyFile", "secret")),
+        r("mtllib a password file", "m.obj", &["m.obj", "secret", "line 1"])
+            .text("m.obj", obj(Some("secret"))),
+        r("mtllib ../../etc/passwd", "m.obj", &["m.obj"])
+            .text("m.obj", obj(Some("../../../../../../../../etc/passwd"))),
+        r("objFile a password file", "s.xml", &["secret", "line 1", "not an OBJ statement"])
+            .text("s.xml", mesh_from("objFile", "secret")),
+        r("plyFile a password file", "s.xml", &["secret", "not a PLY file"])
+            .text("s.xml", mesh_from("plyFile", "secret")),
         r("texture a password file", "s.xml", &["secret", "cannot decode"]).text("s.xml", imaged("secret")),
         r("scene a password file", "secret", &["secret", "malformed XML"]),
         r("shader a password file", "s.xml", &["secret"]).text("s.xml", shaded("secret")),
@@ -323,7 +411,9 @@ fn leaks() -> Vec<Case> {
 
 fn images() -> Vec<Case> {
     let r = |name, bytes: Vec<u8>, expect: &[&'static str]| {
-        Case::render(name, "s.xml", &[&["t.png"][..], expect].concat()).text("s.xml", imaged("t.png")).bytes("t.png", bytes)
+        Case::render(name, "s.xml", &[&["t.png"][..], expect].concat())
+            .text("s.xml", imaged("t.png"))
+            .bytes("t.png", bytes)
     };
     vec![
         r("PNG header of 100000×100000", png_header(100_000, 100_000), &["cannot decode image"]),
@@ -333,7 +423,11 @@ fn images() -> Vec<Case> {
         r("text as PNG", b"hello".to_vec(), &["cannot"]),
         r("truncated signature", b"\x89PN".to_vec(), &["cannot"]),
         r("EXR magic only", b"\x76\x2f\x31\x01\x02\0\0\0".to_vec(), &["cannot decode image"]),
-        r("HDR header without size", b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n".to_vec(), &["cannot decode image"]),
+        r(
+            "HDR header without size",
+            b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n".to_vec(),
+            &["cannot decode image"],
+        ),
         r("JPEG start only", b"\xff\xd8\xff\xe0\0\x10JFIF\0".to_vec(), &["cannot decode image"]),
     ]
 }
@@ -343,7 +437,11 @@ fn command_line() -> Vec<Case> {
         Case::render(name, "s.xml", expect).text("s.xml", xml("", "")).args(args)
     };
     vec![
-        c("--threads 100000000", &["render", "--threads", "100000000", "-o", "{out}", "s.xml"], &["--threads", "100000000", "1..=1024"]),
+        c(
+            "--threads 100000000",
+            &["render", "--threads", "100000000", "-o", "{out}", "s.xml"],
+            &["--threads", "100000000", "1..=1024"],
+        ),
         c("--threads 0", &["render", "--threads", "0", "-o", "{out}", "s.xml"], &["--threads", "1..=1024"]),
         c("--threads -1", &["render", "--threads=-1", "-o", "{out}", "s.xml"], &["--threads"]),
         c("suite --threads 70000", &["suite", "--threads", "70000", "-o", "{out}", "."], &["--threads"]),
@@ -352,10 +450,20 @@ fn command_line() -> Vec<Case> {
 }
 
 fn all_cases() -> Vec<Case> {
-    [special_files(), nesting_and_size(), malformed_xml(), malformed_json(), numbers(), shaders(), leaks(), images(), command_line()]
-        .into_iter()
-        .flatten()
-        .collect()
+    [
+        special_files(),
+        nesting_and_size(),
+        malformed_xml(),
+        malformed_json(),
+        numbers(),
+        shaders(),
+        leaks(),
+        images(),
+        command_line(),
+    ]
+    .into_iter()
+    .flatten()
+    .collect()
 }
 
 struct Run {
@@ -459,18 +567,21 @@ fn hostile_inputs_are_refused_cleanly() {
             .collect();
         workers.into_iter().flat_map(|w| w.join().expect("a worker")).collect()
     });
-    assert!(failures.is_empty(), "{} of {} hostile cases misbehaved:\n{}", failures.len(), cases.len(), failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "{} of {} hostile cases misbehaved:\n{}",
+        failures.len(),
+        cases.len(),
+        failures.join("\n")
+    );
 }
 
 /// Huge but finite coordinates are legitimate: they render (the BVH builder
 /// once panicked on them with an out-of-range leaf index).
 #[test]
 fn huge_but_finite_coordinates_render() {
-    let far_mesh = xml(
-        "<Mesh id=\"1\"><Material>1</Material><Faces>1 2 3 1 2 4</Faces></Mesh>",
-        "",
-    )
-    .replace("0 1 -3</VertexData>", "0 1 -3 1e30 1e30 -1e30</VertexData>");
+    let far_mesh = xml("<Mesh id=\"1\"><Material>1</Material><Faces>1 2 3 1 2 4</Faces></Mesh>", "")
+        .replace("0 1 -3</VertexData>", "0 1 -3 1e30 1e30 -1e30</VertexData>");
     let cases = [
         ("m.obj", "v 0 0 -3\nv 1e9 0 -3\nv 0 1e9 -3\nv 1 1 -3\nf 1 2 3\nf 1 3 4\nf 2 3 4\n".to_string()),
         ("s.xml", far_mesh),

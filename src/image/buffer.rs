@@ -111,7 +111,8 @@ impl Rgb32Image {
         // refused before opening, so nothing blocks or runs memory out.
         if let Err(detail) = crate::scene::file::check_regular(path, crate::texture::image::MAX_IMAGE_BYTES) {
             if std::fs::metadata(path).is_ok() {
-                let detail = if detail == "it is a folder" { "it is a directory".to_string() } else { detail };
+                let detail =
+                    if detail == "it is a folder" { "it is a directory".to_string() } else { detail };
                 return Err(ImageError::Unreadable { path: path.to_path_buf(), detail });
             }
         }

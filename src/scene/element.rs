@@ -110,7 +110,11 @@ impl<'a> Reader<'a> {
                 tok.parse::<u32>().map_err(|_| {
                     self.err(
                         el,
-                        format!("<{}> has {}, which is not a non-negative integer", el.name, shown_token(tok)),
+                        format!(
+                            "<{}> has {}, which is not a non-negative integer",
+                            el.name,
+                            shown_token(tok)
+                        ),
                     )
                 })
             })

@@ -65,10 +65,13 @@ fn unquote(msg: &str) -> String {
     for (i, part) in parts.iter().enumerate() {
         if i % 2 == 1 && i + 1 < parts.len() {
             let shown = shown_token(part);
-            out.push_str(shown.strip_prefix('"').and_then(|s| s.strip_suffix('"')).map_or(
-                "…".to_string(),
-                |s| format!("'{s}'"),
-            ).as_str());
+            out.push_str(
+                shown
+                    .strip_prefix('"')
+                    .and_then(|s| s.strip_suffix('"'))
+                    .map_or("…".to_string(), |s| format!("'{s}'"))
+                    .as_str(),
+            );
         } else {
             out.push_str(part);
         }

@@ -397,7 +397,9 @@ fn a_caught_timeout_still_fails_the_call_and_costs_the_limit_only_once_per_call(
         assert!(start.elapsed() < timeout + Duration::from_millis(700), "took {:?}", start.elapsed());
     }
     // Catching it inside the loop does not help either: every later tick raises again.
-    assert_stops("function color(s) while true do pcall(error, 'x') pcall(function() while true do end end) end end");
+    assert_stops(
+        "function color(s) while true do pcall(error, 'x') pcall(function() while true do end end) end end",
+    );
 }
 
 #[test]

@@ -130,9 +130,8 @@ impl Image {
         if let Ok(format) = ::image::ImageFormat::from_path(path) {
             reader.set_format(format);
         }
-        let reader = reader
-            .with_guessed_format()
-            .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+        let reader =
+            reader.with_guessed_format().map_err(|e| format!("cannot read {}: {e}", path.display()))?;
         let img = reader.decode().map_err(|e| format!("cannot decode image {}: {e}", path.display()))?;
         let (w, h) = (img.width(), img.height());
         if w == 0 || h == 0 || w > MAX_EDGE || h > MAX_EDGE {

@@ -189,8 +189,7 @@ pub fn json(objects: &str) -> String {
 }
 
 /// The sphere of [`json`]'s default scene.
-pub const JSON_SPHERE: &str =
-    r#"{"Sphere": {"_id": "1", "Material": "1", "Center": "1", "Radius": "0.5"}}"#;
+pub const JSON_SPHERE: &str = r#"{"Sphere": {"_id": "1", "Material": "1", "Center": "1", "Radius": "0.5"}}"#;
 
 /// An OBJ triangle using material `m` from `mtl` (when given).
 pub fn obj(mtl: Option<&str>) -> String {

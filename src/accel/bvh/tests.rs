@@ -273,7 +273,9 @@ fn huge_coordinates_and_nan_rays_stay_in_range() {
             Aabb::new(Vec3::new(x.min(m / 2.0), 0.0, 0.0), Vec3::new(x, 1.0, 1.0))
         })
         .collect();
-    boxes.extend((0..40).map(|i| Aabb::new(Vec3::splat(i as f32 * 1e37), Vec3::splat(i as f32 * 1e37 + 1e36))));
+    boxes.extend(
+        (0..40).map(|i| Aabb::new(Vec3::splat(i as f32 * 1e37), Vec3::splat(i as f32 * 1e37 + 1e36))),
+    );
     let bvh = Bvh::build(&boxes);
     check_structure(&bvh, &boxes);
     let in_range = |r: std::ops::Range<usize>| r.end <= bvh.prim_order().len();

@@ -119,8 +119,9 @@ pub fn read(file: &MtlFile, m: usize, warnings: &mut Vec<Warning>) -> Result<Vec
         let id = format!("{}/{key}", mat.name);
         let (source, image) = match kind {
             Kind::Image => {
-                crate::scene::file::check_regular(&path, crate::texture::image::MAX_IMAGE_BYTES)
-                    .map_err(|why| file.err(m, key, format!("{key}: cannot read image {}: {why}", st.file)))?;
+                crate::scene::file::check_regular(&path, crate::texture::image::MAX_IMAGE_BYTES).map_err(
+                    |why| file.err(m, key, format!("{key}: cannot read image {}: {why}", st.file)),
+                )?;
                 let source = TextureSource::Image {
                     image: 0,
                     interpolation: Interpolation::Bilinear,

@@ -176,7 +176,11 @@ pub fn load(path: &Path) -> Result<ObjModel, SceneError> {
             } else {
                 format!("no material library before this line defines it ({})", libs.join(", "))
             };
-            return Err(line_err(path, u.line, format!("usemtl {}: {why}", crate::scene::error::shown_token(&u.name))));
+            return Err(line_err(
+                path,
+                u.line,
+                format!("usemtl {}: {why}", crate::scene::error::shown_token(&u.name)),
+            ));
         }
     }
     // tobj's material numbering: (file, material in file) for each global index.

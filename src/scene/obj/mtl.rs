@@ -135,7 +135,8 @@ fn check(path: &Path, text: &str) -> Result<Checked, SceneError> {
             if matches!(args.first(), Some(&"spectral") | Some(&"xyz")) {
                 return Err(err(format!("{key} {} colours are not supported; give r g b", args[0])));
             }
-            let v = floats(&args).map_err(|w| err(format!("{key} has {}, which is not a number", shown_token(&w))))?;
+            let v = floats(&args)
+                .map_err(|w| err(format!("{key} has {}, which is not a number", shown_token(&w))))?;
             match v[..] {
                 [g] if g >= 0.0 => Some(format!("{key} {g} {g} {g}")),
                 [r, g, b] if r >= 0.0 && g >= 0.0 && b >= 0.0 => None,
@@ -152,7 +153,8 @@ fn check(path: &Path, text: &str) -> Result<Checked, SceneError> {
             } else {
                 &args[..]
             };
-            let v = floats(args).map_err(|w| err(format!("{key} has {}, which is not a number", shown_token(&w))))?;
+            let v = floats(args)
+                .map_err(|w| err(format!("{key} has {}, which is not a number", shown_token(&w))))?;
             if v.len() != 1 {
                 return Err(err(format!("{key} needs 1 number, found {}", v.len())));
             }

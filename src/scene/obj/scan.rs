@@ -173,9 +173,7 @@ fn numbers(line: u32, key: &str, rest: &str) -> Result<usize, LineError> {
         match w.parse::<f32>() {
             Ok(x) if x.is_finite() => n += 1,
             Ok(_) => return Err((line, format!("{key} has a non-finite number {}", shown_token(w)))),
-            Err(_) => {
-                return Err((line, format!("{key} has {}, which is not a number", shown_token(w))))
-            }
+            Err(_) => return Err((line, format!("{key} has {}, which is not a number", shown_token(w)))),
         }
     }
     Ok(n)
@@ -193,7 +191,10 @@ fn corner(line: u32, c: &str, counts: [usize; 3], max_ref: &mut [(usize, u32); 3
             continue;
         }
         let Ok(i) = p.parse::<i64>() else {
-            return Err((line, format!("face corner {}: {} is not an index", shown_token(c), shown_token(p))));
+            return Err((
+                line,
+                format!("face corner {}: {} is not an index", shown_token(c), shown_token(p)),
+            ));
         };
         if i == 0 {
             return Err((
