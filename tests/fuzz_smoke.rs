@@ -8,7 +8,9 @@
 //! written to `target/fuzz-smoke/` for replay.
 //!
 //! Each target gets [`ITERATIONS`] inputs or [`BUDGET`] of time, whichever
-//! ends first, so the whole run stays well under two minutes.
+//! ends first, so the whole run stays well under two minutes. For a long run
+//! outside CI, `LUSTER_FUZZ_ITERATIONS` and `LUSTER_FUZZ_SECONDS` override
+//! both (per target).
 
 use luster::fuzzing::Target;
 use std::path::{Path, PathBuf};
@@ -38,6 +40,11 @@ impl Rng {
             (self.next() % n as u64) as usize
         }
     }
+}
+
+/// A count from the environment, if set.
+fn env(name: &str) -> Option<usize> {
+    std::env::var(name).ok().map(|v| v.parse().unwrap_or_else(|_| panic!("{name} must be a whole number")))
 }
 
 fn repo() -> PathBuf {
@@ -238,7 +245,9 @@ fn fuzz_smoke_run_finds_no_panic() {
     for (k, t) in Target::ALL.into_iter().enumerate() {
         let (seeds, tokens) = seeds(t);
         assert!(!seeds.is_empty(), "no seeds for {}", t.name());
-        let iterations = if t == Target::Shader { ITERATIONS / 10 } else { ITERATIONS };
+        let iterations = env("LUSTER_FUZZ_ITERATIONS").unwrap_or(ITERATIONS);
+        let iterations = if t == Target::Shader { iterations / 10 } else { iterations };
+        let budget = env("LUSTER_FUZZ_SECONDS").map_or(BUDGET, |s| Duration::from_secs(s as u64));
         let mut rng = Rng(0x9e37_79b9_7f4a_7c15 ^ (k as u64 + 1));
         let start = Instant::now();
         let mut runs = 0;
@@ -253,7 +262,7 @@ fn fuzz_smoke_run_finds_no_panic() {
                 let _ = std::fs::write(&file, &input);
                 crashes.push(format!("{} panicked on input {runs} (saved as {})", t.name(), file.display()));
             }
-            if start.elapsed() > BUDGET {
+            if start.elapsed() > budget {
                 break;
             }
         }
