@@ -6,11 +6,12 @@ set -eu
 cd "$(dirname "$0")"
 root=..
 shared=${SHARED:-$root/../shared/scenes/ceng795}
+name() { echo "$1" | sed "s|^\(\.\./\)*||; s|/|_|g"; }
 small() { find "$@" -type f -size -65k 2>/dev/null || true; }
 add() { # target, files...
     t=$1; shift
     mkdir -p corpus/$t
-    for f in "$@"; do cp "$f" "corpus/$t/$(echo "$f" | tr '/' '_')"; done
+    for f in "$@"; do cp "$f" "corpus/$t/$(name "$f")"; done
 }
 add scene_xml $(small "$shared" "$root/tests" -name '*.xml')
 add scene_json $(small "$shared" "$root/tests" -name '*.json')
@@ -19,7 +20,7 @@ add image $(small "$shared" "$root/tests" \( -name '*.png' -o -name '*.jpg' -o -
 add shader $(small "$root/tests" "$root/examples" "$root/docs" -name '*.lua')
 mkdir -p corpus/obj
 for o in $(small "$root/tests" -name '*.obj'); do
-    out="corpus/obj/$(echo "$o" | tr '/' '_')"
+    out="corpus/obj/$(name "$o")"
     cp "$o" "$out"
     for m in $(sed -n 's/^mtllib[[:space:]]*//p' "$o"); do
         [ -f "$(dirname "$o")/$m" ] && { printf '\n#-mtl-\n'; cat "$(dirname "$o")/$m"; } >> "$out"
