@@ -1,6 +1,8 @@
 #!/bin/sh
 # Builds the fuzz targets (libFuzzer, stable Rust) and runs each for RUNS
-# executions (default 1000000) on the seeded corpus, logging to logs/.
+# executions (default 1000000) or SECONDS of time, whichever ends first, on
+# the seeded corpus, logging to logs/. Scene builds run on one thread
+# (RAYON_NUM_THREADS=1): parallel BVH builds of tiny scenes only add overhead.
 # usage: fuzz/run.sh [TARGET...]     (all six when none is given)
 # Crashing inputs land in artifacts/<target>/; replay one with
 #   fuzz/target/<host triple>/release/<target> artifacts/<target>/crash-...
@@ -14,11 +16,13 @@ cargo build --release --bins --target "$host"
 bin=target/$host/release
 [ -d corpus ] || ./seed.sh
 runs=${RUNS:-1000000}
+seconds=${SECONDS_PER_TARGET:-0}
+export RAYON_NUM_THREADS=${RAYON_NUM_THREADS:-1}
 targets=${*:-scene_xml scene_json ply obj image shader}
 mkdir -p logs
 for t in $targets; do
     mkdir -p "artifacts/$t"
-    "$bin/$t" -runs="$runs" -max_len=65536 -rss_limit_mb=2048 -timeout=10 \
+    "$bin/$t" -runs="$runs" -max_total_time="$seconds" -max_len=65536 -rss_limit_mb=2048 -timeout=10 \
         -artifact_prefix="artifacts/$t/" -print_final_stats=1 "corpus/$t" >"logs/$t.log" 2>&1 || true
     echo "$t: $(grep -E 'stat::number_of_executed_units' "logs/$t.log" | tail -1) \
 crashes: $(ls "artifacts/$t" | wc -l)"
