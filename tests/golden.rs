@@ -8,7 +8,7 @@
 //! `target/tmp/golden/`, so a failure can be looked at.
 //!
 //! The course folder is read from `../shared/scenes/ceng795`; without it the
-//! tests say they skipped.
+//! tests say they skipped, except under `CI=true`, where they fail.
 
 mod common;
 use common::course_root;
@@ -16,10 +16,7 @@ use luster::conformance::{discover, run_case, CaseResult};
 use std::path::PathBuf;
 
 fn check_homework(hw: &str) {
-    let Some(root) = course_root() else {
-        eprintln!("skipped: ../shared/scenes/ceng795 is absent, so the {hw} golden images were not checked");
-        return;
-    };
+    let Some(root) = course_root(hw) else { return };
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("golden").join(hw);
     let _ = std::fs::create_dir_all(&out);
     let cases: Vec<_> = discover(&root).into_iter().filter(|c| c.hw == hw).collect();
