@@ -58,18 +58,26 @@ impl Case {
     }
 
     /// The expected image for a camera's `ImageName`, if the folder has one.
+    ///
+    /// A scene in a folder named `2020` takes `expected/2020/` first (the
+    /// course re-rendered hw7 each year); any other XML scene `expected/2022/`
+    /// and then `expected/2020/`; then `expected/` itself. An `.exr` image is
+    /// compared through its `.png` sibling, the course's tone-mapped version,
+    /// when there is one.
     pub fn expected_image(&self, image_name: &str) -> Option<PathBuf> {
         let exp = self.hw_dir.join("expected");
-        if self.encoding == Encoding::Xml {
-            for year in ["2022", "2020"] {
-                let p = exp.join(year).join(image_name);
-                if p.is_file() {
-                    return Some(p);
-                }
-            }
-        }
-        let p = exp.join(image_name);
-        p.is_file().then_some(p)
+        let name = Path::new(image_name);
+        let png = name.with_extension("png");
+        let is_exr = name.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+        let names: Vec<&Path> = if is_exr { vec![&png, name] } else { vec![name] };
+        let in_2020 = self.scene.parent().is_some_and(|d| d.file_name().is_some_and(|n| n == "2020"));
+        let years: &[&str] = match (self.encoding, in_2020) {
+            (Encoding::Xml, true) => &["2020", "2022"],
+            (Encoding::Xml, false) => &["2022", "2020"],
+            (Encoding::Json, _) => &[],
+        };
+        let dirs = years.iter().map(|y| exp.join(y)).chain(std::iter::once(exp.clone()));
+        dirs.flat_map(|d| names.iter().map(move |n| d.join(n)).collect::<Vec<_>>()).find(|p| p.is_file())
     }
 
     /// Whether the scene file names one of its homework's expected images.
@@ -154,6 +162,13 @@ pub struct ImageResult {
     pub coarse_psnr: Option<f64>,
     /// Luma statistics of ours and the expected image, when the bar tests them.
     pub stats: Option<thresholds::StatsPair>,
+    /// Per-block z-scores against the expected image, with the variance from
+    /// the second render, when the bar tests them.
+    pub block_z: Option<thresholds::BlockZ>,
+    /// The camera's own sample count (the expected image's).
+    pub scene_spp: u32,
+    /// A known quirk of the course's data that makes this image differ.
+    pub quirk: Option<&'static str>,
     /// Samples per pixel it was rendered with.
     pub spp: u32,
     /// Render seconds for this camera (both renders of a pair).
@@ -180,6 +195,13 @@ pub struct CaseResult {
     /// Warnings of the loader.
     pub warnings: Vec<String>,
 }
+
+/// What the loader says when a scene uses an element luster ignores.
+const UNSUPPORTED_WARNING: &str = " is not supported yet";
+
+/// What the loader says when an `ImageName` asks for an output format luster
+/// does not write.
+const UNSUPPORTED_OUTPUT: &str = "the formats luster writes";
 
 /// Loads, builds and renders `case` on the current rayon pool, writes each
 /// image and its heatmap under `outdir`, and compares with the expected images.
@@ -231,6 +253,30 @@ impl CaseResult {
             error,
             warnings: Vec::new(),
         }
+    }
+
+    /// The features of the scene that luster does not implement yet, as the
+    /// loader reported them: `<DirectionalLight>` for an ignored element,
+    /// `HDR output (.exr)` for an image format it cannot write. A scene that
+    /// needs them cannot match its expected image, so the suite counts it
+    /// apart from failures.
+    pub fn unsupported(&self) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        for w in &self.warnings {
+            if let Some(end) = w.find(UNSUPPORTED_WARNING) {
+                // "...: <DirectionalLight> inside <Lights> is not supported yet; ignored"
+                let head = &w[..end];
+                let element = head.find('<').map(|i| &head[i..]).and_then(|h| h.split(" inside").next());
+                let feature = element.unwrap_or(head).trim().to_string();
+                if !out.contains(&feature) {
+                    out.push(feature);
+                }
+            }
+        }
+        if self.error.as_deref().is_some_and(|e| e.contains(UNSUPPORTED_OUTPUT) && e.contains(".exr")) {
+            out.push("HDR output (.exr)".to_string());
+        }
+        out
     }
 
     /// Frees the per-pixel FLIP and difference maps of every comparison,
@@ -286,10 +332,13 @@ fn run_case_into(case: &Case, outdir: &Path, opts: &RenderOptions, result: &mut 
             heatmap: None,
             comparison: None,
             threshold,
-            bar: threshold.bar(None),
+            bar: threshold.bar(),
             pair: None,
             coarse_psnr: None,
             stats: None,
+            block_z: None,
+            scene_spp: cam.num_samples.max(1),
+            quirk: thresholds::known_quirk(case, &cam.image_name),
             spp: opts.spp.unwrap_or(cam.num_samples).max(1),
             seconds,
             pass: false,
@@ -306,24 +355,26 @@ fn run_case_into(case: &Case, outdir: &Path, opts: &RenderOptions, result: &mut 
                 Ok(p) => r.pair = Some(p),
                 Err(e) => r.error = Some(e),
             }
-            r.bar = threshold.bar(r.pair.as_ref());
             let pair_png =
                 png.with_file_name(format!("{}__seed{}.png", file_stem(&png), opts.seed.wrapping_add(1)));
             // Kept for looking at; judging does not need the file.
             let _ = crate::image::output::write_rgb8(&pair_png, img.width, img.height, second);
         }
         if let Some(exp) = expected {
-            match compare_with(&exp, img.width, img.height, &rgb, r.bar.tests_coarse(), r.bar.tests_stats()) {
-                Ok((c, coarse, stats)) => {
+            let z = second.as_deref().map(|s| (s, thresholds::ref_variance_ratio(r.spp, r.scene_spp)));
+            match compare_with(&exp, img.width, img.height, &rgb, r.bar.tests_stats(), z) {
+                Ok((c, coarse, stats, block_z)) => {
                     r.coarse_psnr = coarse;
                     r.stats = stats;
+                    r.block_z = block_z;
                     let heat = png.with_file_name(format!("{}__heatmap.png", file_stem(&png)));
                     if let Ok(h) = crate::image::comparison_heatmap(&c, crate::image::HeatmapSource::Flip) {
                         if crate::image::write_heatmap(&h, &heat).is_ok() {
                             r.heatmap = Some(heat);
                         }
                     }
-                    r.pass = r.error.is_none() && r.bar.accepts(&c, r.coarse_psnr, r.stats.as_ref());
+                    r.pass = r.error.is_none()
+                        && r.bar.accepts(&c, r.coarse_psnr, r.stats.as_ref(), r.block_z.as_ref());
                     r.comparison = Some(c);
                 }
                 Err(e) => r.error = Some(e),
@@ -337,27 +388,36 @@ fn file_stem(p: &Path) -> String {
     p.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default()
 }
 
-/// What [`compare_with`] measures: the comparison, the PSNR of block means
-/// and the luma statistics (the last two only when asked for).
-type Measured = (Comparison, Option<f64>, Option<thresholds::StatsPair>);
+/// What [`compare_with`] measures: the comparison, the PSNR of block means,
+/// and, when asked for, the luma statistics and the block z-scores.
+type Measured = (Comparison, Option<f64>, Option<thresholds::StatsPair>, Option<thresholds::BlockZ>);
 
-/// Compares an 8-bit render with the expected image file; with `coarse`,
-/// also the means of 8×8 blocks (see [`thresholds::coarse_psnr`]); with
-/// `stats`, the luma statistics of both.
+/// Compares an 8-bit render with the expected image file, and measures the
+/// PSNR of the means of 8×8 blocks (see [`thresholds::coarse_psnr`]); with
+/// `stats`, also the luma statistics of both; with `second` (our render
+/// with another seed, and the reference's variance relative to ours), the
+/// per-block z-scores (see [`measures::block_z`]).
 fn compare_with(
     expected: &Path,
     w: u32,
     h: u32,
     rgb: &[u8],
-    coarse: bool,
     stats: bool,
+    second: Option<(&[u8], f64)>,
 ) -> Result<Measured, String> {
     let reference = Rgb32Image::load(expected).map_err(|e| e.to_string())?;
     let test = rgb8_image(w, h, rgb).ok_or("render buffer has the wrong size")?;
     let c = compare(&reference, &test, &CompareOptions::default()).map_err(|e| e.to_string())?;
-    let coarse = if coarse { thresholds::coarse_psnr(&reference, &test) } else { None };
+    let coarse = thresholds::coarse_psnr(&reference, &test);
     let stats = stats.then(|| thresholds::StatsPair::of(&test, &reference));
-    Ok((c, coarse, stats))
+    let z = match second {
+        Some((rgb2, ratio)) => {
+            let second = rgb8_image(w, h, rgb2).ok_or("the second render has the wrong size")?;
+            measures::block_z(&test, &second, &reference, ratio)
+        }
+        None => None,
+    };
+    Ok((c, coarse, stats, z))
 }
 
 /// Compares two 8-bit renders of the same camera (so of the same size).

@@ -444,12 +444,14 @@ fn image_cells(h: &mut String, scene: &SceneEntry, img: &ImageEntry) {
         ),
         _ => String::new(),
     };
-    // The bias test on 8×8 block means: its bar, the value, red when missed.
-    let coarse = match (t.min_coarse_psnr, img.metrics.as_ref()) {
-        (Some(min), Some(m)) => format!(
-            "<span class=\"sub{}\">8×8 means {} ≥ {min}</span>",
-            if m.coarse_ok { "" } else { " bad" },
-            m.coarse_psnr.map(|p| format!("{p:.1} dB")).unwrap_or_else(|| "∞ dB".to_string())
+    // The bias test on 8×8 block means: the z-scores, red when missed.
+    let coarse = match (t.max_mean_z2, t.max_outliers, img.metrics.as_ref()) {
+        (Some(max_z2), Some(max_out), Some(m)) => format!(
+            "<span class=\"sub{}\">8×8 z² {} ≤ {max_z2}, |z|&gt;5 {} ≤ {:.1}%</span>",
+            if m.z_ok { "" } else { " bad" },
+            m.block_mean_z2.map(|z| format!("{z:.2}")).unwrap_or_else(|| "–".to_string()),
+            m.block_outliers.map(|o| format!("{:.2}%", o * 100.0)).unwrap_or_else(|| "–".to_string()),
+            max_out * 100.0
         ),
         _ => String::new(),
     };

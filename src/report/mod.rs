@@ -28,7 +28,7 @@ mod assets;
 pub mod html;
 pub mod json;
 
-use crate::conformance::thresholds::StatsPair;
+use crate::conformance::thresholds::{BlockZ, StatsPair};
 use crate::conformance::{Bar, CaseResult, ImageResult, Rule};
 use crate::image::{Comparison, MetricSpace};
 use serde::Serialize;
@@ -233,6 +233,13 @@ pub struct Metrics {
     pub contrast: Option<[f64; 2]>,
     /// Whether the statistics agreed (true when not tested).
     pub stats_ok: bool,
+    /// Noise-aware rule: mean z² of the 8×8 block means (see
+    /// `conformance::measures::block_z`).
+    pub block_mean_z2: Option<f64>,
+    /// Noise-aware rule: share of blocks with |z| > 5.
+    pub block_outliers: Option<f64>,
+    /// Whether the z-scores met the bar (true when not tested).
+    pub z_ok: bool,
 }
 
 /// The bar an image was judged by.
@@ -253,8 +260,10 @@ pub struct ThresholdEntry {
     pub pair_psnr: Option<f64>,
     /// Noise-aware: mean LDR-FLIP between our two renders.
     pub pair_flip: Option<f64>,
-    /// Noise-aware: minimum PSNR of the means of 8×8 blocks.
-    pub min_coarse_psnr: Option<f64>,
+    /// Noise-aware: the largest mean z² of the 8×8 block means.
+    pub max_mean_z2: Option<f64>,
+    /// Noise-aware: the largest share of blocks with |z| > 5.
+    pub max_outliers: Option<f64>,
 }
 
 /// How the run was made, for the report's header.
@@ -397,7 +406,10 @@ fn image_entry(i: &ImageResult, root: &Path, outdir: &Path) -> ImageEntry {
         expected_source: i.expected.as_ref().map(|p| p.display().to_string()),
         heatmap,
         thumbs,
-        metrics: i.comparison.as_ref().map(|c| metrics(c, t, i.coarse_psnr, i.stats.as_ref())),
+        metrics: i
+            .comparison
+            .as_ref()
+            .map(|c| metrics(c, t, i.coarse_psnr, i.stats.as_ref(), i.block_z.as_ref())),
         threshold: ThresholdEntry {
             kind: match i.threshold.rule {
                 Rule::Fixed { .. } => "fixed",
@@ -410,14 +422,21 @@ fn image_entry(i: &ImageResult, root: &Path, outdir: &Path) -> ImageEntry {
             spp: i.spp,
             pair_psnr: i.pair.as_ref().and_then(|p| p.psnr.is_finite().then_some(p.psnr)),
             pair_flip: i.pair.as_ref().map(|p| p.flip),
-            min_coarse_psnr: t.tests_coarse().then_some(t.min_coarse_psnr),
+            max_mean_z2: t.tests_z().then_some(t.max_mean_z2),
+            max_outliers: t.tests_z().then_some(t.max_outliers),
         },
         seconds: i.seconds,
         error,
     }
 }
 
-fn metrics(c: &Comparison, t: &Bar, coarse_psnr: Option<f64>, stats: Option<&StatsPair>) -> Metrics {
+fn metrics(
+    c: &Comparison,
+    t: &Bar,
+    coarse_psnr: Option<f64>,
+    stats: Option<&StatsPair>,
+    z: Option<&BlockZ>,
+) -> Metrics {
     Metrics {
         width: c.width,
         height: c.height,
@@ -439,5 +458,8 @@ fn metrics(c: &Comparison, t: &Bar, coarse_psnr: Option<f64>, stats: Option<&Sta
         mean_luma: stats.map(|s| [s.ours.mean, s.reference.mean]),
         contrast: stats.map(|s| [s.ours.contrast, s.reference.contrast]),
         stats_ok: t.stats_ok(stats),
+        block_mean_z2: z.map(|z| z.mean_z2),
+        block_outliers: z.map(|z| z.outliers),
+        z_ok: t.z_ok(z),
     }
 }
