@@ -216,18 +216,30 @@ pub fn run_case(case: &Case, outdir: &Path) -> CaseResult {
 pub fn run_case_with(case: &Case, outdir: &Path, opts: &RenderOptions) -> CaseResult {
     let t0 = Instant::now();
     let mut result = CaseResult::failed(case, None);
-    run_case_into(case, outdir, opts, &mut result);
+    run_case_into(case, outdir, opts, None, &mut result);
     result.seconds = t0.elapsed().as_secs_f64();
     result
 }
 
-/// [`run_case`], with a panic anywhere in loading, building, rendering or
-/// comparing caught and turned into the case's error, so that one bad scene
-/// cannot stop a suite. The panic message is kept; images finished before the
-/// panic are lost.
-pub fn run_case_guarded(case: &Case, outdir: &Path, opts: &RenderOptions) -> CaseResult {
+/// [`run_case_with`], with each camera's sample count capped at `max_spp`
+/// (when `opts` sets no count of its own), and a panic anywhere in loading,
+/// building, rendering or comparing caught and turned into the case's
+/// error, so that one bad scene cannot stop a suite. The panic message is
+/// kept; images finished before the panic are lost.
+pub fn run_case_guarded(
+    case: &Case,
+    outdir: &Path,
+    opts: &RenderOptions,
+    max_spp: Option<u32>,
+) -> CaseResult {
     let t0 = Instant::now();
-    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run_case_with(case, outdir, opts))) {
+    let run = || {
+        let mut result = CaseResult::failed(case, None);
+        run_case_into(case, outdir, opts, max_spp, &mut result);
+        result.seconds = t0.elapsed().as_secs_f64();
+        result
+    };
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(run)) {
         Ok(r) => r,
         Err(payload) => {
             let msg = payload
@@ -289,7 +301,13 @@ impl CaseResult {
     }
 }
 
-fn run_case_into(case: &Case, outdir: &Path, opts: &RenderOptions, result: &mut CaseResult) {
+fn run_case_into(
+    case: &Case,
+    outdir: &Path,
+    opts: &RenderOptions,
+    max_spp: Option<u32>,
+    result: &mut CaseResult,
+) {
     let t0 = Instant::now();
     let built = crate::scene::load(&case.scene).and_then(|d| {
         result.warnings.extend(d.warnings.iter().map(|w| w.to_string()));
@@ -307,6 +325,14 @@ fn run_case_into(case: &Case, outdir: &Path, opts: &RenderOptions, result: &mut 
     let stem = case.label().replace(['/', '.'], "_");
     for (i, cam) in scene.cameras.iter().enumerate() {
         let t = Instant::now();
+        let capped;
+        let opts = match (max_spp, opts.spp) {
+            (Some(m), None) if cam.num_samples > m => {
+                capped = RenderOptions { spp: Some(m.max(1)), ..*opts };
+                &capped
+            }
+            _ => opts,
+        };
         // A shader that fails makes the scene an error row, not a black image.
         let img = match render::try_render_with(&scene, i, opts, &|_| {}) {
             Ok(img) => img,

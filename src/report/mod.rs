@@ -21,8 +21,12 @@
 //! A row is one camera's image, or a whole scene when it failed before any
 //! image was rendered. Its [`Verdict`] is `pass` (the threshold was met),
 //! `fail` (compared, below the threshold), `error` (the scene did not load,
-//! build or render, or the comparison itself failed, e.g. different sizes) or
-//! `no-reference` (the course has no expected image for that camera).
+//! build or render, or the comparison itself failed, e.g. different sizes),
+//! `no-reference` (the course has no expected image for that camera),
+//! `unsupported` (a fail or error of a scene that uses a feature luster does
+//! not implement yet, named on the row) or `known-quirk` (a miss explained by
+//! a known quirk of the course's data, named on the row). The last two are
+//! counted apart: they are neither our passes nor our failures.
 
 mod assets;
 pub mod html;
@@ -73,6 +77,10 @@ pub struct Counts {
     pub errored: usize,
     /// Rows without an expected image.
     pub no_reference: usize,
+    /// Rows of scenes that need a feature luster does not implement yet.
+    pub unsupported: usize,
+    /// Rows that miss their bar because of a known quirk of the data.
+    pub known_quirks: usize,
 }
 
 impl Counts {
@@ -83,6 +91,8 @@ impl Counts {
             Verdict::Fail => self.failed += 1,
             Verdict::Error => self.errored += 1,
             Verdict::NoReference => self.no_reference += 1,
+            Verdict::Unsupported => self.unsupported += 1,
+            Verdict::KnownQuirk => self.known_quirks += 1,
         }
     }
 }
@@ -112,16 +122,22 @@ pub enum Verdict {
     Error,
     /// No expected image to compare with.
     NoReference,
+    /// Failed or errored, in a scene that needs a feature luster lacks.
+    Unsupported,
+    /// Missed its bar because of a known quirk of the data.
+    KnownQuirk,
 }
 
 impl Verdict {
-    /// `pass`, `fail`, `error` or `no-reference`.
+    /// `pass`, `fail`, `error`, `no-reference`, `unsupported` or `known-quirk`.
     pub fn name(self) -> &'static str {
         match self {
             Verdict::Pass => "pass",
             Verdict::Fail => "fail",
             Verdict::Error => "error",
             Verdict::NoReference => "no-reference",
+            Verdict::Unsupported => "unsupported",
+            Verdict::KnownQuirk => "known-quirk",
         }
     }
 }
@@ -147,12 +163,19 @@ pub struct SceneEntry {
     pub seconds: f64,
     /// One entry per camera.
     pub images: Vec<ImageEntry>,
+    /// Features the scene uses that luster does not implement yet.
+    pub unsupported: Vec<String>,
 }
 
 impl SceneEntry {
-    /// The scene's own verdict when it has no images (it failed early).
+    /// The scene's own verdict when it has no images (it failed early):
+    /// unsupported when it needs a feature luster lacks, else an error.
     pub fn verdict(&self) -> Option<Verdict> {
-        self.images.is_empty().then_some(Verdict::Error)
+        self.images.is_empty().then_some(if self.unsupported.is_empty() {
+            Verdict::Error
+        } else {
+            Verdict::Unsupported
+        })
     }
 }
 
@@ -163,6 +186,8 @@ pub struct ImageEntry {
     pub image_name: String,
     /// The row's verdict.
     pub verdict: Verdict,
+    /// The known quirk of the data this image has, if any.
+    pub quirk: Option<String>,
     /// Our render, relative to the report folder.
     pub render: Option<String>,
     /// The expected image as the browser shows it (a PNG preview for EXR/HDR).
@@ -323,7 +348,8 @@ impl Report {
         }
     }
 
-    /// Whether every row passed or had no reference.
+    /// Whether every row passed or had no reference (unsupported features
+    /// and known quirks of the data are not failures of ours).
     pub fn all_passed(&self) -> bool {
         self.summary.failed == 0 && self.summary.errored == 0
     }
@@ -342,6 +368,7 @@ pub fn write(report: &Report, outdir: &Path) -> std::io::Result<()> {
 }
 
 fn scene_entry(r: &CaseResult, root: &Path, outdir: &Path) -> SceneEntry {
+    let unsupported = r.unsupported();
     SceneEntry {
         label: r.case.label(),
         hw: r.case.hw.clone(),
@@ -351,17 +378,27 @@ fn scene_entry(r: &CaseResult, root: &Path, outdir: &Path) -> SceneEntry {
         warnings: r.warnings.clone(),
         setup_seconds: r.setup_seconds,
         seconds: r.seconds,
-        images: r.images.iter().map(|i| image_entry(i, root, outdir)).collect(),
+        images: r.images.iter().map(|i| image_entry(i, root, outdir, !unsupported.is_empty())).collect(),
+        unsupported,
     }
 }
 
-fn image_entry(i: &ImageResult, root: &Path, outdir: &Path) -> ImageEntry {
+fn image_entry(i: &ImageResult, root: &Path, outdir: &Path, unsupported: bool) -> ImageEntry {
     let verdict = if i.error.is_some() {
-        Verdict::Error
+        if unsupported {
+            Verdict::Unsupported
+        } else {
+            Verdict::Error
+        }
     } else if i.expected.is_none() {
         Verdict::NoReference
     } else if i.pass {
+        // A pass is a pass, whatever the scene lacks.
         Verdict::Pass
+    } else if unsupported {
+        Verdict::Unsupported
+    } else if i.quirk.is_some() && i.comparison.is_some() {
+        Verdict::KnownQuirk
     } else if i.comparison.is_some() {
         Verdict::Fail
     } else {
@@ -400,6 +437,7 @@ fn image_entry(i: &ImageResult, root: &Path, outdir: &Path) -> ImageEntry {
     ImageEntry {
         image_name: i.image_name.clone(),
         verdict,
+        quirk: i.quirk.map(str::to_string),
         render,
         expected,
         expected_original,
