@@ -460,3 +460,55 @@ fn rgb8_image(w: u32, h: u32, rgb: &[u8]) -> Option<Rgb32Image> {
 fn sanitize(name: &str) -> String {
     name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' || c == '-' { c } else { '_' }).collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn case(hw_dir: &Path, scene: &str, encoding: Encoding) -> Case {
+        Case { hw: "hw7".into(), encoding, scene: hw_dir.join(scene), hw_dir: hw_dir.to_path_buf() }
+    }
+
+    #[test]
+    fn unsupported_features_come_from_the_loaders_words() {
+        let mut r = CaseResult::failed(&case(Path::new("hw5"), "xml/a.xml", Encoding::Xml), None);
+        assert!(r.unsupported().is_empty());
+        r.warnings = vec![
+            "a.xml: line 18, Scene/Lights/DirectionalLight[id=1]: <DirectionalLight> inside <Lights> is not \
+             supported yet; ignored"
+                .into(),
+            "a.xml: line 31, Scene/BRDFs: <BRDFs> inside <Scene> is not supported yet; ignored".into(),
+            "a.xml: line 40: an unrelated warning".into(),
+        ];
+        r.error = Some(
+            "a.xml: line 12, Scene/Cameras/Camera[id=1]/ImageName: <ImageName> \"x.exr\" must end in .png, \
+             .jpg, .jpeg, the formats luster writes"
+                .into(),
+        );
+        assert_eq!(r.unsupported(), ["<DirectionalLight>", "<BRDFs>", "HDR output (.exr)"]);
+    }
+
+    #[test]
+    fn expected_images_follow_the_year_of_the_scene_and_exr_takes_its_png() {
+        let dir = tempfile::tempdir().unwrap();
+        let hw = dir.path();
+        for p in [
+            "expected/2020/a.png",
+            "expected/2022/a.png",
+            "expected/a.png",
+            "expected/h.exr",
+            "expected/h.png",
+        ] {
+            std::fs::create_dir_all(hw.join(p).parent().unwrap()).unwrap();
+            std::fs::write(hw.join(p), b"").unwrap();
+        }
+        let exp = |scene: &str, enc, name: &str| {
+            case(hw, scene, enc).expected_image(name).map(|p| p.strip_prefix(hw).unwrap().to_path_buf())
+        };
+        assert_eq!(exp("xml/2020/s.xml", Encoding::Xml, "a.png"), Some("expected/2020/a.png".into()));
+        assert_eq!(exp("xml/s.xml", Encoding::Xml, "a.png"), Some("expected/2022/a.png".into()));
+        assert_eq!(exp("json/s.json", Encoding::Json, "a.png"), Some("expected/a.png".into()));
+        assert_eq!(exp("xml/s.xml", Encoding::Xml, "h.exr"), Some("expected/h.png".into()));
+        assert_eq!(exp("xml/s.xml", Encoding::Xml, "none.png"), None);
+    }
+}
