@@ -152,13 +152,13 @@ pub struct ImageResult {
     pub comparison: Option<Comparison>,
     /// The threshold it was judged by.
     pub threshold: Threshold,
-    /// The numbers it had to reach (the threshold applied to `pair`).
+    /// The numbers it had to reach.
     pub bar: Bar,
     /// For a noise-aware threshold: our render against our render with the
-    /// next seed, which measures our own noise.
+    /// next seed (shown in reports; the block z-scores use the two renders).
     pub pair: Option<Comparison>,
     /// PSNR of the means of 8×8-pixel blocks against the expected image
-    /// (where noise averages out), when the bar tests it.
+    /// (where noise averages out), for reports.
     pub coarse_psnr: Option<f64>,
     /// Luma statistics of ours and the expected image, when the bar tests them.
     pub stats: Option<thresholds::StatsPair>,

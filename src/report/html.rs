@@ -452,8 +452,8 @@ fn image_cells(h: &mut String, scene: &SceneEntry, img: &ImageEntry) {
         seconds(img.seconds)
     );
     let t = &img.threshold;
-    // A noise-aware bar is derived from our own pair of renders: show the
-    // pair's numbers under it, so the bar can be checked by eye.
+    // A noise-aware bar is judged against our own pair of renders: show the
+    // pair's numbers under it, so the noise can be seen beside the bar.
     let pair = match (t.pair_psnr, t.pair_flip) {
         (p, Some(f)) => format!(
             "<span class=\"sub\">{} spp; seed pair {}, {f:.4}</span>",
