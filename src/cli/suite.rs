@@ -31,6 +31,8 @@ pub struct Args {
     pub strict: bool,
     /// Samples per pixel instead of each camera's.
     pub spp: Option<u32>,
+    /// Cap on each camera's samples per pixel.
+    pub max_spp: Option<u32>,
 }
 
 /// Runs the suite and returns the exit code.
@@ -65,6 +67,7 @@ pub fn run(args: &Args) -> ExitCode {
     }
     let mut opts = RunOptions::new(args.jobs, args.threads);
     opts.render.spp = args.spp;
+    opts.max_spp = args.max_spp;
     say!(
         "luster suite: {} scene{} from {}{} ({} job{} × {} thread{})",
         cases.len(),
@@ -104,7 +107,11 @@ pub fn run(args: &Args) -> ExitCode {
 
 /// One line per finished scene: verdicts of its images and its time.
 fn progress(r: &CaseResult, n: usize, total: usize, width: usize) {
+    let unsupported = r.unsupported();
     let what = match &r.error {
+        Some(e) if !unsupported.is_empty() => {
+            format!("UNSUPPORTED ({})  {}", unsupported.join(", "), first_line(e))
+        }
         Some(e) => format!("ERROR  {}", first_line(e)),
         None => r
             .images
@@ -116,6 +123,10 @@ fn progress(r: &CaseResult, n: usize, total: usize, width: usize) {
                     "no ref"
                 } else if i.pass {
                     "pass"
+                } else if !unsupported.is_empty() {
+                    "unsupported"
+                } else if i.quirk.is_some() {
+                    "data quirk"
                 } else {
                     "FAIL"
                 };
@@ -133,6 +144,11 @@ fn progress(r: &CaseResult, n: usize, total: usize, width: usize) {
             .collect::<Vec<_>>()
             .join(", "),
     };
+    let what = if unsupported.is_empty() || r.error.is_some() {
+        what
+    } else {
+        format!("{what}  [unsupported: {}]", unsupported.join(", "))
+    };
     let warn = if r.warnings.is_empty() {
         String::new()
     } else {
@@ -145,19 +161,36 @@ fn first_line(s: &str) -> &str {
     s.lines().next().unwrap_or(s)
 }
 
+/// One line per homework, then the totals: passes and failures are ours;
+/// unsupported features and known data quirks are counted apart.
 fn summary(report: &Report, outdir: &Path) {
     let s = &report.summary;
     say!();
     for hw in &report.homeworks {
         let c = &hw.counts;
+        let verdict = if c.failed + c.errored > 0 {
+            "FAILING"
+        } else if c.unsupported > 0 && c.passed == 0 {
+            "unsupported"
+        } else if c.unsupported > 0 {
+            "ok, some unsupp."
+        } else {
+            "ok"
+        };
         say!(
-            "{:<6} {:>3} scenes {:>4} images: {:>4} passed {:>4} failed {:>4} errored   {:.1} s",
+            "{:<5} {:<15} {:>3} scenes {:>3} images: {:>3} passed {:>3} failed {:>3} errored {:>3} unsupported \
+             {:>2} data quirk{}{}   {:.1} s",
             hw.hw,
+            verdict,
             c.scenes,
             c.rows,
             c.passed,
             c.failed,
             c.errored,
+            c.unsupported,
+            c.known_quirks,
+            if c.known_quirks == 1 { "" } else { "s" },
+            if c.no_reference > 0 { format!(" {} without reference", c.no_reference) } else { String::new() },
             hw.seconds
         );
     }
@@ -167,12 +200,16 @@ fn summary(report: &Report, outdir: &Path) {
         String::new()
     };
     say!(
-        "total: {} scenes, {} images: {} passed, {} failed, {} errored{noref} in {:.1} s",
+        "total: {} scenes, {} images: {} passed, {} failed, {} errored, {} unsupported, {} data quirk{}{noref} \
+         in {:.1} s",
         s.scenes,
         s.rows,
         s.passed,
         s.failed,
         s.errored,
+        s.unsupported,
+        s.known_quirks,
+        if s.known_quirks == 1 { "" } else { "s" },
         report.total_seconds
     );
     say!("report: {}", outdir.join("index.html").display());

@@ -58,18 +58,26 @@ impl Case {
     }
 
     /// The expected image for a camera's `ImageName`, if the folder has one.
+    ///
+    /// A scene in a folder named `2020` takes `expected/2020/` first (the
+    /// course re-rendered hw7 each year); any other XML scene `expected/2022/`
+    /// and then `expected/2020/`; then `expected/` itself. An `.exr` image is
+    /// compared through its `.png` sibling, the course's tone-mapped version,
+    /// when there is one.
     pub fn expected_image(&self, image_name: &str) -> Option<PathBuf> {
         let exp = self.hw_dir.join("expected");
-        if self.encoding == Encoding::Xml {
-            for year in ["2022", "2020"] {
-                let p = exp.join(year).join(image_name);
-                if p.is_file() {
-                    return Some(p);
-                }
-            }
-        }
-        let p = exp.join(image_name);
-        p.is_file().then_some(p)
+        let name = Path::new(image_name);
+        let png = name.with_extension("png");
+        let is_exr = name.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+        let names: Vec<&Path> = if is_exr { vec![&png, name] } else { vec![name] };
+        let in_2020 = self.scene.parent().is_some_and(|d| d.file_name().is_some_and(|n| n == "2020"));
+        let years: &[&str] = match (self.encoding, in_2020) {
+            (Encoding::Xml, true) => &["2020", "2022"],
+            (Encoding::Xml, false) => &["2022", "2020"],
+            (Encoding::Json, _) => &[],
+        };
+        let dirs = years.iter().map(|y| exp.join(y)).chain(std::iter::once(exp.clone()));
+        dirs.flat_map(|d| names.iter().map(move |n| d.join(n)).collect::<Vec<_>>()).find(|p| p.is_file())
     }
 
     /// Whether the scene file names one of its homework's expected images.
@@ -155,16 +163,23 @@ pub struct ImageResult {
     pub comparison: Option<Comparison>,
     /// The threshold it was judged by.
     pub threshold: Threshold,
-    /// The numbers it had to reach (the threshold applied to `pair`).
+    /// The numbers it had to reach.
     pub bar: Bar,
     /// For a noise-aware threshold: our render against our render with the
-    /// next seed, which measures our own noise.
+    /// next seed (shown in reports; the block z-scores use the two renders).
     pub pair: Option<Comparison>,
     /// PSNR of the means of 8×8-pixel blocks against the expected image
-    /// (where noise averages out), when the bar tests it.
+    /// (where noise averages out), for reports.
     pub coarse_psnr: Option<f64>,
     /// Luma statistics of ours and the expected image, when the bar tests them.
     pub stats: Option<thresholds::StatsPair>,
+    /// Per-block z-scores against the expected image, with the variance from
+    /// the second render, when the bar tests them.
+    pub block_z: Option<thresholds::BlockZ>,
+    /// The camera's own sample count (the expected image's).
+    pub scene_spp: u32,
+    /// A known quirk of the course's data that makes this image differ.
+    pub quirk: Option<&'static str>,
     /// Samples per pixel it was rendered with.
     pub spp: u32,
     /// Render seconds for this camera (both renders of a pair).
@@ -192,6 +207,13 @@ pub struct CaseResult {
     pub warnings: Vec<String>,
 }
 
+/// What the loader says when a scene uses an element luster ignores.
+const UNSUPPORTED_WARNING: &str = " is not supported yet";
+
+/// What the loader says when an `ImageName` asks for an output format luster
+/// does not write.
+const UNSUPPORTED_OUTPUT: &str = "the formats luster writes";
+
 /// Loads, builds and renders `case` on the current rayon pool, writes each
 /// image and its heatmap under `outdir`, and compares with the expected images.
 pub fn run_case(case: &Case, outdir: &Path) -> CaseResult {
@@ -205,18 +227,30 @@ pub fn run_case(case: &Case, outdir: &Path) -> CaseResult {
 pub fn run_case_with(case: &Case, outdir: &Path, opts: &RenderOptions) -> CaseResult {
     let t0 = Instant::now();
     let mut result = CaseResult::failed(case, None);
-    run_case_into(case, outdir, opts, &mut result);
+    run_case_into(case, outdir, opts, None, &mut result);
     result.seconds = t0.elapsed().as_secs_f64();
     result
 }
 
-/// [`run_case`], with a panic anywhere in loading, building, rendering or
-/// comparing caught and turned into the case's error, so that one bad scene
-/// cannot stop a suite. The panic message is kept; images finished before the
-/// panic are lost.
-pub fn run_case_guarded(case: &Case, outdir: &Path, opts: &RenderOptions) -> CaseResult {
+/// [`run_case_with`], with each camera's sample count capped at `max_spp`
+/// (when `opts` sets no count of its own), and a panic anywhere in loading,
+/// building, rendering or comparing caught and turned into the case's
+/// error, so that one bad scene cannot stop a suite. The panic message is
+/// kept; images finished before the panic are lost.
+pub fn run_case_guarded(
+    case: &Case,
+    outdir: &Path,
+    opts: &RenderOptions,
+    max_spp: Option<u32>,
+) -> CaseResult {
     let t0 = Instant::now();
-    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run_case_with(case, outdir, opts))) {
+    let run = || {
+        let mut result = CaseResult::failed(case, None);
+        run_case_into(case, outdir, opts, max_spp, &mut result);
+        result.seconds = t0.elapsed().as_secs_f64();
+        result
+    };
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(run)) {
         Ok(r) => r,
         Err(payload) => {
             let msg = payload
@@ -244,6 +278,30 @@ impl CaseResult {
         }
     }
 
+    /// The features of the scene that luster does not implement yet, as the
+    /// loader reported them: `<DirectionalLight>` for an ignored element,
+    /// `HDR output (.exr)` for an image format it cannot write. A scene that
+    /// needs them cannot match its expected image, so the suite counts it
+    /// apart from failures.
+    pub fn unsupported(&self) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        for w in &self.warnings {
+            if let Some(end) = w.find(UNSUPPORTED_WARNING) {
+                // "...: <DirectionalLight> inside <Lights> is not supported yet; ignored"
+                let head = &w[..end];
+                let element = head.find('<').map(|i| &head[i..]).and_then(|h| h.split(" inside").next());
+                let feature = element.unwrap_or(head).trim().to_string();
+                if !out.contains(&feature) {
+                    out.push(feature);
+                }
+            }
+        }
+        if self.error.as_deref().is_some_and(|e| e.contains(UNSUPPORTED_OUTPUT) && e.contains(".exr")) {
+            out.push("HDR output (.exr)".to_string());
+        }
+        out
+    }
+
     /// Frees the per-pixel FLIP and difference maps of every comparison,
     /// keeping the summary numbers (the heatmap is already written).
     pub fn drop_pixel_maps(&mut self) {
@@ -254,7 +312,13 @@ impl CaseResult {
     }
 }
 
-fn run_case_into(case: &Case, outdir: &Path, opts: &RenderOptions, result: &mut CaseResult) {
+fn run_case_into(
+    case: &Case,
+    outdir: &Path,
+    opts: &RenderOptions,
+    max_spp: Option<u32>,
+    result: &mut CaseResult,
+) {
     let t0 = Instant::now();
     let built = crate::scene::load(&case.scene).and_then(|d| {
         result.warnings.extend(d.warnings.iter().map(|w| w.to_string()));
@@ -272,6 +336,14 @@ fn run_case_into(case: &Case, outdir: &Path, opts: &RenderOptions, result: &mut 
     let stem = case.label().replace(['/', '.'], "_");
     for (i, cam) in scene.cameras.iter().enumerate() {
         let t = Instant::now();
+        let capped;
+        let opts = match (max_spp, opts.spp) {
+            (Some(m), None) if cam.num_samples > m => {
+                capped = RenderOptions { spp: Some(m.max(1)), ..*opts };
+                &capped
+            }
+            _ => opts,
+        };
         // A shader that fails makes the scene an error row, not a black image.
         let img = match render::try_render_with(&scene, i, opts, &|_| {}) {
             Ok(img) => img,
@@ -297,10 +369,13 @@ fn run_case_into(case: &Case, outdir: &Path, opts: &RenderOptions, result: &mut 
             heatmap: None,
             comparison: None,
             threshold,
-            bar: threshold.bar(None),
+            bar: threshold.bar(),
             pair: None,
             coarse_psnr: None,
             stats: None,
+            block_z: None,
+            scene_spp: cam.num_samples.max(1),
+            quirk: thresholds::known_quirk(case, &cam.image_name),
             spp: opts.spp.unwrap_or(cam.num_samples).max(1),
             seconds,
             pass: false,
@@ -317,24 +392,26 @@ fn run_case_into(case: &Case, outdir: &Path, opts: &RenderOptions, result: &mut 
                 Ok(p) => r.pair = Some(p),
                 Err(e) => r.error = Some(e),
             }
-            r.bar = threshold.bar(r.pair.as_ref());
             let pair_png =
                 png.with_file_name(format!("{}__seed{}.png", file_stem(&png), opts.seed.wrapping_add(1)));
             // Kept for looking at; judging does not need the file.
             let _ = crate::image::output::write_rgb8(&pair_png, img.width, img.height, second);
         }
         if let Some(exp) = expected {
-            match compare_with(&exp, img.width, img.height, &rgb, r.bar.tests_coarse(), r.bar.tests_stats()) {
-                Ok((c, coarse, stats)) => {
+            let z = second.as_deref().map(|s| (s, thresholds::ref_variance_ratio(r.spp, r.scene_spp)));
+            match compare_with(&exp, img.width, img.height, &rgb, r.bar.tests_stats(), z) {
+                Ok((c, coarse, stats, block_z)) => {
                     r.coarse_psnr = coarse;
                     r.stats = stats;
+                    r.block_z = block_z;
                     let heat = png.with_file_name(format!("{}__heatmap.png", file_stem(&png)));
                     if let Ok(h) = crate::image::comparison_heatmap(&c, crate::image::HeatmapSource::Flip) {
                         if crate::image::write_heatmap(&h, &heat).is_ok() {
                             r.heatmap = Some(heat);
                         }
                     }
-                    r.pass = r.error.is_none() && r.bar.accepts(&c, r.coarse_psnr, r.stats.as_ref());
+                    r.pass = r.error.is_none()
+                        && r.bar.accepts(&c, r.coarse_psnr, r.stats.as_ref(), r.block_z.as_ref());
                     r.comparison = Some(c);
                 }
                 Err(e) => r.error = Some(e),
@@ -348,27 +425,36 @@ fn file_stem(p: &Path) -> String {
     p.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default()
 }
 
-/// What [`compare_with`] measures: the comparison, the PSNR of block means
-/// and the luma statistics (the last two only when asked for).
-type Measured = (Comparison, Option<f64>, Option<thresholds::StatsPair>);
+/// What [`compare_with`] measures: the comparison, the PSNR of block means,
+/// and, when asked for, the luma statistics and the block z-scores.
+type Measured = (Comparison, Option<f64>, Option<thresholds::StatsPair>, Option<thresholds::BlockZ>);
 
-/// Compares an 8-bit render with the expected image file; with `coarse`,
-/// also the means of 8×8 blocks (see [`thresholds::coarse_psnr`]); with
-/// `stats`, the luma statistics of both.
+/// Compares an 8-bit render with the expected image file, and measures the
+/// PSNR of the means of 8×8 blocks (see [`thresholds::coarse_psnr`]); with
+/// `stats`, also the luma statistics of both; with `second` (our render
+/// with another seed, and the reference's variance relative to ours), the
+/// per-block z-scores (see [`measures::block_z`]).
 fn compare_with(
     expected: &Path,
     w: u32,
     h: u32,
     rgb: &[u8],
-    coarse: bool,
     stats: bool,
+    second: Option<(&[u8], f64)>,
 ) -> Result<Measured, String> {
     let reference = Rgb32Image::load(expected).map_err(|e| e.to_string())?;
     let test = rgb8_image(w, h, rgb).ok_or("render buffer has the wrong size")?;
     let c = compare(&reference, &test, &CompareOptions::default()).map_err(|e| e.to_string())?;
-    let coarse = if coarse { thresholds::coarse_psnr(&reference, &test) } else { None };
+    let coarse = thresholds::coarse_psnr(&reference, &test);
     let stats = stats.then(|| thresholds::StatsPair::of(&test, &reference));
-    Ok((c, coarse, stats))
+    let z = match second {
+        Some((rgb2, ratio)) => {
+            let second = rgb8_image(w, h, rgb2).ok_or("the second render has the wrong size")?;
+            measures::block_z(&test, &second, &reference, ratio)
+        }
+        None => None,
+    };
+    Ok((c, coarse, stats, z))
 }
 
 /// Compares two 8-bit renders of the same camera (so of the same size).
@@ -384,4 +470,56 @@ fn rgb8_image(w: u32, h: u32, rgb: &[u8]) -> Option<Rgb32Image> {
 
 fn sanitize(name: &str) -> String {
     name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' || c == '-' { c } else { '_' }).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn case(hw_dir: &Path, scene: &str, encoding: Encoding) -> Case {
+        Case { hw: "hw7".into(), encoding, scene: hw_dir.join(scene), hw_dir: hw_dir.to_path_buf() }
+    }
+
+    #[test]
+    fn unsupported_features_come_from_the_loaders_words() {
+        let mut r = CaseResult::failed(&case(Path::new("hw5"), "xml/a.xml", Encoding::Xml), None);
+        assert!(r.unsupported().is_empty());
+        r.warnings = vec![
+            "a.xml: line 18, Scene/Lights/DirectionalLight[id=1]: <DirectionalLight> inside <Lights> is not \
+             supported yet; ignored"
+                .into(),
+            "a.xml: line 31, Scene/BRDFs: <BRDFs> inside <Scene> is not supported yet; ignored".into(),
+            "a.xml: line 40: an unrelated warning".into(),
+        ];
+        r.error = Some(
+            "a.xml: line 12, Scene/Cameras/Camera[id=1]/ImageName: <ImageName> \"x.exr\" must end in .png, \
+             .jpg, .jpeg, the formats luster writes"
+                .into(),
+        );
+        assert_eq!(r.unsupported(), ["<DirectionalLight>", "<BRDFs>", "HDR output (.exr)"]);
+    }
+
+    #[test]
+    fn expected_images_follow_the_year_of_the_scene_and_exr_takes_its_png() {
+        let dir = tempfile::tempdir().unwrap();
+        let hw = dir.path();
+        for p in [
+            "expected/2020/a.png",
+            "expected/2022/a.png",
+            "expected/a.png",
+            "expected/h.exr",
+            "expected/h.png",
+        ] {
+            std::fs::create_dir_all(hw.join(p).parent().unwrap()).unwrap();
+            std::fs::write(hw.join(p), b"").unwrap();
+        }
+        let exp = |scene: &str, enc, name: &str| {
+            case(hw, scene, enc).expected_image(name).map(|p| p.strip_prefix(hw).unwrap().to_path_buf())
+        };
+        assert_eq!(exp("xml/2020/s.xml", Encoding::Xml, "a.png"), Some("expected/2020/a.png".into()));
+        assert_eq!(exp("xml/s.xml", Encoding::Xml, "a.png"), Some("expected/2022/a.png".into()));
+        assert_eq!(exp("json/s.json", Encoding::Json, "a.png"), Some("expected/a.png".into()));
+        assert_eq!(exp("xml/s.xml", Encoding::Xml, "h.exr"), Some("expected/h.png".into()));
+        assert_eq!(exp("xml/s.xml", Encoding::Xml, "none.png"), None);
+    }
 }

@@ -27,6 +27,8 @@ pub struct RunOptions {
     pub threads: usize,
     /// Sample count, seed and filter of every render.
     pub render: RenderOptions,
+    /// Cap on each camera's samples per pixel (see [`run_case_guarded`]).
+    pub max_spp: Option<u32>,
 }
 
 impl RunOptions {
@@ -36,7 +38,7 @@ impl RunOptions {
         let jobs = jobs.max(1);
         let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
         let threads = threads.unwrap_or(cores / jobs).max(1);
-        RunOptions { jobs, threads, render: RenderOptions::default() }
+        RunOptions { jobs, threads, render: RenderOptions::default(), max_spp: None }
     }
 }
 
@@ -63,7 +65,7 @@ pub fn run_cases(
             s.spawn(|| loop {
                 let i = next.fetch_add(1, Ordering::Relaxed);
                 let Some(case) = cases.get(i) else { break };
-                let mut result = pool.install(|| run_case_guarded(case, outdir, &opts.render));
+                let mut result = pool.install(|| run_case_guarded(case, outdir, &opts.render, opts.max_spp));
                 result.drop_pixel_maps();
                 let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
                 // A failing progress callback must not lose the result.

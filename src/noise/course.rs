@@ -175,11 +175,28 @@ mod tests {
     }
 
     #[test]
-    fn deterministic() {
+    fn known_values_of_the_lectures_formula() {
+        // Computed in double precision by a separate Python transcription of
+        // the lecture's recipe with this PERM and GRADIENTS.
+        for (p, want) in [
+            ([0.5, 0.5, 0.5], -0.375),
+            ([0.25, 0.75, 0.125], -0.254_422_75),
+            ([-3.3, 7.6, 2.2], -0.557_544_7),
+        ] {
+            let n = noise(p[0], p[1], p[2]);
+            assert!((n - want).abs() < 2e-6, "noise{p:?} = {n}, expected {want}");
+        }
+    }
+
+    #[test]
+    fn periodic_with_the_tables_16() {
+        // φ repeats every 16, so the noise does; dyadic points keep x + 16 exact.
         let mut rng = Lcg::new(31);
         for _ in 0..1000 {
-            let p = rng.point4(-1e3, 1e3);
-            assert_eq!(noise(p[0], p[1], p[2]).to_bits(), noise(p[0], p[1], p[2]).to_bits());
+            let p = rng.point4(-100.0, 100.0).map(|v| (v * 64.0).round() / 64.0);
+            let n = noise(p[0], p[1], p[2]);
+            assert_eq!(n, noise(p[0] + 16.0, p[1], p[2]), "{p:?}");
+            assert_eq!(n, noise(p[0], p[1] - 16.0, p[2] + 32.0), "{p:?}");
         }
     }
 }

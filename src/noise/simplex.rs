@@ -244,12 +244,20 @@ mod tests {
     }
 
     #[test]
-    fn deterministic() {
-        let mut rng = Lcg::new(13);
-        for _ in 0..1000 {
-            let p = rng.point4(-1e3, 1e3);
-            assert_eq!(noise2(p[0], p[1]).to_bits(), noise2(p[0], p[1]).to_bits());
-            assert_eq!(noise4(p[0], p[1], p[2], p[3]).to_bits(), noise4(p[0], p[1], p[2], p[3]).to_bits());
+    fn near_a_vertex_only_its_own_kernel_counts() {
+        // At (0.1, 0) and (0, 0.1) (and likewise in 3D) the other corners lie
+        // beyond r² = 0.5, so the value is SCALE · (0.5 − 0.01)⁴ · 0.1 · g_axis
+        // for the origin's gradient g (the hash of cell 0).
+        let t4 = (0.5f32 - 0.01).powi(4);
+        let g2 = GRAD3[(P[P[0] as usize] % 12) as usize];
+        assert!((noise2(0.1, 0.0) - SCALE2 * t4 * 0.1 * g2[0]).abs() < 1e-6);
+        assert!((noise2(0.0, 0.1) - SCALE2 * t4 * 0.1 * g2[1]).abs() < 1e-6);
+        let g3 = GRAD3[(P[P[P[0] as usize] as usize] % 12) as usize];
+        for axis in 0..3 {
+            let mut p = [0.0f32; 3];
+            p[axis] = 0.1;
+            let want = SCALE3 * t4 * 0.1 * g3[axis];
+            assert!((noise3(p[0], p[1], p[2]) - want).abs() < 1e-6, "axis {axis}");
         }
     }
 }

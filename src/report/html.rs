@@ -88,7 +88,7 @@ tr.row { border-left: 6px solid transparent; }
 tr.row.fail { background: var(--fail-bg); border-left-color: var(--fail); }
 tr.row.error { background: var(--err-bg); border-left-color: var(--err); }
 tr.row.pass { border-left-color: var(--pass); }
-tr.row.no-reference { border-left-color: var(--noref); }
+tr.row.no-reference, tr.row.unsupported, tr.row.known-quirk { border-left-color: var(--noref); }
 tr.first td { border-top: 1px solid #afb8c1; }
 td.scene { min-width: 210px; max-width: 260px; overflow-wrap: break-word; }
 td.scene .dir { display: block; color: var(--muted); font-size: 12px; }
@@ -113,6 +113,7 @@ td.img .none { display: block; width: 112px; color: #adb5bd; font-size: 12px; te
            color: #fff; white-space: nowrap; }
 .verdict.pass { background: var(--pass); } .verdict.fail { background: var(--fail); }
 .verdict.error { background: var(--err); } .verdict.no-reference { background: var(--noref); }
+.verdict.unsupported, .verdict.known-quirk { background: var(--noref); }
 pre.err { white-space: pre-wrap; word-break: break-word; margin: 0; color: #82071e; max-width: 640px; }
 .note { color: var(--err); font-size: 12px; margin-top: 4px; }
 footer { margin-top: 24px; color: var(--muted); font-size: 12px; }
@@ -219,6 +220,12 @@ fn header(h: &mut String, r: &Report) {
     if s.no_reference > 0 {
         let _ = write!(h, "<div class=\"card noref\"><b>{}</b>no expected image</div>", s.no_reference);
     }
+    if s.unsupported > 0 {
+        let _ = write!(h, "<div class=\"card noref\"><b>{}</b>unsupported feature</div>", s.unsupported);
+    }
+    if s.known_quirks > 0 {
+        let _ = write!(h, "<div class=\"card noref\"><b>{}</b>known data quirk</div>", s.known_quirks);
+    }
     let _ =
         writeln!(h, "<div class=\"card time\"><b>{}</b>total time</div></div>", duration(r.total_seconds));
 }
@@ -226,7 +233,8 @@ fn header(h: &mut String, r: &Report) {
 fn homeworks(h: &mut String, r: &Report) {
     h.push_str(
         "<h2>By homework</h2>\n<table class=\"hw\"><thead><tr><th>Homework</th><th>Scenes</th>\
-         <th>Images</th><th>Passed</th><th>Failed</th><th>Errored</th><th></th><th>Time</th></tr></thead>\n<tbody>",
+         <th>Images</th><th>Passed</th><th>Failed</th><th>Errored</th><th>Unsupported</th><th>Data quirks</th>\
+         <th></th><th>Time</th></tr></thead>\n<tbody>",
     );
     for hw in &r.homeworks {
         let q = format!("{}/", hw.hw);
@@ -249,12 +257,14 @@ fn counts_cells(h: &mut String, c: &Counts) {
     };
     let _ = write!(
         h,
-        "<td>{}</td><td>{}</td>{}{}{}",
+        "<td>{}</td><td>{}</td>{}{}{}{}{}",
         c.scenes,
         c.rows,
         cell(c.passed, "n-pass"),
         cell(c.failed, "n-fail"),
-        cell(c.errored, "n-error")
+        cell(c.errored, "n-error"),
+        cell(c.unsupported, "n-noref"),
+        cell(c.known_quirks, "n-noref")
     );
     let total = c.rows.max(1) as f64;
     let pct = |n: usize| 100.0 * n as f64 / total;
@@ -295,6 +305,12 @@ fn scene_cell(h: &mut String, scene: &SceneEntry, img: Option<&ImageEntry>, firs
             // Compared, but something else went wrong (a thumbnail, a copy): say so.
             let _ = write!(h, "<div class=\"note\">{}</div>", escape(e));
         }
+        if let Some(q) = &img.quirk {
+            let _ = write!(h, "<div class=\"note\">{}</div>", escape(q));
+        }
+    }
+    if first && !scene.unsupported.is_empty() {
+        let _ = write!(h, "<div class=\"note\">unsupported: {}</div>", escape(&scene.unsupported.join(", ")));
     }
     if first && !scene.warnings.is_empty() {
         let _ = write!(
@@ -328,6 +344,8 @@ fn verdict_cell(h: &mut String, v: Verdict) {
         Verdict::Fail => "FAIL",
         Verdict::Error => "ERROR",
         Verdict::NoReference => "NO REF",
+        Verdict::Unsupported => "UNSUPPORTED",
+        Verdict::KnownQuirk => "DATA QUIRK",
     };
     let _ = write!(h, "<td><span class=\"verdict {}\">{text}</span></td>", v.name());
 }
@@ -434,8 +452,8 @@ fn image_cells(h: &mut String, scene: &SceneEntry, img: &ImageEntry) {
         seconds(img.seconds)
     );
     let t = &img.threshold;
-    // A noise-aware bar is derived from our own pair of renders: show the
-    // pair's numbers under it, so the bar can be checked by eye.
+    // A noise-aware bar is judged against our own pair of renders: show the
+    // pair's numbers under it, so the noise can be seen beside the bar.
     let pair = match (t.pair_psnr, t.pair_flip) {
         (p, Some(f)) => format!(
             "<span class=\"sub\">{} spp; seed pair {}, {f:.4}</span>",
@@ -444,12 +462,14 @@ fn image_cells(h: &mut String, scene: &SceneEntry, img: &ImageEntry) {
         ),
         _ => String::new(),
     };
-    // The bias test on 8×8 block means: its bar, the value, red when missed.
-    let coarse = match (t.min_coarse_psnr, img.metrics.as_ref()) {
-        (Some(min), Some(m)) => format!(
-            "<span class=\"sub{}\">8×8 means {} ≥ {min}</span>",
-            if m.coarse_ok { "" } else { " bad" },
-            m.coarse_psnr.map(|p| format!("{p:.1} dB")).unwrap_or_else(|| "∞ dB".to_string())
+    // The bias test on 8×8 block means: the z-scores, red when missed.
+    let coarse = match (t.max_mean_z2, t.max_outliers, img.metrics.as_ref()) {
+        (Some(max_z2), Some(max_out), Some(m)) => format!(
+            "<span class=\"sub{}\">8×8 z² {} ≤ {max_z2}, |z|&gt;5 {} ≤ {:.1}%</span>",
+            if m.z_ok { "" } else { " bad" },
+            m.block_mean_z2.map(|z| format!("{z:.2}")).unwrap_or_else(|| "–".to_string()),
+            m.block_outliers.map(|o| format!("{:.2}%", o * 100.0)).unwrap_or_else(|| "–".to_string()),
+            max_out * 100.0
         ),
         _ => String::new(),
     };

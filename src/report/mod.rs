@@ -21,14 +21,18 @@
 //! A row is one camera's image, or a whole scene when it failed before any
 //! image was rendered. Its [`Verdict`] is `pass` (the threshold was met),
 //! `fail` (compared, below the threshold), `error` (the scene did not load,
-//! build or render, or the comparison itself failed, e.g. different sizes) or
-//! `no-reference` (the course has no expected image for that camera).
+//! build or render, or the comparison itself failed, e.g. different sizes),
+//! `no-reference` (the course has no expected image for that camera),
+//! `unsupported` (a fail or error of a scene that uses a feature luster does
+//! not implement yet, named on the row) or `known-quirk` (a miss explained by
+//! a known quirk of the course's data, named on the row). The last two are
+//! counted apart: they are neither our passes nor our failures.
 
 mod assets;
 pub mod html;
 pub mod json;
 
-use crate::conformance::thresholds::StatsPair;
+use crate::conformance::thresholds::{BlockZ, StatsPair};
 use crate::conformance::{Bar, CaseResult, ImageResult, Rule};
 use crate::image::{Comparison, MetricSpace};
 use serde::Serialize;
@@ -73,6 +77,10 @@ pub struct Counts {
     pub errored: usize,
     /// Rows without an expected image.
     pub no_reference: usize,
+    /// Rows of scenes that need a feature luster does not implement yet.
+    pub unsupported: usize,
+    /// Rows that miss their bar because of a known quirk of the data.
+    pub known_quirks: usize,
 }
 
 impl Counts {
@@ -83,6 +91,8 @@ impl Counts {
             Verdict::Fail => self.failed += 1,
             Verdict::Error => self.errored += 1,
             Verdict::NoReference => self.no_reference += 1,
+            Verdict::Unsupported => self.unsupported += 1,
+            Verdict::KnownQuirk => self.known_quirks += 1,
         }
     }
 }
@@ -112,16 +122,22 @@ pub enum Verdict {
     Error,
     /// No expected image to compare with.
     NoReference,
+    /// Failed or errored, in a scene that needs a feature luster lacks.
+    Unsupported,
+    /// Missed its bar because of a known quirk of the data.
+    KnownQuirk,
 }
 
 impl Verdict {
-    /// `pass`, `fail`, `error` or `no-reference`.
+    /// `pass`, `fail`, `error`, `no-reference`, `unsupported` or `known-quirk`.
     pub fn name(self) -> &'static str {
         match self {
             Verdict::Pass => "pass",
             Verdict::Fail => "fail",
             Verdict::Error => "error",
             Verdict::NoReference => "no-reference",
+            Verdict::Unsupported => "unsupported",
+            Verdict::KnownQuirk => "known-quirk",
         }
     }
 }
@@ -147,12 +163,19 @@ pub struct SceneEntry {
     pub seconds: f64,
     /// One entry per camera.
     pub images: Vec<ImageEntry>,
+    /// Features the scene uses that luster does not implement yet.
+    pub unsupported: Vec<String>,
 }
 
 impl SceneEntry {
-    /// The scene's own verdict when it has no images (it failed early).
+    /// The scene's own verdict when it has no images (it failed early):
+    /// unsupported when it needs a feature luster lacks, else an error.
     pub fn verdict(&self) -> Option<Verdict> {
-        self.images.is_empty().then_some(Verdict::Error)
+        self.images.is_empty().then_some(if self.unsupported.is_empty() {
+            Verdict::Error
+        } else {
+            Verdict::Unsupported
+        })
     }
 }
 
@@ -163,6 +186,8 @@ pub struct ImageEntry {
     pub image_name: String,
     /// The row's verdict.
     pub verdict: Verdict,
+    /// The known quirk of the data this image has, if any.
+    pub quirk: Option<String>,
     /// Our render, relative to the report folder.
     pub render: Option<String>,
     /// The expected image as the browser shows it (a PNG preview for EXR/HDR).
@@ -233,6 +258,13 @@ pub struct Metrics {
     pub contrast: Option<[f64; 2]>,
     /// Whether the statistics agreed (true when not tested).
     pub stats_ok: bool,
+    /// Noise-aware rule: mean z² of the 8×8 block means (see
+    /// `conformance::measures::block_z`).
+    pub block_mean_z2: Option<f64>,
+    /// Noise-aware rule: share of blocks with |z| > 5.
+    pub block_outliers: Option<f64>,
+    /// Whether the z-scores met the bar (true when not tested).
+    pub z_ok: bool,
 }
 
 /// The bar an image was judged by.
@@ -253,8 +285,10 @@ pub struct ThresholdEntry {
     pub pair_psnr: Option<f64>,
     /// Noise-aware: mean LDR-FLIP between our two renders.
     pub pair_flip: Option<f64>,
-    /// Noise-aware: minimum PSNR of the means of 8×8 blocks.
-    pub min_coarse_psnr: Option<f64>,
+    /// Noise-aware: the largest mean z² of the 8×8 block means.
+    pub max_mean_z2: Option<f64>,
+    /// Noise-aware: the largest share of blocks with |z| > 5.
+    pub max_outliers: Option<f64>,
 }
 
 /// How the run was made, for the report's header.
@@ -314,7 +348,8 @@ impl Report {
         }
     }
 
-    /// Whether every row passed or had no reference.
+    /// Whether every row passed or had no reference (unsupported features
+    /// and known quirks of the data are not failures of ours).
     pub fn all_passed(&self) -> bool {
         self.summary.failed == 0 && self.summary.errored == 0
     }
@@ -333,6 +368,7 @@ pub fn write(report: &Report, outdir: &Path) -> std::io::Result<()> {
 }
 
 fn scene_entry(r: &CaseResult, root: &Path, outdir: &Path) -> SceneEntry {
+    let unsupported = r.unsupported();
     SceneEntry {
         label: r.case.label(),
         hw: r.case.hw.clone(),
@@ -342,17 +378,27 @@ fn scene_entry(r: &CaseResult, root: &Path, outdir: &Path) -> SceneEntry {
         warnings: r.warnings.clone(),
         setup_seconds: r.setup_seconds,
         seconds: r.seconds,
-        images: r.images.iter().map(|i| image_entry(i, root, outdir)).collect(),
+        images: r.images.iter().map(|i| image_entry(i, root, outdir, !unsupported.is_empty())).collect(),
+        unsupported,
     }
 }
 
-fn image_entry(i: &ImageResult, root: &Path, outdir: &Path) -> ImageEntry {
+fn image_entry(i: &ImageResult, root: &Path, outdir: &Path, unsupported: bool) -> ImageEntry {
     let verdict = if i.error.is_some() {
-        Verdict::Error
+        if unsupported {
+            Verdict::Unsupported
+        } else {
+            Verdict::Error
+        }
     } else if i.expected.is_none() {
         Verdict::NoReference
     } else if i.pass {
+        // A pass is a pass, whatever the scene lacks.
         Verdict::Pass
+    } else if unsupported {
+        Verdict::Unsupported
+    } else if i.quirk.is_some() && i.comparison.is_some() {
+        Verdict::KnownQuirk
     } else if i.comparison.is_some() {
         Verdict::Fail
     } else {
@@ -391,13 +437,17 @@ fn image_entry(i: &ImageResult, root: &Path, outdir: &Path) -> ImageEntry {
     ImageEntry {
         image_name: i.image_name.clone(),
         verdict,
+        quirk: i.quirk.map(str::to_string),
         render,
         expected,
         expected_original,
         expected_source: i.expected.as_ref().map(|p| p.display().to_string()),
         heatmap,
         thumbs,
-        metrics: i.comparison.as_ref().map(|c| metrics(c, t, i.coarse_psnr, i.stats.as_ref())),
+        metrics: i
+            .comparison
+            .as_ref()
+            .map(|c| metrics(c, t, i.coarse_psnr, i.stats.as_ref(), i.block_z.as_ref())),
         threshold: ThresholdEntry {
             kind: match i.threshold.rule {
                 Rule::Fixed { .. } => "fixed",
@@ -410,14 +460,21 @@ fn image_entry(i: &ImageResult, root: &Path, outdir: &Path) -> ImageEntry {
             spp: i.spp,
             pair_psnr: i.pair.as_ref().and_then(|p| p.psnr.is_finite().then_some(p.psnr)),
             pair_flip: i.pair.as_ref().map(|p| p.flip),
-            min_coarse_psnr: t.tests_coarse().then_some(t.min_coarse_psnr),
+            max_mean_z2: t.tests_z().then_some(t.max_mean_z2),
+            max_outliers: t.tests_z().then_some(t.max_outliers),
         },
         seconds: i.seconds,
         error,
     }
 }
 
-fn metrics(c: &Comparison, t: &Bar, coarse_psnr: Option<f64>, stats: Option<&StatsPair>) -> Metrics {
+fn metrics(
+    c: &Comparison,
+    t: &Bar,
+    coarse_psnr: Option<f64>,
+    stats: Option<&StatsPair>,
+    z: Option<&BlockZ>,
+) -> Metrics {
     Metrics {
         width: c.width,
         height: c.height,
@@ -439,5 +496,8 @@ fn metrics(c: &Comparison, t: &Bar, coarse_psnr: Option<f64>, stats: Option<&Sta
         mean_luma: stats.map(|s| [s.ours.mean, s.reference.mean]),
         contrast: stats.map(|s| [s.ours.contrast, s.reference.contrast]),
         stats_ok: t.stats_ok(stats),
+        block_mean_z2: z.map(|z| z.mean_z2),
+        block_outliers: z.map(|z| z.outliers),
+        z_ok: t.z_ok(z),
     }
 }

@@ -327,9 +327,21 @@ impl Textures {
     /// replaces it. Like `BackgroundColor`, it is in output units (0–255
     /// is black to white), so the value is scaled by 255: with the default
     /// `Normalizer` a texel shows as itself (hw4 `galactica_dynamic`).
+    ///
+    /// The texel is the nearest one, whatever the map's `Interpolation`: the
+    /// course looks the background up once per pixel at the pixel's corner,
+    /// where its bilinear weights fall on a single texel, so an image of the
+    /// output's size shows pixel for pixel. Bilinear weights at jittered
+    /// sample positions would blur every star over two texels; nearest
+    /// lookups at those positions stay in the pixel's own texel, and for an
+    /// image of another size they average to a box filter over the pixel.
     pub fn background(&self, uv: Vec2) -> Option<Vec3> {
         let map = &self.maps[self.background? as usize];
-        Some(Self::normalized(&map.texture, self.raw(&map.texture, uv, uv.extend(0.0), 0.0)) * 255.0)
+        let raw = match map.texture {
+            Texture::Image { image, .. } => self.images[image as usize].nearest(uv),
+            _ => self.raw(&map.texture, uv, uv.extend(0.0), 0.0),
+        };
+        Some(Self::normalized(&map.texture, raw) * 255.0)
     }
 }
 

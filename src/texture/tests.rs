@@ -195,3 +195,26 @@ fn decal_modes_change_the_right_component() {
     let (r, _) = apply(3);
     assert!(matches!(r, Applied::Unlit(v) if (v - c).length() < 1e-6));
 }
+
+#[test]
+fn a_bilinear_background_of_the_output_size_shows_texel_for_texel() {
+    // A 4×1 image: every sample position inside pixel x must give texel x
+    // exactly, wherever the sample is jittered within the pixel (hw4
+    // galactica_dynamic's star field equals its texture pixel for pixel).
+    let texels = vec![[0, 0, 0], [255, 255, 255], [0, 0, 0], [255, 0, 0]];
+    let img = Image::from_rgb8(4, 1, texels.clone()).unwrap();
+    let mut tex = Textures::new(vec![img], &[], Some(0), None);
+    tex.maps.push(TextureMap {
+        texture: Texture::Image { image: 0, interpolation: Interpolation::Bilinear, scale: 1.0 / 255.0 },
+        decal: DecalMode::ReplaceBackground,
+        bump_factor: 1.0,
+    });
+    for (x, t) in texels.iter().enumerate() {
+        let want = Vec3::new(f32::from(t[0]), f32::from(t[1]), f32::from(t[2]));
+        for jitter in [0.0, 0.3, 0.5, 0.99] {
+            let uv = Vec2::new((x as f32 + jitter) / 4.0, 0.5);
+            let got = tex.background(uv).unwrap();
+            assert!((got - want).length() < 1e-3, "pixel {x} at jitter {jitter}: {got} instead of {want}");
+        }
+    }
+}
