@@ -81,6 +81,22 @@ pub fn plan_outputs(image_name: &str, tonemaps: &[Tonemap]) -> Result<Vec<Output
     Ok(out)
 }
 
+/// The 8-bit image `kind` asks for (`None` for [`OutputKind::Hdr`]).
+pub fn rgb8(film: &Film, kind: &OutputKind) -> Option<Vec<u8>> {
+    match kind {
+        OutputKind::Hdr => None,
+        OutputKind::Course => Some(film.to_rgb8()),
+        OutputKind::Tonemapped(t) => Some(t.apply(&film.pixels)),
+    }
+}
+
+/// The first 8-bit output of a camera: the image a person (or the
+/// conformance suite, against the course's `.png`) looks at. `None` when the
+/// name cannot be written.
+pub fn first_ldr(image_name: &str, tonemaps: &[Tonemap]) -> Option<Output> {
+    plan_outputs(image_name, tonemaps).ok()?.into_iter().find(|o| o.kind != OutputKind::Hdr)
+}
+
 /// Writes every output of `film` under `outdir`; returns the paths written.
 /// Tone mapping runs before any file is opened, so a failure to write one
 /// file is the only way to end with some of them.
@@ -88,10 +104,9 @@ pub fn write_outputs(film: &Film, outdir: &Path, outputs: &[Output]) -> Result<V
     let mut written = Vec::with_capacity(outputs.len());
     for o in outputs {
         let path = outdir.join(&o.name);
-        match &o.kind {
-            OutputKind::Hdr => write_rgb32f(&path, film.width, film.height, &film.rgb32f())?,
-            OutputKind::Course => write_rgb8(&path, film.width, film.height, &film.to_rgb8())?,
-            OutputKind::Tonemapped(t) => write_rgb8(&path, film.width, film.height, &t.apply(&film.pixels))?,
+        match rgb8(film, &o.kind) {
+            None => write_rgb32f(&path, film.width, film.height, &film.rgb32f())?,
+            Some(rgb) => write_rgb8(&path, film.width, film.height, &rgb)?,
         }
         written.push(path);
     }
