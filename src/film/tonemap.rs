@@ -128,6 +128,57 @@ impl Gamma {
     }
 }
 
+/// Clamping, gamma and truncation to 8 bits as tables, instead of a `powf`
+/// per channel: `edges[k - 1]` is the smallest linear value whose code is at
+/// least `k`, and `start[i]` the code of `i / BINS`, from which a value in
+/// that bin steps up past at most a few edges.
+struct Quantizer {
+    edges: [f32; 255],
+    start: Vec<u8>,
+}
+
+/// Bins of [`Quantizer::start`] over [0, 1].
+const BINS: usize = 1 << 16;
+
+impl Quantizer {
+    fn new(gamma: Gamma) -> Quantizer {
+        let mut edges = [0.0f32; 255];
+        for (k, e) in edges.iter_mut().enumerate() {
+            // Bisect on the linear value, so the table agrees with
+            // `to_byte(encode(clamp(c)))` up to the last bit of the bisection.
+            let code = (k + 1) as u8;
+            let (mut lo, mut hi) = (0.0f32, 1.0f32);
+            for _ in 0..40 {
+                let mid = 0.5 * (lo + hi);
+                if to_byte(gamma.encode(mid)) >= code {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            *e = hi;
+        }
+        let start =
+            (0..=BINS).map(|i| edges.partition_point(|&e| e <= i as f32 / BINS as f32) as u8).collect();
+        Quantizer { edges, start }
+    }
+
+    #[inline]
+    fn code(&self, c: f32) -> u8 {
+        if !(c > 0.0) {
+            return 0;
+        }
+        if c >= 1.0 {
+            return self.start[BINS];
+        }
+        let mut k = self.start[(c * BINS as f32) as usize];
+        while k < 255 && c >= self.edges[k as usize] {
+            k += 1;
+        }
+        k
+    }
+}
+
 /// One tone mapping: a camera's `Tonemap` element.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tonemap {
@@ -166,7 +217,10 @@ impl Tonemap {
     /// 8-bit RGB of `pixels` (linear radiance), row-major.
     pub fn apply(&self, pixels: &[Vec3]) -> Vec<u8> {
         let lum: Vec<f32> = pixels.par_iter().map(|&p| luminance(p)).collect();
-        let log_sum: f64 = lum.par_iter().map(|&y| (LOG_DELTA + f64::from(y)).ln()).sum();
+        let log_sum: f64 = lum
+            .par_chunks(4096)
+            .map(|c| c.iter().map(|&y| f64::from((LOG_DELTA as f32 + y).ln())).sum::<f64>())
+            .sum();
         let log_avg = if lum.is_empty() { 1.0 } else { (log_sum / lum.len() as f64).exp() };
         let scale = (f64::from(self.key) / log_avg) as f32;
         let l_white = (self.burn_percent > 0.0 && !lum.is_empty()).then(|| {
@@ -177,19 +231,20 @@ impl Tonemap {
             w.max(f32::MIN_POSITIVE)
         });
         let t = *self;
-        pixels
-            .par_iter()
-            .zip(&lum)
-            .flat_map_iter(|(&p, &y)| {
-                let rgb = if y > 0.0 {
+        let q = Quantizer::new(t.gamma);
+        let mut out = vec![0u8; 3 * pixels.len()];
+        let blocks = pixels.par_chunks(1024).zip(lum.par_chunks(1024));
+        out.par_chunks_mut(3 * 1024).zip(blocks).for_each(|(out, (px, lum))| {
+            for ((o, &p), &y) in out.chunks_exact_mut(3).zip(px).zip(lum) {
+                if y > 0.0 {
                     let yo = t.operator.curve(y * scale, l_white);
-                    (p / y).max(Vec3::ZERO).powf(t.saturation) * yo
-                } else {
-                    Vec3::ZERO
-                };
-                rgb.to_array().map(|c| to_byte(t.gamma.encode(c.clamp(0.0, 1.0))))
-            })
-            .collect()
+                    let ratio = (p * (1.0 / y)).max(Vec3::ZERO);
+                    let c = if t.saturation == 1.0 { ratio } else { ratio.powf(t.saturation) } * yo;
+                    o.copy_from_slice(&c.to_array().map(|c| q.code(c)));
+                }
+            }
+        });
+        out
     }
 }
 

@@ -86,3 +86,15 @@ fn black_and_non_finite_pixels_stay_black() {
     assert_eq!(&out[..6], &[0; 6]);
     assert!(out[6] > 0);
 }
+
+#[test]
+fn the_quantizer_table_agrees_with_the_formula() {
+    for gamma in [Gamma::Power(2.2), Gamma::Power(1.0), Gamma::Srgb] {
+        let q = Quantizer::new(gamma);
+        for i in 0..=200_000 {
+            let c = i as f32 / 200_000.0;
+            assert_eq!(q.code(c), to_byte(gamma.encode(c)), "{gamma:?} at {c}");
+        }
+        assert_eq!((q.code(-1.0), q.code(7.0), q.code(f32::NAN)), (0, 255, 0));
+    }
+}
