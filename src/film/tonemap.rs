@@ -165,7 +165,7 @@ impl Quantizer {
 
     #[inline]
     fn code(&self, c: f32) -> u8 {
-        if !(c > 0.0) {
+        if c.is_nan() || c <= 0.0 {
             return 0;
         }
         if c >= 1.0 {
