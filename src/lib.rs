@@ -3,8 +3,8 @@
 //! The flow of data follows the flow of a render:
 //!
 //! ```text
-//! scene file ─parse─▶ scene::Description ─build─▶ render::Scene ─▶ integrator ─▶ image
-//! (XML/JSON/PLY)      (plain data + locations)    (BVH, lights, Sync)
+//! scene file ─parse─▶ scene::Description ─build─▶ render::Scene ─▶ integrator ─▶ film ─▶ image files
+//! (XML/JSON/PLY)      (plain data + locations)    (BVH, lights, Sync)                (PNG/EXR/HDR)
 //! ```
 //!
 //! The renderer never sees XML or JSON: [`scene`] turns either encoding of the
@@ -15,6 +15,7 @@
 pub mod accel;
 pub mod bench;
 pub mod conformance;
+pub mod film;
 pub mod fuzzing;
 pub mod geometry;
 pub mod image;

@@ -83,6 +83,14 @@ const CASES: &[(&str, &[&str])] = &[
     ("image_name_parent.xml", &["<ImageName>", "\"../x.png\"", "output folder"]),
     ("image_name_absolute.json", &["<ImageName>", "\"/tmp/x.png\"", "absolute"]),
     ("image_name_bad_extension.xml", &["<ImageName>", "\"second.bmp\"", ".png"]),
+    ("image_name_bad_hdr_extension.xml", &["<ImageName>", "\"out.tiff\"", ".exr"]),
+    ("image_name_twice.json", &["Camera[id=2]", "same.png", "already writes"]),
+    ("image_name_exr_and_png_clash.xml", &["Camera[id=2]", "cube.png", "already writes"]),
+    // Tone mapping (hw5).
+    ("tonemap_unknown_tmo.xml", &["<TMO>", "tone-mapping operator", "Photographic, ACES or Filmic"]),
+    ("tonemap_options_not_numbers.json", &["<TMOOptions>", "must be numbers"]),
+    ("tonemap_burn_100.json", &["<TMOOptions>", "burn-out percentage", "below 100"]),
+    ("tonemap_bad_gamma.xml", &["<Gamma>", "positive number or sRGB"]),
     // Ellipsoids (luster's extension).
     ("ellipsoid_radii_two_numbers.xml", &["Ellipsoid[id=1]/Radii", "3 numbers", "found 2"]),
     ("ellipsoid_radius_zero.json", &["Ellipsoid[id=1]/Radii", "three positive numbers", "0.5 0 0.4"]),

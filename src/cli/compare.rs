@@ -58,6 +58,12 @@ pub fn run(args: &Args) -> ExitCode {
         }
     };
     print_comparison(args, &reference, &test, &c);
+    if c.space == MetricSpace::Linear {
+        if let Ok(rel) = luster::image::relative_error(&reference, &test) {
+            say!("{:<10} {:.4}% (Σ|t − r| / Σ|r|, linear light)", "rel. MAE", 100.0 * rel.mae);
+            say!("{:<10} {:.6} (mean (t − r)² / (r² + 0.01))", "rel. MSE", rel.mse);
+        }
+    }
     if let Some(path) = &args.heatmap {
         match comparison_heatmap(&c, HeatmapSource::Flip).and_then(|h| write_heatmap(&h, path)) {
             Ok(()) => say!("{:<10} {} (LDR-FLIP per pixel, magma colour map)", "heatmap", path.display()),

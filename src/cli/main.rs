@@ -13,6 +13,7 @@ macro_rules! say {
 mod compare;
 mod render;
 mod suite;
+mod tonemap;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -113,6 +114,35 @@ enum Command {
         #[arg(long, value_name = "STOPS", default_value_t = 0.0, allow_negative_numbers = true)]
         exposure: f32,
     },
+    /// Tone-map an HDR image (.exr or .hdr) to an 8-bit PNG or JPEG without rendering.
+    ///
+    /// The pipeline of hw5 (luminance, key scaling by the log-average, the
+    /// operator's curve, saturation, clamp, gamma, rounding), as a camera's
+    /// <Tonemap> does; docs/hdr.md has the exact curves. Exit code: 0 written,
+    /// 2 the input could not be read or is not HDR, an option is out of range,
+    /// or the output could not be written.
+    Tonemap {
+        /// The HDR image (.exr or .hdr).
+        input: PathBuf,
+        /// The image to write (.png, .jpg).
+        #[arg(short, long, value_name = "OUT.png")]
+        output: PathBuf,
+        /// Operator: photographic (Reinhard 2002, hw5), aces or filmic.
+        #[arg(long, default_value = "photographic")]
+        tmo: String,
+        /// Key value: the level the log-average luminance is scaled to.
+        #[arg(long, default_value_t = 0.18)]
+        key: f32,
+        /// Burn-out percentage: this share of the brightest pixels becomes white (0: none).
+        #[arg(long, value_name = "PERCENT", default_value_t = 0.0)]
+        burn: f32,
+        /// Saturation exponent (1 keeps colours, 0 is grey).
+        #[arg(long, default_value_t = 1.0)]
+        saturation: f32,
+        /// Gamma: a positive number (C^(1/g)) or srgb.
+        #[arg(long, default_value = "2.2")]
+        gamma: String,
+    },
     /// Render a course folder, compare with its expected images, write an HTML report.
     ///
     /// Finds every scene under DIR/hwN/{json,xml}/ that names one of the
@@ -156,6 +186,9 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Err(e) = luster::image::output::remove_temporaries_on_signal() {
+        eprintln!("warning: Ctrl-C will not remove half-written images: {e}");
+    }
     match cli.command {
         Command::Render { scenes, outdir, threads, quiet, spp, seed, filter, shader_timeout, model } => {
             let filter = match filter {
@@ -185,6 +218,9 @@ fn main() -> ExitCode {
                 tolerance,
                 exposure,
             })
+        }
+        Command::Tonemap { input, output, tmo, key, burn, saturation, gamma } => {
+            tonemap::run(&tonemap::Args { input, output, tmo, key, burn, saturation, gamma })
         }
         Command::Suite { dir, outdir, jobs, only, threads, strict, spp, max_spp } => {
             suite::run(&suite::Args {

@@ -1,8 +1,10 @@
 //! `luster render`: load (a scene, or an OBJ model in a scene made around it),
-//! build, render every camera, write images atomically.
+//! build, render every camera, write its files (see `luster::film::outputs`)
+//! atomically.
 
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
+use luster::film::outputs::{first_clash, plan_outputs, write_outputs};
 use luster::render::{self, BuildOptions, RenderOptions, Scene};
 use luster::scene::obj::ModelView;
 use std::path::{Path, PathBuf};
@@ -62,6 +64,15 @@ fn render_scene(
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", path.display());
     }
+    let plans = scene
+        .cameras
+        .iter()
+        .map(|c| plan_outputs(&c.image_name, &c.tonemaps))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    if let Some(clash) = first_clash(plans.iter().flatten().map(|o| o.name.as_path())) {
+        anyhow::bail!("{}: two outputs would be written to {}", path.display(), clash.display());
+    }
     let setup = t0.elapsed().as_secs_f64();
     let mut done = Vec::with_capacity(scene.cameras.len());
     for (i, cam) in scene.cameras.iter().enumerate() {
@@ -77,15 +88,16 @@ fn render_scene(
         let img = render::try_render_with(&scene, i, opts, &|n| bar.inc(n));
         bar.finish_and_clear();
         let img = img.map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-        done.push((outdir.join(&cam.image_name), img, t.elapsed().as_secs_f64()));
+        done.push((img, t.elapsed().as_secs_f64()));
     }
-    for (out, img, secs) in done {
-        luster::image::output::write_rgb8(&out, img.width, img.height, &img.to_rgb8())
+    for ((img, secs), plan) in done.iter().zip(&plans) {
+        let written = write_outputs(&img.film, outdir, plan)
             .with_context(|| format!("rendering {}", path.display()))?;
         if !quiet {
+            let names: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
             println!(
                 "{}  {}x{}  {:.2} s render (+{:.2} s load and build)  {:.1} Mrays/s  {} triangles",
-                out.display(),
+                names.join(" + "),
                 img.width,
                 img.height,
                 secs,

@@ -352,13 +352,19 @@ fn run_case_into(
                 return;
             }
         };
-        let threshold = threshold(case, &cam.image_name, cam.num_samples);
-        let expected = case.expected_image(&cam.image_name);
+        // An .exr camera is judged by its tone-mapped .png, as the course's is.
+        let (ldr, ldr_name) = match crate::film::outputs::first_ldr(&cam.image_name, &cam.tonemaps) {
+            Some(o) => (o.kind, o.name.display().to_string()),
+            None => (crate::film::OutputKind::Course, cam.image_name.clone()),
+        };
+        let threshold = threshold(case, &ldr_name, cam.num_samples);
+        let expected = case.expected_image(&ldr_name);
         // The second render is only worth its time when there is a
         // reference to judge.
         let second = (threshold.needs_pair() && expected.is_some()).then(|| {
             let next = RenderOptions { seed: opts.seed.wrapping_add(1), ..*opts };
-            render::render_with(&scene, i, &next, &|_| {}).to_rgb8()
+            let film = render::render_with(&scene, i, &next, &|_| {}).film;
+            crate::film::outputs::rgb8(&film, &ldr).unwrap_or_default()
         });
         let seconds = t.elapsed().as_secs_f64();
         let png = outdir.join(format!("{stem}__{}", sanitize(&cam.image_name))).with_extension("png");
@@ -381,7 +387,7 @@ fn run_case_into(
             pass: false,
             error: None,
         };
-        let rgb = img.to_rgb8();
+        let rgb = crate::film::outputs::rgb8(&img.film, &ldr).unwrap_or_default();
         if let Err(e) = crate::image::output::write_rgb8(&png, img.width, img.height, &rgb) {
             r.error = Some(e.to_string());
             result.images.push(r);

@@ -20,6 +20,12 @@
 //! HDR-FLIP (Andersson et al., EG 2021), which would sweep exposures through a
 //! tone mapper; highlights above 1 after exposure are therefore not compared.
 //!
+//! For two linear images, [`relative_error`] gives the HDR measures that do
+//! not depend on exposure: the relative mean absolute error
+//! `Σ|t − r| / Σ|r|` (over all channels of all pixels) and the relative MSE
+//! `mean((t − r)² / (r² + 0.01))` (Rousselle et al. 2011). No HDR-FLIP: no
+//! maintained Rust crate implements it (the `nv-flip` crate wraps LDR-FLIP).
+//!
 //! PSNR is `10·log10(1 / MSE)` over all three channels of all pixels, i.e. the
 //! usual 8-bit PSNR with values scaled to [0, 1]; it is `+∞` when MSE is 0.
 //! Non-finite samples count as 0.
@@ -234,6 +240,51 @@ pub fn compare(
         diff_bbox: stats.bbox,
         max_abs_diff: stats.max_abs,
     })
+}
+
+/// Exposure-independent errors of a linear test image against a linear
+/// reference (see the module documentation).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RelativeError {
+    /// `Σ|t − r| / Σ|r|`: 0.01 is "1% relative mean absolute error".
+    pub mae: f64,
+    /// `mean((t − r)² / (r² + 0.01))`.
+    pub mse: f64,
+}
+
+/// [`RelativeError`] of `test` against `reference`; the sizes must match.
+/// Non-finite samples count as 0. A black reference gives an infinite
+/// relative MAE unless the test is black too (then 0).
+pub fn relative_error(reference: &Rgb32Image, test: &Rgb32Image) -> Result<RelativeError, ImageError> {
+    reference.check_len()?;
+    test.check_len()?;
+    if (reference.width, reference.height) != (test.width, test.height) {
+        return Err(ImageError::SizeMismatch {
+            reference: (reference.width, reference.height),
+            test: (test.width, test.height),
+        });
+    }
+    if reference.is_empty() {
+        return Err(ImageError::Empty { width: reference.width, height: reference.height });
+    }
+    let (abs, refsum, rel_sq) = reference
+        .pixels
+        .par_iter()
+        .zip(&test.pixels)
+        .map(|(r, t)| {
+            let mut acc = (0.0f64, 0.0f64, 0.0f64);
+            for c in 0..3 {
+                let (r, t) = (f64::from(finite_or_zero(r[c])), f64::from(finite_or_zero(t[c])));
+                let d = t - r;
+                acc.0 += d.abs();
+                acc.1 += r.abs();
+                acc.2 += d * d / (r * r + 0.01);
+            }
+            acc
+        })
+        .reduce(|| (0.0, 0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));
+    let mae = if abs == 0.0 { 0.0 } else { abs / refsum };
+    Ok(RelativeError { mae, mse: rel_sq / (3 * reference.len()) as f64 })
 }
 
 #[cfg(test)]

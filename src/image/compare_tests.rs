@@ -225,3 +225,14 @@ fn non_finite_samples_do_not_poison_metrics() {
     assert!(c.ssim.is_finite() && c.flip.is_finite());
     assert_eq!(c.differing_pixels, 1);
 }
+
+#[test]
+fn relative_error_is_scale_free_and_zero_for_equal_images() {
+    let r = Rgb32Image::from_fn(4, 4, Encoding::Linear, |x, y| [x as f32 * 100.0, y as f32, 0.5]);
+    assert_eq!(relative_error(&r, &r).unwrap().mae, 0.0);
+    let t = Rgb32Image::from_fn(4, 4, Encoding::Linear, |x, y| [x as f32 * 101.0, y as f32 * 1.01, 0.505]);
+    let e = relative_error(&r, &t).unwrap();
+    assert!((e.mae - 0.01).abs() < 1e-6, "{}", e.mae);
+    let small = Rgb32Image::new(2, 2, Encoding::Linear);
+    assert!(relative_error(&r, &small).is_err());
+}

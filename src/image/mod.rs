@@ -20,6 +20,6 @@ pub mod output;
 pub mod ssim;
 
 pub use buffer::{Encoding, Rgb32Image};
-pub use compare::{compare, CompareOptions, Comparison, MetricSpace};
+pub use compare::{compare, relative_error, CompareOptions, Comparison, MetricSpace, RelativeError};
 pub use error::ImageError;
 pub use heatmap::{comparison_heatmap, heatmap, magma, write_heatmap, HeatmapSource};

@@ -23,6 +23,8 @@ pub struct Camera {
     pub height: u32,
     /// Output file name.
     pub image_name: String,
+    /// Tone mappings for the outputs (see [`crate::film::outputs`]).
+    pub tonemaps: Vec<crate::film::Tonemap>,
     /// Samples per pixel the scene asks for.
     pub num_samples: u32,
     /// Unit gaze, and the lens's right and up axes scaled by the aperture edge.
@@ -57,6 +59,7 @@ impl Camera {
             width,
             height,
             image_name: d.image_name.clone(),
+            tonemaps: d.tonemaps.clone(),
             num_samples: d.num_samples,
             gaze,
             lens_u: u * d.aperture_size,
@@ -122,6 +125,7 @@ mod tests {
             near_distance: 1.0,
             resolution: res,
             image_name: "x.png".into(),
+            tonemaps: Vec::new(),
             num_samples: 1,
             aperture_size: 0.0,
             focus_distance: 1.0,

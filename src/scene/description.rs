@@ -88,6 +88,9 @@ pub struct CameraDesc {
     pub resolution: (u32, u32),
     /// Output file name.
     pub image_name: String,
+    /// Tone mappings of the image (`Tonemap` elements), in order; none for
+    /// the course's plain 8-bit images.
+    pub tonemaps: Vec<crate::film::Tonemap>,
     /// Samples per pixel requested by the scene.
     pub num_samples: u32,
     /// Edge of the square lens (0: a pinhole).

@@ -7,15 +7,20 @@
 //! | `type="lookAt"`: `GazePoint` + `FovY` (degrees) | the look-at form; the horizontal extent follows the aspect ratio |
 //! | `NearDistance` | distance to the image plane |
 //! | `ImageResolution` | width height |
-//! | `ImageName` | output file name: a relative path without `..`, ending in one of [`OUTPUT_EXTENSIONS`] |
+//! | `ImageName` | output file name: a relative path without `..`, ending in one of [`OUTPUT_EXTENSIONS`]; `.exr`/`.hdr` also write a tone-mapped `.png` |
+//! | `Tonemap` | tone mapping of the image (see [`super::tonemap`]); several allowed |
 //! | `NumSamples` | samples per pixel (default 1) |
 //! | `ApertureSize` | edge of the square lens (default 0: a pinhole) |
 //! | `FocusDistance` | distance along the gaze that is in focus (needed with an aperture) |
+//!
+//! No two cameras (nor an `.exr` and its derived `.png`) may write the same
+//! file: that is an error before anything is rendered.
 //!
 //! The course's `hw1/xml/spheres*.xml` give five numbers to `NearPlane`; the
 //! first four are used and a warning says so.
 
 use super::Warnings;
+use crate::film::outputs::{file_key, plan_outputs};
 use crate::scene::description::{CameraDesc, Projection};
 use crate::scene::element::{Element, Reader};
 use crate::scene::error::SceneError;
@@ -27,14 +32,31 @@ pub const MAX_SIDE: u32 = 32768;
 /// See [`MAX_SIDE`].
 pub const MAX_PIXELS: u64 = 1 << 27;
 
-/// Image formats `image::output` can write, by extension. Keep in step with
-/// the writer (hw5's `.exr` belongs here once HDR output exists).
-pub const OUTPUT_EXTENSIONS: &[&str] = &["png", "jpg", "jpeg"];
+/// Image formats `image::output` can write, by extension.
+pub const OUTPUT_EXTENSIONS: &[&str] = &["png", "jpg", "jpeg", "exr", "hdr"];
 
-/// Reads every camera.
+/// Reads every camera, refusing two that would write the same file.
 pub fn read_all(r: &Reader, cams: &Element, w: &mut Warnings) -> Result<Vec<CameraDesc>, SceneError> {
     w.unknown_children(cams, &["Camera"]);
-    cams.children_named("Camera").map(|c| read(r, c, w)).collect()
+    let mut out: Vec<CameraDesc> = Vec::new();
+    let mut files = std::collections::HashSet::new();
+    for c in cams.children_named("Camera") {
+        let desc = read(r, c, w)?;
+        let plan = plan_outputs(&desc.image_name, &desc.tonemaps).map_err(|e| r.err(c, e))?;
+        for o in plan {
+            if !files.insert(file_key(&o.name)) {
+                return Err(r.err(
+                    c,
+                    format!(
+                        "this camera would write {}, which an earlier camera (or this one) already writes",
+                        o.name.display()
+                    ),
+                ));
+            }
+        }
+        out.push(desc);
+    }
+    Ok(out)
 }
 
 fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneError> {
@@ -59,6 +81,7 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
         "FovY",
         "ApertureSize",
         "FocusDistance",
+        "Tonemap",
     ];
     w.unknown_children(c, known);
 
@@ -152,6 +175,7 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
         near_distance,
         resolution: (wpx as u32, hpx as u32),
         image_name,
+        tonemaps: super::tonemap::read_all(r, c, w)?,
         num_samples,
         aperture_size,
         focus_distance,

@@ -10,6 +10,7 @@
 //! | `AbsorptionCoefficient` | dielectric Beer's-law RGB coefficient | 0 |
 //! | `AbsorptionIndex` | a conductor's imaginary part | 0 |
 //! | `Roughness` | glossy spread of mirror, conductor and dielectric rays | 0 |
+//! | `degamma` attribute (`_degamma`) | `true`: the three Blinn-Phong reflectances are sRGB-looking values, raised to the power 2.2 (hw5) | false |
 //!
 //! Only `type="mirror"` (or conductor) makes `MirrorReflectance` reflect: the
 //! course's scenes give plain materials a mirror reflectance that their
@@ -73,12 +74,18 @@ fn read(r: &Reader, m: &Element, w: &mut Warnings) -> Result<MaterialDesc, Scene
     if absorption_coefficient.min_element() < 0.0 {
         return Err(r.err(m, "<AbsorptionCoefficient> must not be negative"));
     }
+    // hw5's cube_point_hdr: "Read these values by applying degamma transform".
+    let degamma = r.bool_attr(m, "degamma", false)?;
+    let reflectance = |name: &str| -> Result<Vec3, SceneError> {
+        let v = r.vec3_or(m, name, Vec3::ZERO)?;
+        Ok(if degamma { v.max(Vec3::ZERO).powf(2.2) } else { v })
+    };
     Ok(MaterialDesc {
         id: id.to_string(),
         kind,
-        ambient: r.vec3_or(m, "AmbientReflectance", Vec3::ZERO)?,
-        diffuse: r.vec3_or(m, "DiffuseReflectance", Vec3::ZERO)?,
-        specular: r.vec3_or(m, "SpecularReflectance", Vec3::ZERO)?,
+        ambient: reflectance("AmbientReflectance")?,
+        diffuse: reflectance("DiffuseReflectance")?,
+        specular: reflectance("SpecularReflectance")?,
         mirror,
         phong_exponent: r.float_or(m, "PhongExponent", 1.0)?,
         refraction_index,

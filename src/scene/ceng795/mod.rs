@@ -26,6 +26,7 @@ pub mod obj_file;
 pub mod objects;
 pub mod shader_map;
 pub mod textures;
+pub mod tonemap;
 pub mod transforms;
 pub mod volumes;
 

@@ -111,6 +111,8 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         near_distance: 1.0,
         resolution: (view.width, view.height),
         image_name: format!("{stem}.png"),
+        // Not a course scene: a display-referred image, as other renderers write.
+        tonemaps: vec![crate::film::Tonemap::DISPLAY],
         num_samples: view.samples,
         aperture_size: 0.0,
         focus_distance: 1.0,

@@ -1,0 +1,180 @@
+//! Which files a camera writes, and writing them from a [`Film`].
+//!
+//! | `ImageName` | `Tonemap`s | files |
+//! |---|---|---|
+//! | `x.png`, `x.jpg` | none | `x.png`: the course's clamp and truncation, no gamma |
+//! | `x.png` | one or more | `x.png` tone-mapped by the first; `x_<tmo>.png` by each further one |
+//! | `x.exr`, `x.hdr` | none | `x.exr` (32-bit float) and `x.png` tone-mapped by hw5's example operator |
+//! | `x.exr`, `x.hdr` | one or more | `x.exr`, `x.png` by the first, `x_<tmo>.png` by each further one |
+//!
+//! `<tmo>` is the operator's lower-case name (`photographic`, `aces`,
+//! `filmic`); a name used twice gets `_2`, `_3`, ... The course writes
+//! `x.exr` beside `x.png` (hw5 `cube_point_hdr`, every hw7 image); its 2025
+//! JSON files may list several `Tonemap`s, whose PNG names could not be found
+//! in any course file, hence the rule above.
+
+use super::tonemap::Tonemap;
+use super::Film;
+use crate::image::output::{write_rgb32f, write_rgb8, WriteError, HDR_EXTENSIONS, LDR_EXTENSIONS};
+use std::path::{Path, PathBuf};
+
+/// What one output file holds.
+#[derive(Clone, Debug, PartialEq)]
+pub enum OutputKind {
+    /// Linear radiance, 32-bit float (`.exr`) or RGBE (`.hdr`).
+    Hdr,
+    /// 8-bit with the course's clamp and truncation.
+    Course,
+    /// 8-bit tone-mapped.
+    Tonemapped(Tonemap),
+}
+
+/// One file a camera writes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Output {
+    /// Path relative to the output folder.
+    pub name: PathBuf,
+    /// What it holds.
+    pub kind: OutputKind,
+}
+
+/// The files for `image_name` and the camera's `tonemaps`, or a sentence
+/// saying why the name cannot be written.
+pub fn plan_outputs(image_name: &str, tonemaps: &[Tonemap]) -> Result<Vec<Output>, String> {
+    let path = Path::new(image_name);
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
+    let hdr = HDR_EXTENSIONS.contains(&ext.as_str());
+    if !hdr && !LDR_EXTENSIONS.contains(&ext.as_str()) {
+        return Err(format!(
+            "\"{image_name}\" must end in .{} or .{}, the formats luster writes",
+            LDR_EXTENSIONS.join(", ."),
+            HDR_EXTENSIONS.join(", .")
+        ));
+    }
+    let mut out = Vec::new();
+    let ldr_ext = if hdr { "png" } else { ext.as_str() };
+    if hdr {
+        out.push(Output { name: path.to_path_buf(), kind: OutputKind::Hdr });
+    }
+    let maps: &[Tonemap] = if hdr && tonemaps.is_empty() { &[Tonemap::COURSE_DEFAULT] } else { tonemaps };
+    if maps.is_empty() {
+        out.push(Output { name: path.to_path_buf(), kind: OutputKind::Course });
+    }
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("image");
+    let mut used: Vec<String> = Vec::new();
+    for (i, t) in maps.iter().enumerate() {
+        let file = if i == 0 {
+            format!("{stem}.{ldr_ext}")
+        } else {
+            let base = format!("{stem}_{}", t.operator.name());
+            let mut name = base.clone();
+            let mut k = 1;
+            while used.contains(&name) {
+                k += 1;
+                name = format!("{base}_{k}");
+            }
+            used.push(name.clone());
+            format!("{name}.{ldr_ext}")
+        };
+        out.push(Output { name: path.with_file_name(file), kind: OutputKind::Tonemapped(*t) });
+    }
+    Ok(out)
+}
+
+/// The 8-bit image `kind` asks for (`None` for [`OutputKind::Hdr`]).
+pub fn rgb8(film: &Film, kind: &OutputKind) -> Option<Vec<u8>> {
+    match kind {
+        OutputKind::Hdr => None,
+        OutputKind::Course => Some(film.to_rgb8()),
+        OutputKind::Tonemapped(t) => Some(t.apply(&film.pixels)),
+    }
+}
+
+/// The first 8-bit output of a camera: the image a person (or the
+/// conformance suite, against the course's `.png`) looks at. `None` when the
+/// name cannot be written.
+pub fn first_ldr(image_name: &str, tonemaps: &[Tonemap]) -> Option<Output> {
+    plan_outputs(image_name, tonemaps).ok()?.into_iter().find(|o| o.kind != OutputKind::Hdr)
+}
+
+/// Writes every output of `film` under `outdir`; returns the paths written.
+/// Tone mapping runs before any file is opened, so a failure to write one
+/// file is the only way to end with some of them.
+pub fn write_outputs(film: &Film, outdir: &Path, outputs: &[Output]) -> Result<Vec<PathBuf>, WriteError> {
+    let mut written = Vec::with_capacity(outputs.len());
+    for o in outputs {
+        let path = outdir.join(&o.name);
+        match rgb8(film, &o.kind) {
+            None => write_rgb32f(&path, film.width, film.height, &film.rgb32f())?,
+            Some(rgb) => write_rgb8(&path, film.width, film.height, &rgb)?,
+        }
+        written.push(path);
+    }
+    Ok(written)
+}
+
+/// The first file name that two outputs (of one camera or of several) share,
+/// compared after joining to the output folder. Case and Unicode
+/// normalisation are not folded: on such file systems two names may still
+/// meet.
+pub fn first_clash<'a>(names: impl IntoIterator<Item = &'a Path>) -> Option<PathBuf> {
+    let mut seen = std::collections::HashSet::new();
+    names.into_iter().find(|n| !seen.insert(file_key(n))).map(Path::to_path_buf)
+}
+
+/// The form of an output name that two names of one file share (`./a.png`
+/// and `a.png`, `x//a.png` and `x/a.png`).
+pub fn file_key(name: &Path) -> PathBuf {
+    name.components().filter(|c| !matches!(c, std::path::Component::CurDir)).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::film::tonemap::{Gamma, Operator};
+
+    fn names(o: &[Output]) -> Vec<String> {
+        o.iter().map(|o| o.name.display().to_string()).collect()
+    }
+
+    #[test]
+    fn exr_writes_itself_and_a_png_beside_it() {
+        let o = plan_outputs("sub/cube_point_hdr.exr", &[]).unwrap();
+        assert_eq!(names(&o), ["sub/cube_point_hdr.exr", "sub/cube_point_hdr.png"]);
+        assert_eq!(o[0].kind, OutputKind::Hdr);
+        assert_eq!(o[1].kind, OutputKind::Tonemapped(Tonemap::COURSE_DEFAULT));
+    }
+
+    #[test]
+    fn several_tonemaps_get_their_operator_in_the_name() {
+        let t = |operator| Tonemap { operator, ..Tonemap::COURSE_DEFAULT };
+        let maps = [t(Operator::Photographic), t(Operator::Aces), t(Operator::Filmic), t(Operator::Aces)];
+        let o = plan_outputs("a.hdr", &maps).unwrap();
+        assert_eq!(names(&o), ["a.hdr", "a.png", "a_aces.png", "a_filmic.png", "a_aces_2.png"]);
+    }
+
+    #[test]
+    fn png_without_tonemap_keeps_the_course_clamp() {
+        assert_eq!(plan_outputs("x.PNG", &[]).unwrap()[0].kind, OutputKind::Course);
+        let srgb = Tonemap { gamma: Gamma::Srgb, ..Tonemap::DISPLAY };
+        let o = plan_outputs("x.jpg", &[srgb]).unwrap();
+        assert_eq!(names(&o), ["x.jpg"]);
+        assert_eq!(o[0].kind, OutputKind::Tonemapped(srgb));
+    }
+
+    #[test]
+    fn other_extensions_are_refused() {
+        let e = plan_outputs("x.bmp", &[]).unwrap_err();
+        assert!(e.contains("x.bmp") && e.contains(".exr"), "{e}");
+        assert!(plan_outputs("noext", &[]).is_err());
+    }
+
+    #[test]
+    fn clashes_are_found_after_normalising() {
+        let a = plan_outputs("a.exr", &[]).unwrap();
+        let b = plan_outputs("./a.png", &[]).unwrap();
+        let all: Vec<&Path> = a.iter().chain(&b).map(|o| o.name.as_path()).collect();
+        assert_eq!(first_clash(all), Some(PathBuf::from("./a.png")));
+        assert_eq!(first_clash([Path::new("a.png"), Path::new("b.png")]), None);
+    }
+}

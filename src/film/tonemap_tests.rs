@@ -1,0 +1,100 @@
+use super::*;
+
+fn grey(y: f32) -> Vec3 {
+    Vec3::splat(y)
+}
+
+#[test]
+fn course_clamp_truncates_and_zeroes_nan() {
+    let px = [Vec3::new(-3.0, 12.9, 300.0), Vec3::new(f32::NAN, 254.99, f32::INFINITY)];
+    assert_eq!(course_rgb8(&px), [0, 12, 255, 0, 254, 255]);
+}
+
+#[test]
+fn photographic_maps_the_log_average_to_key_over_one_plus_key() {
+    // A uniform image: every pixel is the log-average (up to δ).
+    let px = vec![grey(37.0); 16];
+    let out = Tonemap::COURSE_DEFAULT.apply(&px);
+    let expect = ((0.18f32 / 1.18).powf(1.0 / 2.2) * 255.0) as u8;
+    assert!(out.iter().all(|&c| c == expect), "{out:?} vs {expect}");
+}
+
+#[test]
+fn the_scale_does_not_matter_only_ratios() {
+    let px: Vec<Vec3> = (0..64).map(|i| Vec3::new(i as f32, (i * 3 % 7) as f32, 0.5)).collect();
+    let bright: Vec<Vec3> = px.iter().map(|p| *p * 1000.0).collect();
+    let t = Tonemap { burn_percent: 5.0, ..Tonemap::COURSE_DEFAULT };
+    let (a, b) = (t.apply(&px), t.apply(&bright));
+    assert!(a.iter().zip(&b).all(|(x, y)| x.abs_diff(*y) <= 1));
+}
+
+#[test]
+fn burn_out_makes_the_top_percentile_white() {
+    // 100 pixels of rising luminance; 1% burn: the brightest is L_white.
+    let px: Vec<Vec3> = (1..=100).map(|i| grey(i as f32)).collect();
+    let t = Tonemap { burn_percent: 1.0, ..Tonemap::COURSE_DEFAULT };
+    let out = t.apply(&px);
+    assert_eq!(&out[297..], &[255, 255, 255]);
+    assert!(out[3 * 90] < 255);
+    let plain = Tonemap::COURSE_DEFAULT.apply(&px);
+    assert!(plain[297] < 255, "without burn-out nothing reaches white");
+    assert!(out[150] > plain[150], "burn-out brightens the middle");
+}
+
+#[test]
+fn saturation_zero_is_grey_and_one_keeps_ratios() {
+    let px = vec![Vec3::new(2.0, 1.0, 0.5), grey(1.0)];
+    let g = Tonemap { saturation: 0.0, ..Tonemap::COURSE_DEFAULT }.apply(&px);
+    assert!(g[0] == g[1] && g[1] == g[2]);
+    let c = Tonemap::COURSE_DEFAULT.apply(&px);
+    assert!(c[0] > c[1] && c[1] > c[2]);
+}
+
+#[test]
+fn curves_reach_white_where_documented() {
+    assert!((Operator::Aces.curve(ACES_WHITE, None) - 1.0).abs() < 1e-5);
+    assert!(Operator::Aces.curve(ACES_WHITE * 0.9, None) < 1.0);
+    assert!((Operator::Filmic.curve(FILMIC_W / FILMIC_BIAS, None) - 1.0).abs() < 1e-5);
+    assert_eq!(Operator::Photographic.curve(3.0, Some(3.0)), 1.0);
+    assert_eq!(Operator::Photographic.curve(1.0, None), 0.5);
+    for op in [Operator::Photographic, Operator::Aces, Operator::Filmic] {
+        let mut last = -1.0;
+        for i in 0..200 {
+            let v = op.curve(i as f32 * 0.05, None);
+            assert!(v >= last && (0.0..=1.0).contains(&v), "{op:?} not monotone in [0,1]");
+            last = v;
+        }
+    }
+}
+
+#[test]
+fn srgb_gamma_and_operator_names() {
+    let px = vec![grey(1.0); 4];
+    let t = Tonemap { gamma: Gamma::Srgb, ..Tonemap::COURSE_DEFAULT };
+    let v = 0.18f32 / 1.18;
+    let expect = ((1.055 * v.powf(1.0 / 2.4) - 0.055) * 255.0) as u8;
+    assert_eq!(t.apply(&px)[0], expect);
+    assert_eq!(Operator::parse(" aces "), Some(Operator::Aces));
+    assert_eq!(Operator::parse("Photographic"), Some(Operator::Photographic));
+    assert_eq!(Operator::parse("Drago"), None);
+}
+
+#[test]
+fn black_and_non_finite_pixels_stay_black() {
+    let px = vec![Vec3::ZERO, Vec3::splat(f32::NAN), grey(1.0)];
+    let out = Tonemap::DISPLAY.apply(&px);
+    assert_eq!(&out[..6], &[0; 6]);
+    assert!(out[6] > 0);
+}
+
+#[test]
+fn the_quantizer_table_agrees_with_the_formula() {
+    for gamma in [Gamma::Power(2.2), Gamma::Power(1.0), Gamma::Srgb] {
+        let q = Quantizer::new(gamma);
+        for i in 0..=200_000 {
+            let c = i as f32 / 200_000.0;
+            assert_eq!(q.code(c), to_byte(gamma.encode(c)), "{gamma:?} at {c}");
+        }
+        assert_eq!((q.code(-1.0), q.code(7.0), q.code(f32::NAN)), (0, 255, 0));
+    }
+}
