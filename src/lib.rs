@@ -17,6 +17,7 @@ pub mod bench;
 pub mod conformance;
 pub mod geometry;
 pub mod image;
+pub mod light;
 pub mod math;
 pub mod noise;
 pub mod render;

@@ -153,6 +153,19 @@ impl Image {
             .then(|| Image::from_level(Level { width, height, texels: Texels::Ldr(texels) }, false))
     }
 
+    /// A linear float image from row-major RGB texels (tests and generated maps).
+    pub fn from_rgb32f(width: u32, height: u32, texels: Vec<[f32; 3]>) -> Option<Image> {
+        (width > 0 && height > 0 && texels.len() == (width * height) as usize)
+            .then(|| Image::from_level(Level { width, height, texels: Texels::Hdr(texels) }, true))
+    }
+
+    /// Level 0's texels, row-major, in the file's scale (an environment light
+    /// keeps its own copy to sample from).
+    pub fn texels(&self) -> Vec<Vec3> {
+        let l = &self.levels[0];
+        (0..l.height).flat_map(|y| (0..l.width).map(move |x| l.fetch(x, y))).collect()
+    }
+
     fn from_level(level: Level, hdr: bool) -> Image {
         Image { levels: vec![level], hdr }
     }
