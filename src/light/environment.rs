@@ -66,14 +66,14 @@ impl Environment {
         let texels = image.texels();
         if let Some(i) = texels.iter().position(|t| !t.is_finite() || t.min_element() < 0.0) {
             let kind = if texels[i].is_nan() {
-                "NaN"
+                "a NaN"
             } else if !texels[i].is_finite() {
-                "infinite"
+                "an infinite"
             } else {
-                "negative"
+                "a negative"
             };
             return Err(format!(
-                "the environment map has a {kind} texel at ({}, {}); radiance must be finite and not negative",
+                "the environment map has {kind} texel at ({}, {}); radiance must be finite and not negative",
                 i % width,
                 i / width
             ));
