@@ -342,6 +342,9 @@ pub struct ImageDesc {
     pub id: String,
     /// Resolved path.
     pub path: PathBuf,
+    /// Whether texels are display-encoded colours to raise to the power 2.2
+    /// (`degamma="true"` on the image or on a texture map reading it).
+    pub degamma: bool,
     /// Where.
     pub loc: Loc,
 }

@@ -175,6 +175,21 @@ impl Image {
         self.hdr
     }
 
+    /// Turns display-encoded texels linear (`degamma`): `c^2.2` per channel,
+    /// on the 0–1 scale for 8- and 16-bit images (their values stay 0–255).
+    /// Call before [`Image::build_mipmaps`].
+    pub fn degamma(&mut self) {
+        let scale = if self.hdr { 1.0 } else { 255.0 };
+        for level in &mut self.levels {
+            let linear: Vec<[f32; 3]> = (0..level.height)
+                .flat_map(|y| (0..level.width).map(move |x| (x, y)))
+                .map(|(x, y)| (level.fetch(x, y).max(Vec3::ZERO) / scale).powf(2.2) * scale)
+                .map(|c| c.to_array())
+                .collect();
+            level.texels = Texels::Hdr(linear);
+        }
+    }
+
     /// Width and height of level 0.
     pub fn size(&self) -> (u32, u32) {
         (self.levels[0].width, self.levels[0].height)

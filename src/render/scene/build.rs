@@ -207,6 +207,9 @@ fn build_textures(desc: &Description, opts: &BuildOptions) -> Result<Textures, S
                     .ok_or_else(|| SceneError::at(&desc.file, &d.loc, "internal error"));
             }
             let mut img = Image::load(&d.path).map_err(|e| SceneError::at(&desc.file, &d.loc, e))?;
+            if d.degamma {
+                img.degamma();
+            }
             if trilinear[i] {
                 img.build_mipmaps();
             }
