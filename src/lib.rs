@@ -19,6 +19,7 @@ pub mod film;
 pub mod fuzzing;
 pub mod geometry;
 pub mod image;
+pub mod light;
 pub mod math;
 pub mod noise;
 pub mod render;

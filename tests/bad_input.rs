@@ -139,6 +139,21 @@ const CASES: &[(&str, &[&str])] = &[
     ("obj_face_index_zero.obj", &["line 5", "vertex index 0", "from 1"]),
     ("obj_garbage.obj", &["line 6", "\"this\" is not an OBJ statement"]),
     ("obj_no_faces.obj", &["no faces"]),
+    // hw5 lights and HDR images.
+    ("env_map_missing.xml", &["Image[id=1]", "no_such_sky.exr", "no such file"]),
+    ("env_map_corrupt_exr.xml", &["Image[id=1]", "corrupt.exr", "cannot decode image"]),
+    ("env_map_corrupt_hdr.json", &["Image[id=1]", "corrupt.hdr", "cannot decode image"]),
+    ("env_map_nan.xml", &["SphericalDirectionalLight[id=1]", "nan_sky.exr", "a NaN texel at (1, 0)"]),
+    ("env_map_infinite.xml", &["SphericalDirectionalLight[id=1]", "infinite_sky.exr", "an infinite texel"]),
+    ("env_map_negative.json", &["SphericalDirectionalLight[id=1]", "negative_sky.exr", "a negative texel"]),
+    ("env_map_unknown_image.xml", &["SphericalDirectionalLight[id=1]/ImageId", "names no image"]),
+    (
+        "spot_falloff_larger_than_coverage.xml",
+        &["SpotLight[id=1]/FalloffAngle", "30", "larger than <CoverageAngle> 20"],
+    ),
+    ("spot_missing_coverage.json", &["SpotLight[id=1]", "missing its <CoverageAngle>"]),
+    ("directional_missing_radiance.xml", &["DirectionalLight[id=1]", "missing its <Radiance>"]),
+    ("directional_zero_direction.json", &["DirectionalLight[id=1]/Direction", "non-zero"]),
 ];
 
 /// A scene path that must not exist.

@@ -150,9 +150,18 @@ pub fn radiance(scene: &Scene, ray: &Ray, depth: u32, weight: f32, st: &mut Path
             st.travelled = before;
             (hit.t, c)
         }
-        None => (f32::INFINITY, scene.textures.background(st.screen).unwrap_or(scene.background)),
+        None => (f32::INFINITY, background(scene, ray, st)),
     };
     volumes::through_media(scene, ray, t, color, st)
+}
+
+/// What a ray that escapes sees: the environment map if there is one, else
+/// the background texture at the camera sample, else the background colour.
+fn background(scene: &Scene, ray: &Ray, st: &PathState) -> Vec3 {
+    match &scene.environment {
+        Some(env) => env.eval(ray.d.normalize()),
+        None => scene.textures.background(st.screen).unwrap_or(scene.background),
+    }
 }
 
 fn shade(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, weight: f32, st: &mut PathState) -> Vec3 {
@@ -239,8 +248,8 @@ fn shade(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, weight: f32, st: &mut 
     color
 }
 
-/// Ambient plus the light that reaches the hit directly from every point and
-/// area light, with shadow rays.
+/// Ambient plus the light that reaches the hit directly from every light,
+/// with shadow rays (see [`crate::light`] for what each light contributes).
 fn direct(scene: &Scene, m: &Material, hit: &Hit, ns: Vec3, ray: &Ray, st: &mut PathState) -> Vec3 {
     let mut color = m.ambient * scene.ambient;
     // The winding normals, not ones flipped towards the eye: see the module doc.
@@ -248,43 +257,23 @@ fn direct(scene: &Scene, m: &Material, hit: &Hit, ns: Vec3, ray: &Ray, st: &mut 
     let eps = scene.shadow_epsilon;
     let origin = hit.p + ng * eps;
     for light in &scene.lights {
-        let to_light = light.position - origin;
-        let d2 = to_light.length_squared();
-        let dist = d2.sqrt();
-        let l = to_light / dist;
-        let cos = n.dot(l);
-        if cos <= 0.0 {
+        let Some(ls) = light.sample(origin, hit.p, Some(n), &mut st.sampler) else { continue };
+        let cos = n.dot(ls.wi);
+        if cos <= 0.0 || ls.e == Vec3::ZERO {
             continue;
         }
-        // The shadow ray reaches a little past the light, so a light lying exactly
-        // on a surface (hw2 mirror_room puts one in the ceiling plane) is blocked
-        // by it consistently, as in the references, not by per-pixel rounding.
-        let tr = volumes::shadow(scene, &Ray::new(origin, l), dist + eps, st);
+        // A point source's shadow ray reaches a little past it, so a light
+        // lying exactly on a surface (hw2 mirror_room puts one in the ceiling
+        // plane) is blocked by it consistently, as in the references, not by
+        // per-pixel rounding. An area light's stops short of its own plane:
+        // it is an imaginary square, not geometry, and a surface it lies on
+        // must not shadow it.
+        let t_max = if ls.point_source { ls.dist + eps } else { ls.dist - eps };
+        let tr = volumes::shadow(scene, &Ray::new(origin, ls.wi), t_max, st);
         if tr == Vec3::ZERO {
             continue;
         }
-        let e = tr * light.intensity / (light.position - hit.p).length_squared();
-        color += blinn_phong(m, n, l, ray.d, cos) * e;
-    }
-    for light in &scene.area_lights {
-        let q = light.point(st.sampler.next_2d());
-        let to_light = q - origin;
-        let d2 = to_light.length_squared();
-        let dist = d2.sqrt();
-        let l = to_light / dist;
-        let cos = n.dot(l);
-        let cos_light = light.normal.dot(l).abs();
-        if cos <= 0.0 || cos_light == 0.0 {
-            continue;
-        }
-        // Stopping short of the light's own plane: it is an imaginary square,
-        // not geometry, and a surface it lies on must not shadow it.
-        let tr = volumes::shadow(scene, &Ray::new(origin, l), dist - eps, st);
-        if tr == Vec3::ZERO {
-            continue;
-        }
-        let e = tr * light.radiance * (light.area * cos_light / (q - hit.p).length_squared());
-        color += blinn_phong(m, n, l, ray.d, cos) * e;
+        color += blinn_phong(m, n, ls.wi, ray.d, cos) * (tr * ls.e);
     }
     color
 }

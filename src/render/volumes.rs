@@ -266,21 +266,9 @@ fn point(
         }
         inscatter += f * e;
     };
-    for pl in &scene.lights {
-        let to = pl.position - p;
-        let d2 = to.length_squared();
-        let dist = d2.sqrt();
-        light(to / dist, dist, pl.intensity / d2, st);
-    }
-    for al in &scene.area_lights {
-        let q = al.point(st.sampler.next_2d());
-        let to = q - p;
-        let d2 = to.length_squared();
-        let dist = d2.sqrt();
-        let l = to / dist;
-        let cos_light = al.normal.dot(l).abs();
-        if cos_light > 0.0 {
-            light(l, dist, al.radiance * (al.area * cos_light / d2), st);
+    for l in &scene.lights {
+        if let Some(ls) = l.sample(p, p, None, &mut st.sampler) {
+            light(ls.wi, ls.dist, ls.e, st);
         }
     }
     if st.error.is_some() {

@@ -31,6 +31,12 @@ pub struct Description {
     pub point_lights: Vec<PointLightDesc>,
     /// Square area lights.
     pub area_lights: Vec<AreaLightDesc>,
+    /// Directional lights (hw5).
+    pub directional_lights: Vec<DirectionalLightDesc>,
+    /// Spot lights (hw5).
+    pub spot_lights: Vec<SpotLightDesc>,
+    /// The environment light (`SphericalDirectionalLight`, hw5), if any.
+    pub environment_light: Option<EnvironmentLightDesc>,
     /// Materials, referenced by index from objects.
     pub materials: Vec<MaterialDesc>,
     /// Shared vertex positions (the course's 1-based `VertexData`).
@@ -123,6 +129,67 @@ pub struct AreaLightDesc {
     pub size: f32,
     /// RGB radiance.
     pub radiance: Vec3,
+    /// Where.
+    pub loc: Loc,
+}
+
+/// A directional light: parallel rays of one radiance, no attenuation.
+#[derive(Clone, Debug)]
+pub struct DirectionalLightDesc {
+    /// Unit direction the light travels in.
+    pub direction: Vec3,
+    /// RGB radiance.
+    pub radiance: Vec3,
+    /// Where.
+    pub loc: Loc,
+}
+
+/// A spot light: a point light limited to a cone, with a smooth edge.
+#[derive(Clone, Debug)]
+pub struct SpotLightDesc {
+    /// Position.
+    pub position: Vec3,
+    /// Unit direction of the cone's axis.
+    pub direction: Vec3,
+    /// RGB intensity (irradiance `I / d²` inside the fall-off cone).
+    pub intensity: Vec3,
+    /// Full opening angle of the lit cone, degrees.
+    pub coverage_angle: f32,
+    /// Full opening angle of the cone without fall-off, degrees (at most `coverage_angle`).
+    pub falloff_angle: f32,
+    /// Where.
+    pub loc: Loc,
+}
+
+/// How an environment image wraps around the sphere of directions.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EnvMapping {
+    /// Latitude-longitude (equirectangular), `type="latlong"`.
+    LatLong,
+    /// Debevec's angular map (light probe), `type="probe"`.
+    Probe,
+}
+
+/// How the environment light picks directions for direct lighting.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EnvSampling {
+    /// By the map's luminance (a 2D piecewise-constant distribution); the default.
+    Importance,
+    /// Uniformly over the hemisphere around the normal (hw5's scheme, `Sampler` `uniform`).
+    Uniform,
+    /// Cosine-weighted over the hemisphere around the normal (`Sampler` `cosine`).
+    Cosine,
+}
+
+/// The environment light: an image of radiance on the sphere at infinity.
+#[derive(Clone, Debug)]
+pub struct EnvironmentLightDesc {
+    /// Index into [`Description::images`].
+    pub image: usize,
+    /// How the image maps to directions.
+    pub mapping: EnvMapping,
+    /// How directions are sampled.
+    pub sampling: EnvSampling,
     /// Where.
     pub loc: Loc,
 }
@@ -278,6 +345,9 @@ pub struct ImageDesc {
     pub id: String,
     /// Resolved path.
     pub path: PathBuf,
+    /// Whether texels are display-encoded colours to raise to the power 2.2
+    /// (`degamma="true"` on the image or on a texture map reading it).
+    pub degamma: bool,
     /// Where.
     pub loc: Loc,
 }

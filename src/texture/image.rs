@@ -160,6 +160,19 @@ impl Image {
             .then(|| Image::from_level(Level { width, height, texels: Texels::Ldr(texels) }, false))
     }
 
+    /// A linear float image from row-major RGB texels (tests and generated maps).
+    pub fn from_rgb32f(width: u32, height: u32, texels: Vec<[f32; 3]>) -> Option<Image> {
+        (width > 0 && height > 0 && texels.len() == (width * height) as usize)
+            .then(|| Image::from_level(Level { width, height, texels: Texels::Hdr(texels) }, true))
+    }
+
+    /// Level 0's texels, row-major, in the file's scale (an environment light
+    /// keeps its own copy to sample from).
+    pub fn texels(&self) -> Vec<Vec3> {
+        let l = &self.levels[0];
+        (0..l.height).flat_map(|y| (0..l.width).map(move |x| l.fetch(x, y))).collect()
+    }
+
     fn from_level(level: Level, hdr: bool) -> Image {
         Image { levels: vec![level], hdr }
     }
@@ -167,6 +180,21 @@ impl Image {
     /// Whether texels are linear floats (so the default normalizer is 1, not 255).
     pub fn is_hdr(&self) -> bool {
         self.hdr
+    }
+
+    /// Turns display-encoded texels linear (`degamma`): `c^2.2` per channel,
+    /// on the 0–1 scale for 8- and 16-bit images (their values stay 0–255).
+    /// Call before [`Image::build_mipmaps`].
+    pub fn degamma(&mut self) {
+        let scale = if self.hdr { 1.0 } else { 255.0 };
+        for level in &mut self.levels {
+            let linear: Vec<[f32; 3]> = (0..level.height)
+                .flat_map(|y| (0..level.width).map(move |x| (x, y)))
+                .map(|(x, y)| (level.fetch(x, y).max(Vec3::ZERO) / scale).powf(2.2) * scale)
+                .map(|c| c.to_array())
+                .collect();
+            level.texels = Texels::Hdr(linear);
+        }
     }
 
     /// Width and height of level 0.

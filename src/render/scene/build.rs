@@ -5,13 +5,14 @@ use super::{Geom, Prim, Scene};
 use crate::accel::Bvh;
 use crate::geometry::mesh::{vertex_normals, welded_vertex_normals};
 use crate::geometry::{Ellipsoid, Mesh, Plane, Sphere};
+use crate::light::{AreaLight, Environment, Light, PointLight, SpotLight};
 use crate::math::{Aabb, Vec2};
 use crate::render::camera::Camera;
 use crate::scene::description::{Description, MeshSource, Shape};
 use crate::scene::ply::read_ply;
 use crate::scene::{SceneError, Warning};
 use crate::shader::ShaderImages;
-use crate::shading::{AreaLight, Material, PointLight};
+use crate::shading::Material;
 use crate::texture::{shader, Image, Textures};
 use crate::volume::Volumes;
 use rayon::prelude::*;
@@ -62,6 +63,8 @@ impl Scene {
         }
 
         let mut textures = build_textures(desc, opts)?;
+        let environment = build_environment(desc, &textures)?;
+        let lights = build_lights(desc, environment.as_ref());
         let images = shader_images(desc, &textures.images);
         let volumes = Volumes::build(desc, &mut textures, Some(images), opts.shader_timeout)?;
         let mut prims = Vec::new();
@@ -125,12 +128,8 @@ impl Scene {
             textures,
             volumes,
             materials: desc.materials.iter().map(Material::from_desc).collect(),
-            lights: desc
-                .point_lights
-                .iter()
-                .map(|l| PointLight { position: l.position, intensity: l.intensity })
-                .collect(),
-            area_lights: desc.area_lights.iter().map(AreaLight::from_desc).collect(),
+            lights,
+            environment,
             ambient: desc.ambient_light,
             background: desc.background,
             shadow_epsilon: desc.shadow_ray_epsilon,
@@ -140,6 +139,39 @@ impl Scene {
             warnings,
         })
     }
+}
+
+/// The environment light's map, checked and with its sampling distribution.
+fn build_environment(
+    desc: &Description,
+    textures: &Textures,
+) -> Result<Option<Arc<Environment>>, SceneError> {
+    let Some(e) = &desc.environment_light else { return Ok(None) };
+    let at = |msg: String| SceneError::at(&desc.file, &e.loc, msg);
+    let image = textures.images.get(e.image).ok_or_else(|| at("internal error: no such image".into()))?;
+    let path = desc.images.get(e.image).map(|i| i.path.display().to_string()).unwrap_or_default();
+    let env = Environment::new(image, e.mapping, e.sampling).map_err(|m| at(format!("{path}: {m}")))?;
+    Ok(Some(Arc::new(env)))
+}
+
+/// Every light in the order the integrator visits them: point lights,
+/// directional and spot lights (which draw no samples), area lights, then the
+/// environment, so scenes without the hw5 lights sample exactly as before.
+fn build_lights(desc: &Description, environment: Option<&Arc<Environment>>) -> Vec<Light> {
+    let mut lights: Vec<Light> = desc
+        .point_lights
+        .iter()
+        .map(|l| Light::Point(PointLight { position: l.position, intensity: l.intensity }))
+        .collect();
+    lights.extend(
+        desc.directional_lights
+            .iter()
+            .map(|d| Light::Directional { direction: d.direction, radiance: d.radiance }),
+    );
+    lights.extend(desc.spot_lights.iter().map(|s| Light::Spot(SpotLight::from_desc(s))));
+    lights.extend(desc.area_lights.iter().map(|a| Light::Area(AreaLight::from_desc(a))));
+    lights.extend(environment.map(|e| Light::Environment(Arc::clone(e))));
+    lights
 }
 
 /// The last segment of an element path: `Scene/Objects/Sphere[id=2]` gives
@@ -166,6 +198,7 @@ fn build_textures(desc: &Description, opts: &BuildOptions) -> Result<Textures, S
     let used: Vec<bool> = (0..desc.images.len())
         .map(|i| {
             any_shader
+                || desc.environment_light.as_ref().is_some_and(|e| e.image == i)
                 || desc
                     .texture_maps
                     .iter()
@@ -183,6 +216,9 @@ fn build_textures(desc: &Description, opts: &BuildOptions) -> Result<Textures, S
                     .ok_or_else(|| SceneError::at(&desc.file, &d.loc, "internal error"));
             }
             let mut img = Image::load(&d.path).map_err(|e| SceneError::at(&desc.file, &d.loc, e))?;
+            if d.degamma {
+                img.degamma();
+            }
             if trilinear[i] {
                 img.build_mipmaps();
             }

@@ -12,12 +12,14 @@
 
 use crate::accel::{Bvh, TriHit};
 use crate::geometry::{Ellipsoid, Mesh, Plane, Sphere};
+use crate::light::{Environment, Light};
 use crate::math::{Ray, Transform, Vec2, Vec3};
 use crate::render::camera::Camera;
 use crate::scene::Warning;
-use crate::shading::{AreaLight, Material, PointLight};
+use crate::shading::Material;
 use crate::texture::{TexFrame, TexList, Textures};
 use crate::volume::Volumes;
+use std::sync::Arc;
 
 mod build;
 pub use build::BuildOptions;
@@ -130,10 +132,11 @@ pub struct Scene {
     pub volumes: Volumes,
     /// Materials.
     pub materials: Vec<Material>,
-    /// Point lights.
-    pub lights: Vec<PointLight>,
-    /// Area lights.
-    pub area_lights: Vec<AreaLight>,
+    /// Lights for direct lighting: point, directional, spot, area, then the
+    /// environment (this order fixes which sampler dimensions each uses).
+    pub lights: Vec<Light>,
+    /// The environment map, which rays that escape see.
+    pub environment: Option<Arc<Environment>>,
     /// Ambient light.
     pub ambient: Vec3,
     /// Colour of rays that miss.

@@ -10,7 +10,12 @@
 //! | `AbsorptionCoefficient` | dielectric Beer's-law RGB coefficient | 0 |
 //! | `AbsorptionIndex` | a conductor's imaginary part | 0 |
 //! | `Roughness` | glossy spread of mirror, conductor and dielectric rays | 0 |
-//! | `degamma` attribute (`_degamma`) | `true`: the three Blinn-Phong reflectances are sRGB-looking values, raised to the power 2.2 (hw5) | false |
+//! | `degamma` attribute (`_degamma`) | the four reflectance colours are raised to the power 2.2 | false |
+//!
+//! `degamma="true"` (hw5 `cube_point_hdr`: "read these values by applying
+//! degamma transform") says the colours were picked on a display and turns
+//! them linear: `c^2.2` per channel. The course's `.exr` shows it: that
+//! cube's red-to-green ratio is 3.105 = (0.651/0.389)^2.2, not 1.674.
 //!
 //! Only `type="mirror"` (or conductor) makes `MirrorReflectance` reflect: the
 //! course's scenes give plain materials a mirror reflectance that their
@@ -21,6 +26,9 @@ use crate::math::Vec3;
 use crate::scene::description::{MaterialDesc, MaterialKind};
 use crate::scene::element::{Element, Reader};
 use crate::scene::error::SceneError;
+
+/// The exponent of `degamma="true"`.
+pub const DEGAMMA: f32 = 2.2;
 
 /// Reads every material.
 pub fn read_all(r: &Reader, ms: &Element, w: &mut Warnings) -> Result<Vec<MaterialDesc>, SceneError> {
@@ -74,19 +82,18 @@ fn read(r: &Reader, m: &Element, w: &mut Warnings) -> Result<MaterialDesc, Scene
     if absorption_coefficient.min_element() < 0.0 {
         return Err(r.err(m, "<AbsorptionCoefficient> must not be negative"));
     }
-    // hw5's cube_point_hdr: "Read these values by applying degamma transform".
     let degamma = r.bool_attr(m, "degamma", false)?;
-    let reflectance = |name: &str| -> Result<Vec3, SceneError> {
-        let v = r.vec3_or(m, name, Vec3::ZERO)?;
-        Ok(if degamma { v.max(Vec3::ZERO).powf(2.2) } else { v })
+    let colour = |name: &str| -> Result<Vec3, SceneError> {
+        let c = r.vec3_or(m, name, Vec3::ZERO)?;
+        Ok(if degamma { c.max(Vec3::ZERO).powf(DEGAMMA) } else { c })
     };
     Ok(MaterialDesc {
         id: id.to_string(),
         kind,
-        ambient: reflectance("AmbientReflectance")?,
-        diffuse: reflectance("DiffuseReflectance")?,
-        specular: reflectance("SpecularReflectance")?,
-        mirror,
+        ambient: colour("AmbientReflectance")?,
+        diffuse: colour("DiffuseReflectance")?,
+        specular: colour("SpecularReflectance")?,
+        mirror: if degamma { mirror.max(Vec3::ZERO).powf(DEGAMMA) } else { mirror },
         phong_exponent: r.float_or(m, "PhongExponent", 1.0)?,
         refraction_index,
         absorption_coefficient,

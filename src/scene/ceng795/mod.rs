@@ -10,7 +10,7 @@
 //! | `ShadowRayEpsilon` | offset of secondary ray origins | 1e-3 |
 //! | `IntersectionTestEpsilon` | intersection tolerance | 1e-6 |
 //! | `Cameras/Camera` | see [`camera`] | required |
-//! | `Lights/AmbientLight`, `Lights/PointLight` | see [`lights`] | none |
+//! | `Lights` (ambient, point, area, directional, spot, environment) | see [`lights`] | none |
 //! | `Materials/Material` | see [`material`] | |
 //! | `Transformations`, `VertexData`, `Objects` | see [`objects`] (and [`obj_file`] for OBJ meshes) | |
 //! | `Textures`, `TexCoordData` | see [`textures`] | none |
@@ -117,10 +117,6 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
     if cameras.is_empty() {
         return Err(r.err(root, "the scene has no <Camera>, so there is no image to render"));
     }
-    let (ambient_light, point_lights, area_lights) = match root.child("Lights") {
-        Some(l) => lights::read_all(&r, l, &mut w)?,
-        None => (Vec3::ZERO, Vec::new(), Vec::new()),
-    };
     let mut materials = match root.child("Materials") {
         Some(m) => material::read_all(&r, m, &mut w)?,
         None => Vec::new(),
@@ -143,6 +139,11 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
     let (mut images, mut texture_maps) = match root.child("Textures") {
         Some(t) => textures::read_all(&r, t, &base_dir, &mut w)?,
         None => (Vec::new(), Vec::new()),
+    };
+    // After the images: an environment light names one.
+    let lights = match root.child("Lights") {
+        Some(l) => lights::read_all(&r, l, &images, &mut w)?,
+        None => lights::Lights::default(),
     };
     let texture_ids: HashMap<&str, usize> =
         texture_maps.iter().enumerate().rev().map(|(i, m)| (m.id.as_str(), i)).collect();
@@ -192,9 +193,12 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
         shadow_ray_epsilon,
         intersection_test_epsilon,
         cameras,
-        ambient_light,
-        point_lights,
-        area_lights,
+        ambient_light: lights.ambient,
+        point_lights: lights.points,
+        area_lights: lights.areas,
+        directional_lights: lights.directionals,
+        spot_lights: lights.spots,
+        environment_light: lights.environment,
         materials,
         vertices,
         tex_coords,

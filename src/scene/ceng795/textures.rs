@@ -3,6 +3,7 @@
 //! | element | reads | default |
 //! |---|---|---|
 //! | `Images/Image id` | a path relative to the scene file | required |
+//! | `degamma` attribute (`_degamma`) on an `Image` or an image `TextureMap` | the image's texels are display-encoded: each is raised to the power 2.2 (on the 0–1 scale for 8- and 16-bit images) | false |
 //! | `TextureMap id type` | `type` is `image`, `perlin`, `checkerboard` or `shader` (luster's extension, see [`super::shader_map`]) | required |
 //! | `DecalMode` | `replace_kd`, `blend_kd`, `replace_ks`, `replace_background`, `replace_normal`, `bump_normal`, `replace_all`, and luster's `replace_km` (mirror reflectance) | required |
 //! | `ImageId` | (image) the `Image` read | required |
@@ -59,18 +60,26 @@ pub fn read_all(
             if path.is_empty() {
                 return Err(r.err(im, "<Image> names no file"));
             }
-            images.push(ImageDesc { id: id_of(im), path: base_dir.join(path), loc: im.loc.clone() });
+            let degamma = r.bool_attr(im, "degamma", false)?;
+            images.push(ImageDesc { id: id_of(im), path: base_dir.join(path), degamma, loc: im.loc.clone() });
         }
     }
     let image_ids: HashMap<&str, usize> =
         images.iter().enumerate().rev().map(|(i, im)| (im.id.as_str(), i)).collect();
     let mut maps: Vec<TextureMapDesc> = Vec::new();
+    let mut degamma = Vec::new();
     for tm in el.children_named("TextureMap") {
         let m = texture_map(r, tm, &image_ids, base_dir, w)?;
         if m.decal == DecalMode::ReplaceBackground && maps.iter().any(|o| o.decal == m.decal) {
             return Err(r.err(tm, "a second texture map replaces the background; only one may"));
         }
+        if let (true, TextureSource::Image { image, .. }) = (r.bool_attr(tm, "degamma", false)?, &m.source) {
+            degamma.push(*image);
+        }
         maps.push(m);
+    }
+    for i in degamma {
+        images[i].degamma = true;
     }
     Ok((images, maps))
 }
