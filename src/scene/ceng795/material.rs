@@ -10,6 +10,7 @@
 //! | `AbsorptionCoefficient` | dielectric Beer's-law RGB coefficient | 0 |
 //! | `AbsorptionIndex` | a conductor's imaginary part | 0 |
 //! | `Roughness` | glossy spread of mirror, conductor and dielectric rays | 0 |
+//! | `BRDF` attribute | id of a [`brdf`](super::brdf) entry replacing Blinn-Phong | none |
 //!
 //! Only `type="mirror"` (or conductor) makes `MirrorReflectance` reflect: the
 //! course's scenes give plain materials a mirror reflectance that their
@@ -17,16 +18,22 @@
 
 use super::Warnings;
 use crate::math::Vec3;
-use crate::scene::description::{MaterialDesc, MaterialKind};
+use crate::scene::description::{BrdfDesc, MaterialDesc, MaterialKind};
 use crate::scene::element::{Element, Reader};
 use crate::scene::error::SceneError;
+use std::collections::HashMap;
 
 /// Reads every material.
-pub fn read_all(r: &Reader, ms: &Element, w: &mut Warnings) -> Result<Vec<MaterialDesc>, SceneError> {
+pub fn read_all(
+    r: &Reader,
+    ms: &Element,
+    brdfs: &HashMap<String, BrdfDesc>,
+    w: &mut Warnings,
+) -> Result<Vec<MaterialDesc>, SceneError> {
     w.unknown_children(ms, &["Material"]);
     let mut out: Vec<MaterialDesc> = Vec::new();
     for m in ms.children_named("Material") {
-        let desc = read(r, m, w)?;
+        let desc = read(r, m, brdfs, w)?;
         if out.iter().any(|o| o.id == desc.id) {
             w.at(m, format!("material id {} is defined twice; the first definition is used", desc.id));
         }
@@ -35,7 +42,12 @@ pub fn read_all(r: &Reader, ms: &Element, w: &mut Warnings) -> Result<Vec<Materi
     Ok(out)
 }
 
-fn read(r: &Reader, m: &Element, w: &mut Warnings) -> Result<MaterialDesc, SceneError> {
+fn read(
+    r: &Reader,
+    m: &Element,
+    brdfs: &HashMap<String, BrdfDesc>,
+    w: &mut Warnings,
+) -> Result<MaterialDesc, SceneError> {
     w.unknown_children(
         m,
         &[
@@ -70,6 +82,13 @@ fn read(r: &Reader, m: &Element, w: &mut Warnings) -> Result<MaterialDesc, Scene
         return Err(r.err(m, format!("<RefractionIndex> must be positive, found {refraction_index}")));
     }
     let absorption_coefficient = r.vec3_or(m, "AbsorptionCoefficient", Vec3::ZERO)?;
+    let brdf = match m.attr("BRDF").map(str::trim) {
+        None => None,
+        Some(b) => match brdfs.get(b) {
+            Some(desc) => Some(desc.clone()),
+            None => return Err(r.err(m, format!("material {id} names BRDF \"{b}\", which <BRDFs> does not define"))),
+        },
+    };
     if absorption_coefficient.min_element() < 0.0 {
         return Err(r.err(m, "<AbsorptionCoefficient> must not be negative"));
     }
@@ -85,6 +104,7 @@ fn read(r: &Reader, m: &Element, w: &mut Warnings) -> Result<MaterialDesc, Scene
         absorption_coefficient,
         absorption_index: r.float_or(m, "AbsorptionIndex", 0.0)?,
         roughness: non_negative_roughness(r, m)?,
+        brdf,
         loc: m.loc.clone(),
     })
 }
