@@ -13,7 +13,9 @@
 //! The original Blinn-Phong is the course's default shading (hw1–hw5),
 //! `kd cos θi + ks cos^p α_h` once multiplied by `cos θi`.
 
-use super::sampling::{half_vector_pdf, power_cosine, power_cosine_about, power_cosine_pdf, reflect_about, reflect_z};
+use super::sampling::{
+    half_vector_pdf, power_cosine, power_cosine_about, power_cosine_pdf, reflect_about, reflect_z,
+};
 use crate::math::Vec3;
 use std::f32::consts::{FRAC_1_PI, PI};
 

@@ -41,7 +41,9 @@ pub fn read_all(r: &Reader, bs: &Element, w: &mut Warnings) -> Result<HashMap<St
 fn read(r: &Reader, b: &Element, w: &mut Warnings) -> Result<BrdfDesc, SceneError> {
     let Some(&(_, kind)) = KINDS.iter().find(|(name, _)| *name == b.name) else {
         let names: Vec<&str> = KINDS.iter().map(|(n, _)| *n).collect();
-        return Err(r.err(b, format!("<{}> is not a known BRDF (expected one of {})", b.name, names.join(", "))));
+        return Err(
+            r.err(b, format!("<{}> is not a known BRDF (expected one of {})", b.name, names.join(", ")))
+        );
     };
     w.unknown_children(b, &["Exponent"]);
     let Some(id) = b.attr("id").map(str::trim).filter(|s| !s.is_empty()) else {

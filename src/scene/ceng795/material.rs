@@ -86,7 +86,11 @@ fn read(
         None => None,
         Some(b) => match brdfs.get(b) {
             Some(desc) => Some(desc.clone()),
-            None => return Err(r.err(m, format!("material {id} names BRDF \"{b}\", which <BRDFs> does not define"))),
+            None => {
+                return Err(
+                    r.err(m, format!("material {id} names BRDF \"{b}\", which <BRDFs> does not define"))
+                )
+            }
         },
     };
     if absorption_coefficient.min_element() < 0.0 {
