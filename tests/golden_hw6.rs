@@ -122,8 +122,11 @@ const JSON: &str = r#"{"Scene": {
   "Objects": {"Sphere": {"_id": "1", "Material": "1", "Center": "1", "Radius": "1"}}
 }}"#;
 
-/// (kind, exponent, normalized, kdfresnel) of each material's BRDF.
-fn brdfs(d: &Description) -> Vec<Option<(BrdfKind, Option<f32>, bool, bool)>> {
+/// (kind, exponent, normalized, kdfresnel) of a BRDF.
+type Read = (BrdfKind, Option<f32>, bool, bool);
+
+/// What each material's BRDF was read as.
+fn brdfs(d: &Description) -> Vec<Option<Read>> {
     d.materials
         .iter()
         .map(|m| m.brdf.as_ref().map(|b| (b.kind, b.exponent, b.normalized, b.kd_fresnel)))
