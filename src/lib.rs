@@ -14,6 +14,7 @@
 
 pub mod accel;
 pub mod bench;
+pub mod bsdf;
 pub mod conformance;
 pub mod film;
 pub mod fuzzing;

@@ -40,6 +40,9 @@ const CASES: &[(&str, &[&str])] = &[
     ("nearplane_three_numbers.json", &["<NearPlane>", "4 numbers", "found 3"]),
     // References.
     ("unknown_material.xml", &["material \"7\"", "not defined"]),
+    ("brdf_unknown_id.xml", &["Material[id=1]", "BRDF \"4\"", "does not define"]),
+    ("brdf_unknown_type.xml", &["<CookTorrance>", "not a known BRDF", "TorranceSparrow"]),
+    ("brdf_exponent_not_a_number.xml", &["<Exponent>", "\"fifty\"", "not a number"]),
     ("material_without_id.xml", &["<Material>", "no id"]),
     ("unknown_transformation.xml", &["\"t9\"", "not defined", "Transformations"]),
     ("unknown_base_mesh.xml", &["baseMeshId \"42\"", "MeshInstance[id=2]"]),

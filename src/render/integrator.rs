@@ -103,6 +103,7 @@ impl PathState {
     }
 }
 
+use crate::bsdf::Frame;
 use crate::math::{orthonormal_basis, Ray, Vec2, Vec3};
 use crate::render::sampler::PixelSampler;
 use crate::render::scene::{Hit, Scene};
@@ -273,9 +274,23 @@ fn direct(scene: &Scene, m: &Material, hit: &Hit, ns: Vec3, ray: &Ray, st: &mut 
         if tr == Vec3::ZERO {
             continue;
         }
-        color += blinn_phong(m, n, ls.wi, ray.d, cos) * (tr * ls.e);
+        color += reflectance(m, n, ls.wi, ray.d, cos) * (tr * ls.e);
     }
     color
+}
+
+/// What the surface sends towards a viewer along `-d` per unit irradiance
+/// arriving from `l` (`cos = n · l`, positive): `f(l, -d) cos` for a material
+/// with a BRDF, the course's Blinn-Phong otherwise.
+#[inline]
+fn reflectance(m: &Material, n: Vec3, l: Vec3, d: Vec3, cos: f32) -> Vec3 {
+    match &m.brdf {
+        None => blinn_phong(m, n, l, d, cos),
+        Some(brdf) => {
+            let frame = Frame::new(n);
+            brdf.eval(m.diffuse, m.specular, frame.to_local(l), frame.to_local(-d)) * cos
+        }
+    }
 }
 
 /// Diffuse plus Blinn-Phong specular reflectance towards `l` for a viewer

@@ -232,6 +232,40 @@ pub struct MaterialDesc {
     pub absorption_index: f32,
     /// Glossiness of mirrors and conductors: how far reflected rays stray (0: perfect).
     pub roughness: f32,
+    /// The reflection model named by `BRDF="id"`; the course's Blinn-Phong when absent.
+    pub brdf: Option<BrdfDesc>,
+    /// Where.
+    pub loc: Loc,
+}
+
+/// Which reflection model a `<BRDFs>` entry is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BrdfKind {
+    /// `OriginalPhong`.
+    OriginalPhong,
+    /// `ModifiedPhong`.
+    ModifiedPhong,
+    /// `OriginalBlinnPhong`.
+    OriginalBlinnPhong,
+    /// `ModifiedBlinnPhong`.
+    ModifiedBlinnPhong,
+    /// `TorranceSparrow`.
+    TorranceSparrow,
+}
+
+/// A `<BRDFs>` entry.
+#[derive(Clone, Debug)]
+pub struct BrdfDesc {
+    /// Its id.
+    pub id: String,
+    /// The model.
+    pub kind: BrdfKind,
+    /// `<Exponent>`; the material's `PhongExponent` when absent.
+    pub exponent: Option<f32>,
+    /// `normalized="true"` (modified Phong and Blinn-Phong).
+    pub normalized: bool,
+    /// `kdfresnel="true"` (Torrance-Sparrow): the diffuse term is weighted by `1 - F`.
+    pub kd_fresnel: bool,
     /// Where.
     pub loc: Loc,
 }

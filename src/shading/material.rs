@@ -1,6 +1,7 @@
 //! Render-side materials: the course's Blinn-Phong surface with an optional
 //! perfect-specular part (mirror, dielectric or conductor).
 
+use crate::bsdf::Brdf;
 use crate::math::Vec3;
 use crate::scene::description::{MaterialDesc, MaterialKind};
 
@@ -44,6 +45,8 @@ pub struct Material {
     pub kind: Specular,
     /// Glossy spread of mirror and conductor reflections (0: perfect).
     pub roughness: f32,
+    /// A reflection model replacing Blinn-Phong in direct lighting.
+    pub brdf: Option<Brdf>,
 }
 
 impl Default for Material {
@@ -57,6 +60,7 @@ impl Default for Material {
             mirror: Vec3::ZERO,
             kind: Specular::None,
             roughness: 0.0,
+            brdf: None,
         }
     }
 }
@@ -80,6 +84,10 @@ impl Material {
             mirror: d.mirror,
             kind,
             roughness: d.roughness,
+            brdf: d
+                .brdf
+                .as_ref()
+                .map(|b| Brdf::from_desc(b, d.phong_exponent, d.refraction_index, d.absorption_index)),
         }
     }
 }

@@ -16,6 +16,7 @@
 //! degamma transform") says the colours were picked on a display and turns
 //! them linear: `c^2.2` per channel. The course's `.exr` shows it: that
 //! cube's red-to-green ratio is 3.105 = (0.651/0.389)^2.2, not 1.674.
+//! | `BRDF` attribute | id of a [`brdf`](super::brdf) entry replacing Blinn-Phong | none |
 //!
 //! Only `type="mirror"` (or conductor) makes `MirrorReflectance` reflect: the
 //! course's scenes give plain materials a mirror reflectance that their
@@ -23,19 +24,25 @@
 
 use super::Warnings;
 use crate::math::Vec3;
-use crate::scene::description::{MaterialDesc, MaterialKind};
+use crate::scene::description::{BrdfDesc, MaterialDesc, MaterialKind};
 use crate::scene::element::{Element, Reader};
 use crate::scene::error::SceneError;
+use std::collections::HashMap;
 
 /// The exponent of `degamma="true"`.
 pub const DEGAMMA: f32 = 2.2;
 
 /// Reads every material.
-pub fn read_all(r: &Reader, ms: &Element, w: &mut Warnings) -> Result<Vec<MaterialDesc>, SceneError> {
+pub fn read_all(
+    r: &Reader,
+    ms: &Element,
+    brdfs: &HashMap<String, BrdfDesc>,
+    w: &mut Warnings,
+) -> Result<Vec<MaterialDesc>, SceneError> {
     w.unknown_children(ms, &["Material"]);
     let mut out: Vec<MaterialDesc> = Vec::new();
     for m in ms.children_named("Material") {
-        let desc = read(r, m, w)?;
+        let desc = read(r, m, brdfs, w)?;
         if out.iter().any(|o| o.id == desc.id) {
             w.at(m, format!("material id {} is defined twice; the first definition is used", desc.id));
         }
@@ -44,7 +51,12 @@ pub fn read_all(r: &Reader, ms: &Element, w: &mut Warnings) -> Result<Vec<Materi
     Ok(out)
 }
 
-fn read(r: &Reader, m: &Element, w: &mut Warnings) -> Result<MaterialDesc, SceneError> {
+fn read(
+    r: &Reader,
+    m: &Element,
+    brdfs: &HashMap<String, BrdfDesc>,
+    w: &mut Warnings,
+) -> Result<MaterialDesc, SceneError> {
     w.unknown_children(
         m,
         &[
@@ -79,6 +91,17 @@ fn read(r: &Reader, m: &Element, w: &mut Warnings) -> Result<MaterialDesc, Scene
         return Err(r.err(m, format!("<RefractionIndex> must be positive, found {refraction_index}")));
     }
     let absorption_coefficient = r.vec3_or(m, "AbsorptionCoefficient", Vec3::ZERO)?;
+    let brdf = match m.attr("BRDF").map(str::trim) {
+        None => None,
+        Some(b) => match brdfs.get(b) {
+            Some(desc) => Some(desc.clone()),
+            None => {
+                return Err(
+                    r.err(m, format!("material {id} names BRDF \"{b}\", which <BRDFs> does not define"))
+                )
+            }
+        },
+    };
     if absorption_coefficient.min_element() < 0.0 {
         return Err(r.err(m, "<AbsorptionCoefficient> must not be negative"));
     }
@@ -99,6 +122,7 @@ fn read(r: &Reader, m: &Element, w: &mut Warnings) -> Result<MaterialDesc, Scene
         absorption_coefficient,
         absorption_index: r.float_or(m, "AbsorptionIndex", 0.0)?,
         roughness: non_negative_roughness(r, m)?,
+        brdf,
         loc: m.loc.clone(),
     })
 }

@@ -11,6 +11,7 @@
 //! | `IntersectionTestEpsilon` | intersection tolerance | 1e-6 |
 //! | `Cameras/Camera` | see [`camera`] | required |
 //! | `Lights` (ambient, point, area, directional, spot, environment) | see [`lights`] | none |
+//! | `BRDFs` | reflection models materials name, see [`brdf`] | none |
 //! | `Materials/Material` | see [`material`] | |
 //! | `Transformations`, `VertexData`, `Objects` | see [`objects`] (and [`obj_file`] for OBJ meshes) | |
 //! | `Textures`, `TexCoordData` | see [`textures`] | none |
@@ -19,6 +20,7 @@
 //! Anything else gets a warning naming it, so a scene that relies on a feature
 //! luster lacks says so instead of rendering silently wrong.
 
+pub mod brdf;
 pub mod camera;
 pub mod lights;
 pub mod material;
@@ -78,6 +80,7 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
             "IntersectionTestEpsilon",
             "Cameras",
             "Lights",
+            "BRDFs",
             "Materials",
             "Transformations",
             "VertexData",
@@ -117,8 +120,12 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
     if cameras.is_empty() {
         return Err(r.err(root, "the scene has no <Camera>, so there is no image to render"));
     }
+    let brdfs = match root.child("BRDFs") {
+        Some(b) => brdf::read_all(&r, b, &mut w)?,
+        None => HashMap::new(),
+    };
     let mut materials = match root.child("Materials") {
-        Some(m) => material::read_all(&r, m, &mut w)?,
+        Some(m) => material::read_all(&r, m, &brdfs, &mut w)?,
         None => Vec::new(),
     };
     let material_ids: HashMap<&str, usize> =

@@ -260,6 +260,7 @@ pub fn material(
         absorption_coefficient: Vec3::ZERO,
         absorption_index: 0.0,
         roughness: 0.0,
+        brdf: None,
         loc: file.loc(m, "newmtl"),
     };
     let maps = super::maps::read(file, m, warnings)?;
@@ -280,6 +281,7 @@ pub fn default_material(loc: Loc) -> MaterialDesc {
         absorption_coefficient: Vec3::ZERO,
         absorption_index: 0.0,
         roughness: 0.0,
+        brdf: None,
         loc,
     }
 }

@@ -1,0 +1,157 @@
+//! BRDFs: the reflection models a material can name with `BRDF="id"` (hw6
+//! `<BRDFs>`), each able to evaluate `f(wi, wo)`, importance-sample an
+//! incoming direction and give that sample's density.
+//!
+//! Everything here works in a local shading frame whose `+z` is the surface
+//! normal; [`Frame`] moves directions in and out of it. `wi` points towards
+//! the light, `wo` towards the viewer, both unit length. The diffuse and
+//! specular colours come in per call, so textures and shaders that change a
+//! material's `kd`/`ks` at a point keep working.
+//!
+//! Sampling picks the diffuse part (cosine-weighted) or the specular lobe with
+//! probabilities proportional to the luminance of `kd` and `ks`, and
+//! [`Brdf::pdf`] is the matching mixture density.
+
+pub mod phong;
+pub mod sampling;
+pub mod torrance_sparrow;
+
+#[cfg(test)]
+mod tests;
+
+pub use phong::{Lobe, PhongFamily, Variant};
+pub use torrance_sparrow::TorranceSparrow;
+
+use crate::math::{orthonormal_basis, Vec3};
+use crate::scene::description::{BrdfDesc, BrdfKind};
+use sampling::{power_cosine, power_cosine_pdf};
+
+/// A reflection model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Brdf {
+    /// Phong or Blinn-Phong, original, modified or normalized.
+    Phong(PhongFamily),
+    /// Torrance-Sparrow microfacets.
+    TorranceSparrow(TorranceSparrow),
+}
+
+/// A direction drawn by [`Brdf::sample`].
+#[derive(Clone, Copy, Debug)]
+pub struct Sample {
+    /// The incoming direction, local frame.
+    pub wi: Vec3,
+    /// `f(wi, wo)`.
+    pub f: Vec3,
+    /// Density of `wi` per unit solid angle (the full mixture's).
+    pub pdf: f32,
+}
+
+impl Brdf {
+    /// The BRDF a description names, on a material whose Blinn-Phong exponent
+    /// (used when the BRDF gives none) and complex index of refraction are given.
+    pub fn from_desc(d: &BrdfDesc, phong_exponent: f32, eta: f32, k: f32) -> Brdf {
+        let exponent = d.exponent.unwrap_or(phong_exponent);
+        let variant = if d.normalized { Variant::Normalized } else { Variant::Modified };
+        match d.kind {
+            BrdfKind::OriginalPhong => {
+                Brdf::Phong(PhongFamily { lobe: Lobe::Phong, variant: Variant::Original, exponent })
+            }
+            BrdfKind::ModifiedPhong => Brdf::Phong(PhongFamily { lobe: Lobe::Phong, variant, exponent }),
+            BrdfKind::OriginalBlinnPhong => {
+                Brdf::Phong(PhongFamily { lobe: Lobe::BlinnPhong, variant: Variant::Original, exponent })
+            }
+            BrdfKind::ModifiedBlinnPhong => {
+                Brdf::Phong(PhongFamily { lobe: Lobe::BlinnPhong, variant, exponent })
+            }
+            BrdfKind::TorranceSparrow => {
+                Brdf::TorranceSparrow(TorranceSparrow { exponent, kd_fresnel: d.kd_fresnel, eta, k })
+            }
+        }
+    }
+
+    /// `f(wi, wo)`, local frame.
+    #[inline]
+    pub fn eval(&self, kd: Vec3, ks: Vec3, wi: Vec3, wo: Vec3) -> Vec3 {
+        match self {
+            Brdf::Phong(b) => b.eval(kd, ks, wi, wo),
+            Brdf::TorranceSparrow(b) => b.eval(kd, ks, wi, wo),
+        }
+    }
+
+    /// Draws `wi` for a viewer at `wo` from `choice` (picks the part) and `u`.
+    /// `None` when the drawn direction falls below the surface.
+    #[inline]
+    pub fn sample(&self, kd: Vec3, ks: Vec3, wo: Vec3, choice: f32, u: (f32, f32)) -> Option<Sample> {
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let wi = if choice < diffuse_probability(kd, ks) {
+            power_cosine(1.0, u)
+        } else {
+            match self {
+                Brdf::Phong(b) => b.sample_lobe(wo, u),
+                Brdf::TorranceSparrow(b) => b.sample_lobe(wo, u),
+            }
+        };
+        if wi.z <= 0.0 {
+            return None;
+        }
+        let pdf = self.pdf(kd, ks, wo, wi);
+        (pdf > 0.0).then(|| Sample { wi, f: self.eval(kd, ks, wi, wo), pdf })
+    }
+
+    /// Density of [`sample`](Self::sample) at `wi`.
+    #[inline]
+    pub fn pdf(&self, kd: Vec3, ks: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return 0.0;
+        }
+        let pd = diffuse_probability(kd, ks);
+        let lobe = match self {
+            Brdf::Phong(b) => b.lobe_pdf(wo, wi),
+            Brdf::TorranceSparrow(b) => b.lobe_pdf(wo, wi),
+        };
+        pd * power_cosine_pdf(1.0, wi.z) + (1.0 - pd) * lobe
+    }
+}
+
+/// Chance of sampling the diffuse part: its share of `kd + ks` by luminance.
+#[inline]
+fn diffuse_probability(kd: Vec3, ks: Vec3) -> f32 {
+    let w = Vec3::new(0.2126, 0.7152, 0.0722);
+    let (d, s) = (kd.max(Vec3::ZERO).dot(w), ks.max(Vec3::ZERO).dot(w));
+    if d + s <= 0.0 {
+        0.5
+    } else {
+        d / (d + s)
+    }
+}
+
+/// An orthonormal frame around a shading normal.
+#[derive(Clone, Copy, Debug)]
+pub struct Frame {
+    t: Vec3,
+    b: Vec3,
+    n: Vec3,
+}
+
+impl Frame {
+    /// The frame whose `+z` is the unit normal `n`.
+    #[inline]
+    pub fn new(n: Vec3) -> Frame {
+        let (t, b) = orthonormal_basis(n);
+        Frame { t, b, n }
+    }
+
+    /// A world direction in local coordinates.
+    #[inline]
+    pub fn to_local(&self, v: Vec3) -> Vec3 {
+        Vec3::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
+    }
+
+    /// A local direction in world coordinates.
+    #[inline]
+    pub fn to_world(&self, v: Vec3) -> Vec3 {
+        self.t * v.x + self.b * v.y + self.n * v.z
+    }
+}
