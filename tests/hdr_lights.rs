@@ -231,3 +231,37 @@ fn degamma_on_materials_and_images() {
     assert!((t[0].x - 255.0 * (128.0f32 / 255.0).powf(2.2)).abs() < 1e-3);
     assert!((t[0].y - 255.0).abs() < 1e-3 && t[0].z == 0.0);
 }
+
+/// hw5 `cube_directional` (XML and JSON) against the course's image: PSNR on
+/// 8-bit RGB ≥ 40 dB and mean LDR-FLIP ≤ 0.01, the golden tests' default bar
+/// (`luster::conformance::thresholds`). Measured: 53.4 dB.
+#[test]
+fn hw5_cube_directional_matches_expected_image() {
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes/ceng795");
+    if !root.is_dir() {
+        assert!(std::env::var("CI").as_deref() != Ok("true"), "{} is missing in CI", root.display());
+        eprintln!("skipped: {} is absent", root.display());
+        return;
+    }
+    let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("golden").join("hw5");
+    let _ = std::fs::create_dir_all(&out);
+    let cases: Vec<_> = luster::conformance::discover(&root)
+        .into_iter()
+        .filter(|c| c.hw == "hw5" && c.label().contains("cube_directional"))
+        .collect();
+    assert_eq!(cases.len(), 2, "cube_directional in XML and JSON");
+    for case in &cases {
+        let r = luster::conformance::run_case(case, &out);
+        assert!(r.error.is_none(), "{}: {:?}", case.label(), r.error);
+        for img in &r.images {
+            let c = img.comparison.as_ref().expect("an expected image to compare with");
+            assert!(
+                c.psnr >= 40.0 && c.flip <= 0.01,
+                "{}: PSNR {:.2} dB, FLIP {:.4}",
+                case.label(),
+                c.psnr,
+                c.flip
+            );
+        }
+    }
+}
