@@ -18,14 +18,7 @@ use std::path::PathBuf;
 
 #[test]
 fn hw6_scenes_match_expected_images() {
-    let Some(root) = course_root() else {
-        assert!(
-            std::env::var("CI").map_or(true, |v| v != "true"),
-            "../shared/scenes/ceng795 is absent: the hw6 golden images cannot be checked in CI"
-        );
-        eprintln!("skipped: ../shared/scenes/ceng795 is absent, so the hw6 golden images were not checked");
-        return;
-    };
+    let Some(root) = course_root("hw6") else { return };
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("golden").join("hw6");
     let _ = std::fs::create_dir_all(&out);
     let cases: Vec<_> = discover(&root).into_iter().filter(|c| c.hw == "hw6").collect();

@@ -210,10 +210,6 @@ pub struct CaseResult {
 /// What the loader says when a scene uses an element luster ignores.
 const UNSUPPORTED_WARNING: &str = " is not supported yet";
 
-/// What the loader says when an `ImageName` asks for an output format luster
-/// does not write.
-const UNSUPPORTED_OUTPUT: &str = "the formats luster writes";
-
 /// Loads, builds and renders `case` on the current rayon pool, writes each
 /// image and its heatmap under `outdir`, and compares with the expected images.
 pub fn run_case(case: &Case, outdir: &Path) -> CaseResult {
@@ -279,8 +275,7 @@ impl CaseResult {
     }
 
     /// The features of the scene that luster does not implement yet, as the
-    /// loader reported them: `<DirectionalLight>` for an ignored element,
-    /// `HDR output (.exr)` for an image format it cannot write. A scene that
+    /// loader reported them: `<Renderer>` for an ignored element. A scene that
     /// needs them cannot match its expected image, so the suite counts it
     /// apart from failures.
     pub fn unsupported(&self) -> Vec<String> {
@@ -295,9 +290,6 @@ impl CaseResult {
                     out.push(feature);
                 }
             }
-        }
-        if self.error.as_deref().is_some_and(|e| e.contains(UNSUPPORTED_OUTPUT) && e.contains(".exr")) {
-            out.push("HDR output (.exr)".to_string());
         }
         out
     }
@@ -497,12 +489,7 @@ mod tests {
             "a.xml: line 31, Scene/BRDFs: <BRDFs> inside <Scene> is not supported yet; ignored".into(),
             "a.xml: line 40: an unrelated warning".into(),
         ];
-        r.error = Some(
-            "a.xml: line 12, Scene/Cameras/Camera[id=1]/ImageName: <ImageName> \"x.exr\" must end in .png, \
-             .jpg, .jpeg, the formats luster writes"
-                .into(),
-        );
-        assert_eq!(r.unsupported(), ["<DirectionalLight>", "<BRDFs>", "HDR output (.exr)"]);
+        assert_eq!(r.unsupported(), ["<DirectionalLight>", "<BRDFs>"]);
     }
 
     #[test]

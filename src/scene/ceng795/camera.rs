@@ -4,7 +4,8 @@
 //! |---|---|
 //! | `Position`, `Up` | eye and up vector |
 //! | `Gaze` + `NearPlane` (l r b t) | the plain form |
-//! | `type="lookAt"`: `GazePoint` + `FovY` (degrees) | the look-at form; the horizontal extent follows the aspect ratio |
+//! | `type="lookAt"`: `GazePoint` (or a `Gaze` direction, as in 2022 files) + `FovY` (degrees) | the look-at form; the horizontal extent follows the aspect ratio |
+//! | `handedness` attribute | `right`, the default and the course's only kind; `left` is refused |
 //! | `NearDistance` | distance to the image plane |
 //! | `ImageResolution` | width height |
 //! | `ImageName` | output file name: a relative path without `..`, ending in one of [`OUTPUT_EXTENSIONS`]; `.exr`/`.hdr` also write a tone-mapped `.png` |
@@ -68,6 +69,15 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
             return Err(r.err(c, format!("camera type \"{other}\" is unknown (expected lookAt or none)")))
         }
     };
+    match c.attr("handedness").map(str::trim) {
+        None | Some("right") => {}
+        Some(other) => return Err(r.err(
+            c,
+            format!(
+                "camera handedness \"{other}\" is not supported (only the course's right-handed cameras are)"
+            ),
+        )),
+    }
     let known: &[&str] = &[
         "Position",
         "Gaze",
@@ -91,7 +101,21 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
         return Err(r.err(c, "the camera's <Up> vector is zero"));
     }
     let projection = if look_at {
-        let gaze_point = r.vec3(r.required(c, "GazePoint")?)?;
+        // The 2022 course files give look-at cameras a <Gaze> direction
+        // instead of a <GazePoint>; both name the same view.
+        let gaze_point = match (c.child("GazePoint"), c.child("Gaze")) {
+            (Some(gp), _) => r.vec3(gp)?,
+            (None, Some(g)) => {
+                let gaze = r.vec3(g)?;
+                if gaze.length_squared() == 0.0 {
+                    return Err(r.err(g, "the camera's <Gaze> vector is zero"));
+                }
+                position + gaze
+            }
+            (None, None) => {
+                return Err(r.err(c, "a lookAt camera needs a <GazePoint> (or a <Gaze> direction)"))
+            }
+        };
         let fy = r.required(c, "FovY")?;
         let fov_y = r.float(fy)?;
         if !(fov_y > 0.0 && fov_y < 180.0) {

@@ -27,7 +27,8 @@
 use super::{load, Additions, ObjModel};
 use crate::math::{Transform, Vec3};
 use crate::scene::description::{
-    CameraDesc, Description, MaterialDesc, MeshSource, ObjectDesc, PointLightDesc, Projection, Shape,
+    CameraDesc, DecalMode, Description, MaterialDesc, MeshSource, ObjectDesc, PointLightDesc, Projection,
+    Shape, TextureSource,
 };
 use crate::scene::error::{Loc, SceneError, Warning};
 use std::path::Path;
@@ -169,6 +170,18 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         });
     }
     let warnings: Vec<Warning> = model.warnings;
+    // The image is display-referred, so colour maps (sRGB-encoded as painted)
+    // are made linear first; height and normal maps hold data, not colour.
+    let mut images = add.images;
+    for map in &add.texture_maps {
+        if let TextureSource::Image { image, .. } = map.source {
+            if !matches!(map.decal, DecalMode::BumpNormal | DecalMode::ReplaceNormal) {
+                if let Some(img) = images.get_mut(image) {
+                    img.degamma = true;
+                }
+            }
+        }
+    }
     Ok(Description {
         file: path.to_path_buf(),
         base_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
@@ -186,7 +199,7 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         materials: add.materials,
         vertices: Vec::new(),
         tex_coords: Vec::new(),
-        images: add.images,
+        images,
         texture_maps: add.texture_maps,
         background_texture: None,
         objects,
