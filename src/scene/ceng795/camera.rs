@@ -71,12 +71,14 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
     };
     match c.attr("handedness").map(str::trim) {
         None | Some("right") => {}
-        Some(other) => return Err(r.err(
-            c,
-            format!(
+        Some(other) => {
+            return Err(r.err(
+                c,
+                format!(
                 "camera handedness \"{other}\" is not supported (only the course's right-handed cameras are)"
             ),
-        )),
+            ))
+        }
     }
     let known: &[&str] = &[
         "Position",
