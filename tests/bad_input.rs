@@ -10,11 +10,14 @@
 //! folder without a line in the table fails the test, so a scene that loads
 //! fine cannot pass unnoticed.
 
+mod common;
+
+use common::{run_limited, Run};
 use std::collections::BTreeSet;
-use std::io::Read;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
+use std::time::Duration;
 
 /// Scene (relative to the corpus folder) → substrings the error must contain,
 /// besides the scene's file name.
@@ -177,50 +180,12 @@ fn corpus() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests").join("bad_input")
 }
 
-struct Run {
-    code: Option<i32>,
-    stderr: String,
-}
-
 /// Runs `luster render -q -o OUT scene` from inside a fresh temporary folder,
 /// so a write that escapes OUT still lands where it can be seen.
 fn render(scene: &Path, root: &Path, out: &Path) -> Run {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_luster"))
-        .arg("render")
-        .arg("-q")
-        .arg("--threads")
-        .arg("2")
-        .arg("-o")
-        .arg(out)
-        .arg(scene)
-        .current_dir(root)
-        .env_remove("RUST_BACKTRACE")
-        .env_remove("RUST_LIB_BACKTRACE")
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("the luster binary starts");
-    let mut pipe = child.stderr.take().expect("stderr is piped");
-    let reader = std::thread::spawn(move || {
-        let mut bytes = Vec::new();
-        let _ = pipe.read_to_end(&mut bytes);
-        String::from_utf8_lossy(&bytes).into_owned()
-    });
-    let start = Instant::now();
-    let status = loop {
-        if let Some(status) = child.try_wait().expect("waiting for luster") {
-            break Some(status);
-        }
-        if start.elapsed() > TIMEOUT {
-            let _ = child.kill();
-            let _ = child.wait();
-            break None;
-        }
-        std::thread::sleep(Duration::from_millis(5));
-    };
-    let stderr = reader.join().unwrap_or_default();
-    Run { code: status.and_then(|s| s.code()), stderr }
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_luster"));
+    cmd.arg("render").arg("-q").arg("--threads").arg("2").arg("-o").arg(out).arg(scene).current_dir(root);
+    run_limited(cmd, TIMEOUT)
 }
 
 /// Every file and folder under `dir`, relative to it.

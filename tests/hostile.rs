@@ -12,15 +12,17 @@
 
 #[path = "hostile/cases.rs"]
 mod cases;
+mod common;
 #[path = "hostile/kit.rs"]
 mod kit;
 
 use cases::all_cases;
+use common::{run_limited, Run};
 use kit::{xml, Case};
-use std::io::Read;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
+use std::time::Duration;
 
 /// Longest a case may take; anything slower is a hang.
 const TIMEOUT: Duration = Duration::from_secs(30);
@@ -29,42 +31,11 @@ const TIMEOUT: Duration = Duration::from_secs(30);
 const CRASH_TEXT: &[&str] =
     &["panicked", "RUST_BACKTRACE", "stack overflow", "fatal runtime error", "memory allocation", "SIGSEGV"];
 
-struct Run {
-    code: Option<i32>,
-    stderr: String,
-}
-
 /// Runs `luster ARGS` in `dir`, killing it after [`TIMEOUT`].
 fn luster(args: &[String], dir: &Path) -> Run {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_luster"))
-        .args(args)
-        .current_dir(dir)
-        .env_remove("RUST_BACKTRACE")
-        .env_remove("RUST_LIB_BACKTRACE")
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("the luster binary starts");
-    let mut pipe = child.stderr.take().expect("stderr is piped");
-    let reader = std::thread::spawn(move || {
-        let mut bytes = Vec::new();
-        let _ = pipe.read_to_end(&mut bytes);
-        String::from_utf8_lossy(&bytes).into_owned()
-    });
-    let start = Instant::now();
-    let status = loop {
-        if let Some(status) = child.try_wait().expect("waiting for luster") {
-            break Some(status);
-        }
-        if start.elapsed() > TIMEOUT {
-            let _ = child.kill();
-            let _ = child.wait();
-            break None;
-        }
-        std::thread::sleep(Duration::from_millis(5));
-    };
-    Run { code: status.and_then(|s| s.code()), stderr: reader.join().unwrap_or_default() }
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_luster"));
+    cmd.args(args).current_dir(dir);
+    run_limited(cmd, TIMEOUT)
 }
 
 /// Every file under `dir`, relative to it.

@@ -32,3 +32,48 @@ pub fn folder(files: &[(&str, &str)]) -> tempfile::TempDir {
     }
     dir
 }
+
+/// How a run of the luster binary ended: its exit code (`None` when it was
+/// killed at the time limit or by a signal) and everything it wrote to stderr.
+#[allow(dead_code)] // only the command-line tests run the binary
+pub struct Run {
+    /// Exit code.
+    pub code: Option<i32>,
+    /// Standard error, lossily decoded.
+    pub stderr: String,
+}
+
+/// Runs `cmd` with no backtraces, stdin closed and stderr captured, killing
+/// it after `limit`, so a hang fails a test instead of stalling the suite.
+#[allow(dead_code)] // only the command-line tests run the binary
+pub fn run_limited(mut cmd: std::process::Command, limit: std::time::Duration) -> Run {
+    use std::io::Read;
+    use std::process::Stdio;
+    let mut child = cmd
+        .env_remove("RUST_BACKTRACE")
+        .env_remove("RUST_LIB_BACKTRACE")
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the luster binary starts");
+    let mut pipe = child.stderr.take().expect("stderr is piped");
+    let reader = std::thread::spawn(move || {
+        let mut bytes = Vec::new();
+        let _ = pipe.read_to_end(&mut bytes);
+        String::from_utf8_lossy(&bytes).into_owned()
+    });
+    let start = std::time::Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("waiting for luster") {
+            break Some(status);
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            break None;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    };
+    Run { code: status.and_then(|s| s.code()), stderr: reader.join().unwrap_or_default() }
+}
