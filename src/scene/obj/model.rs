@@ -27,8 +27,7 @@
 use super::{load, Additions, ObjModel};
 use crate::math::{Transform, Vec3};
 use crate::scene::description::{
-    CameraDesc, DecalMode, Description, MaterialDesc, MeshSource, ObjectDesc, PointLightDesc, Projection,
-    Shape, TextureSource,
+    CameraDesc, Description, MaterialDesc, MeshSource, ObjectDesc, PointLightDesc, Projection, Shape,
 };
 use crate::scene::error::{Loc, SceneError, Warning};
 use std::path::Path;
@@ -112,8 +111,9 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         near_distance: 1.0,
         resolution: (view.width, view.height),
         image_name: format!("{stem}.png"),
-        // Not a course scene: a display-referred image, as other renderers write.
-        tonemaps: vec![crate::film::Tonemap::DISPLAY],
+        // The course's clamp, like the example scenes: the framing lights and
+        // the shaders' colours are tuned as display values (see docs/hdr.md).
+        tonemaps: Vec::new(),
         num_samples: view.samples,
         aperture_size: 0.0,
         focus_distance: 1.0,
@@ -170,18 +170,6 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         });
     }
     let warnings: Vec<Warning> = model.warnings;
-    // The image is display-referred, so colour maps (sRGB-encoded as painted)
-    // are made linear first; height and normal maps hold data, not colour.
-    let mut images = add.images;
-    for map in &add.texture_maps {
-        if let TextureSource::Image { image, .. } = map.source {
-            if !matches!(map.decal, DecalMode::BumpNormal | DecalMode::ReplaceNormal) {
-                if let Some(img) = images.get_mut(image) {
-                    img.degamma = true;
-                }
-            }
-        }
-    }
     Ok(Description {
         file: path.to_path_buf(),
         base_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
@@ -199,7 +187,7 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         materials: add.materials,
         vertices: Vec::new(),
         tex_coords: Vec::new(),
-        images,
+        images: add.images,
         texture_maps: add.texture_maps,
         background_texture: None,
         objects,
