@@ -141,15 +141,9 @@ fn finite_or_zero(c: f32) -> f32 {
     }
 }
 
-/// Compares `test` against `reference`.
-///
-/// Fails when the sizes differ (the error names both), when a pixel buffer
-/// does not match its stated size, or when the images have no pixels.
-pub fn compare(
-    reference: &Rgb32Image,
-    test: &Rgb32Image,
-    opts: &CompareOptions,
-) -> Result<Comparison, ImageError> {
+/// Refuses a pair that cannot be compared: a buffer that does not match its
+/// stated size, two sizes, or no pixels.
+fn check_pair(reference: &Rgb32Image, test: &Rgb32Image) -> Result<(), ImageError> {
     reference.check_len()?;
     test.check_len()?;
     if (reference.width, reference.height) != (test.width, test.height) {
@@ -161,6 +155,19 @@ pub fn compare(
     if reference.is_empty() {
         return Err(ImageError::Empty { width: reference.width, height: reference.height });
     }
+    Ok(())
+}
+
+/// Compares `test` against `reference`.
+///
+/// Fails when the sizes differ (the error names both), when a pixel buffer
+/// does not match its stated size, or when the images have no pixels.
+pub fn compare(
+    reference: &Rgb32Image,
+    test: &Rgb32Image,
+    opts: &CompareOptions,
+) -> Result<Comparison, ImageError> {
+    check_pair(reference, test)?;
     let width = reference.width as usize;
 
     let (ref_display, test_display) =
@@ -256,17 +263,7 @@ pub struct RelativeError {
 /// Non-finite samples count as 0. A black reference gives an infinite
 /// relative MAE unless the test is black too (then 0).
 pub fn relative_error(reference: &Rgb32Image, test: &Rgb32Image) -> Result<RelativeError, ImageError> {
-    reference.check_len()?;
-    test.check_len()?;
-    if (reference.width, reference.height) != (test.width, test.height) {
-        return Err(ImageError::SizeMismatch {
-            reference: (reference.width, reference.height),
-            test: (test.width, test.height),
-        });
-    }
-    if reference.is_empty() {
-        return Err(ImageError::Empty { width: reference.width, height: reference.height });
-    }
+    check_pair(reference, test)?;
     let (abs, refsum, rel_sq) = reference
         .pixels
         .par_iter()

@@ -5,17 +5,7 @@ use super::*;
 use crate::light::Light;
 use crate::render::sampler::PixelSampler;
 
-/// SplitMix64 uniforms for the statistical tests.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
+use crate::light::test_rng::Rng;
 
 /// A sky-like map: a vertical gradient, a dark band, and one bright texel
 /// (the "sun"), so the distribution is far from uniform.

@@ -278,3 +278,20 @@ mod tests {
         assert!(s.dist.is_infinite());
     }
 }
+
+/// SplitMix64 uniforms shared by the light module's statistical tests.
+#[cfg(test)]
+pub(crate) mod test_rng {
+    /// The generator's state.
+    pub(crate) struct Rng(pub(crate) u64);
+    impl Rng {
+        /// The next uniform in [0, 1).
+        pub(crate) fn next(&mut self) -> f32 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+}
