@@ -12,6 +12,7 @@
 //! probabilities proportional to the luminance of `kd` and `ks`, and
 //! [`Brdf::pdf`] is the matching mixture density.
 
+pub mod fresnel;
 pub mod phong;
 pub mod sampling;
 pub mod torrance_sparrow;

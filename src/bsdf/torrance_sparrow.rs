@@ -11,8 +11,8 @@
 //! With `kdfresnel="true"` the diffuse term becomes `(1 - F) kd/π`.
 
 use super::sampling::{half_vector_pdf, power_cosine, power_cosine_pdf, reflect_about};
+use crate::bsdf::fresnel;
 use crate::math::Vec3;
-use crate::shading::fresnel;
 use std::f32::consts::{FRAC_1_PI, PI};
 
 /// A Torrance-Sparrow BRDF.

@@ -103,15 +103,15 @@ impl PathState {
     }
 }
 
+use crate::bsdf::fresnel;
 use crate::bsdf::Frame;
+use crate::material::Material;
+use crate::material::Specular;
 use crate::math::{orthonormal_basis, Ray, Vec2, Vec3};
 use crate::render::sampler::PixelSampler;
 use crate::render::scene::{Hit, Scene};
 use crate::render::volumes;
 use crate::shader::ShaderError;
-use crate::shading::fresnel;
-use crate::shading::material::Specular;
-use crate::shading::Material;
 use crate::texture::Applied;
 
 /// Ray counts, for the Mrays/s summary.

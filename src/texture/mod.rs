@@ -34,10 +34,10 @@ pub mod shader;
 pub use image::Image;
 pub use procedural::{Checkerboard, Perlin};
 
+use crate::material::Material;
 use crate::math::{Transform, Vec2, Vec3};
 use crate::scene::description::{DecalMode, Interpolation, TextureMapDesc, TextureSource};
 use crate::shader::{ShaderError, ShaderSet};
-use crate::shading::Material;
 use std::sync::Arc;
 
 /// Where a map's value comes from.
@@ -307,8 +307,8 @@ impl Textures {
                 DecalMode::ReplaceKs => m.specular = self.value(&map.texture, f, lod),
                 DecalMode::ReplaceKm => {
                     m.mirror = self.value(&map.texture, f, lod);
-                    if m.kind == crate::shading::material::Specular::None {
-                        m.kind = crate::shading::material::Specular::Mirror;
+                    if m.kind == crate::material::Specular::None {
+                        m.kind = crate::material::Specular::Mirror;
                     }
                 }
                 DecalMode::ReplaceAll => return Ok(Applied::Unlit(self.value(&map.texture, f, lod))),

@@ -18,13 +18,13 @@
 use std::time::Duration;
 
 use super::{bump, Image, TexFrame, TextureMap, Textures};
+use crate::material::Material;
+use crate::material::Specular;
 use crate::math::{Vec2, Vec3};
 use crate::scene::description::{DecalMode, ImageDesc, TextureMapDesc, TextureSource};
 use crate::shader::{
     ImageSampler, SampleFilter, ShadeInput, ShaderError, ShaderImages, ShaderSet, ShaderSource,
 };
-use crate::shading::material::Specular;
-use crate::shading::Material;
 use std::sync::Arc;
 
 /// A shader map the scene cannot use: which map and why.

@@ -136,7 +136,7 @@ fn flat_normal_map_texel_leaves_the_normal_unchanged() {
         bump_factor: 1.0,
     });
     let list = tex.add_list(&[0]);
-    let mut m = crate::shading::Material::default();
+    let mut m = crate::material::Material::default();
     let mut out = n;
     assert!(matches!(tex.apply(list, &f, &mut m, &mut out), Ok(Applied::Lit)));
     assert!((out - n).length() < 0.01, "{out}");
@@ -174,7 +174,7 @@ fn decal_modes_change_the_right_component() {
         });
     }
     let f = frame(Vec3::Z, Vec3::X, Vec3::Y, Vec2::new(0.5, 0.5));
-    let base = crate::shading::Material {
+    let base = crate::material::Material {
         diffuse: Vec3::splat(0.6),
         specular: Vec3::splat(0.1),
         ..Default::default()

@@ -13,10 +13,10 @@
 use crate::accel::{Bvh, TriHit};
 use crate::geometry::{Ellipsoid, Mesh, Plane, Sphere};
 use crate::light::{Environment, Light};
+use crate::material::Material;
 use crate::math::{Ray, Transform, Vec2, Vec3};
 use crate::render::camera::Camera;
 use crate::scene::Warning;
-use crate::shading::Material;
 use crate::texture::{TexFrame, TexList, Textures};
 use crate::volume::Volumes;
 use std::sync::Arc;
