@@ -18,8 +18,11 @@
 //!   differences 27.8 dB, derivatives per unit of `u` 30 dB or less.
 //! - For Perlin noise, `h` is a function of the position at rest (see
 //!   [`TexFrame::p_rest`]), so its gradient `g` is used directly: the
-//!   component of `g` along the surface tilts the world normal,
-//!   `n' = normalize(n − k (g − (g·n) n))`.
+//!   component of `g` along the surface tilts the normal,
+//!   `n' = normalize(n − k (g − (g·n) n))`, in the space the noise lives in
+//!   (object space on meshes: on hw4 `cube_perlin_bump`, scaled by 0.8, the
+//!   references' per-face contrast is within 9% of this on average, 16%
+//!   of the world-space gradient `M⁻ᵀ g`'s).
 //! - For a shader's `height(s)`, see [`height_bump`]: forward differences
 //!   along the surface's own tangents, three calls per point.
 
@@ -51,9 +54,15 @@ pub fn bump(tex: &Textures, map: &TextureMap, f: &TexFrame) -> Vec3 {
     match map.texture {
         Texture::Perlin(p) => {
             let (_, g) = p.value_grad(f.p_rest, true);
-            let n = f.normal_to_world(f.n);
+            // The gradient's space is the noise's: tilt the normal there.
+            let n = if f.rest_in_object { f.n } else { f.normal_to_world(f.n) };
             let along = g - n * g.dot(n);
-            (n - along * k).try_normalize().unwrap_or(n)
+            let bumped = (n - along * k).try_normalize().unwrap_or(n);
+            if f.rest_in_object {
+                f.normal_to_world(bumped)
+            } else {
+                bumped
+            }
         }
         Texture::Image { image, .. } => {
             let img = &tex.images[image as usize];

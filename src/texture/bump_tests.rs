@@ -13,6 +13,7 @@ fn frame(p: Vec3) -> TexFrame {
         p_world: p,
         time: 0.0,
         p_rest: p,
+        rest_in_object: false,
         dpdu,
         dpdv,
         n: dpdu.cross(dpdv).normalize(),

@@ -102,11 +102,17 @@ pub struct TexFrame {
     pub p_world: Vec3,
     /// The ray's shutter time, 0 to 1.
     pub time: f32,
-    /// The position at rest: in world space, but without the motion blur
-    /// translation, so procedural patterns move with their object. The
-    /// course evaluates Perlin noise and checkerboards here (hw4
-    /// `ellipsoids_texture`: the noise on a squashed sphere is not squashed).
+    /// Where Perlin noise is evaluated, a position that moves with its
+    /// object. The course's references pin it down per kind of object: for
+    /// spheres and ellipsoids the world position without the motion blur
+    /// translation (hw4 `ellipsoids_texture`: the noise on a squashed sphere
+    /// is not squashed); for meshes the object-space position (hw4
+    /// `cube_perlin`, `cube_perlin_bump`: on cubes scaled by 0.8 the
+    /// references' noise is 1.25 times finer than world-space noise).
     pub p_rest: Vec3,
+    /// Whether [`p_rest`](Self::p_rest) is in object space (meshes) rather
+    /// than world space: a Perlin bump then tilts the object-space normal.
+    pub rest_in_object: bool,
     /// Object-space ∂p/∂u.
     pub dpdu: Vec3,
     /// Object-space ∂p/∂v.

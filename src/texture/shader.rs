@@ -255,6 +255,7 @@ mod tests {
             p_world: Vec3::new(1.5, 0.0, 0.0),
             time: 0.5,
             p_rest: Vec3::new(1.5, 0.0, 0.0),
+            rest_in_object: false,
             dpdu: Vec3::X,
             dpdv: Vec3::Y,
             n: Vec3::Z,

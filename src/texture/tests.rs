@@ -12,6 +12,7 @@ fn frame(n: Vec3, dpdu: Vec3, dpdv: Vec3, uv: Vec2) -> TexFrame {
         p_world: Vec3::new(0.3, 0.2, 0.1),
         time: 0.0,
         p_rest: Vec3::new(0.3, 0.2, 0.1),
+        rest_in_object: false,
         dpdu,
         dpdv,
         n,

@@ -157,6 +157,7 @@ impl Bound {
             p_world: p,
             time,
             p_rest: p,
+            rest_in_object: false,
             dpdu: tangent(dpdu),
             dpdv: tangent(dpdv),
             n: n_local,

@@ -310,11 +310,26 @@ impl Scene {
             }
         };
         let to_world = prim.and_then(|p| p.xf.as_deref().copied());
+        // Noise lives in object space on meshes, in world space on spheres
+        // and ellipsoids (see `TexFrame::p_rest`).
+        let rest_in_object = matches!(hit.geom, HitGeom::Triangle { .. });
         let p_rest = match &to_world {
-            Some(xf) => xf.point(p_object),
-            None => p_object,
+            Some(xf) if !rest_in_object => xf.point(p_object),
+            _ => p_object,
         };
-        TexFrame { uv, p_object, p_world: hit.p, time, p_rest, dpdu, dpdv, n, to_world, footprint }
+        TexFrame {
+            uv,
+            p_object,
+            p_world: hit.p,
+            time,
+            p_rest,
+            rest_in_object,
+            dpdu,
+            dpdv,
+            n,
+            to_world,
+            footprint,
+        }
     }
 
     /// Whether anything lies on `ray` at `time` between the intersection
@@ -349,6 +364,7 @@ fn flat_frame(hit: &Hit, footprint: f32) -> TexFrame {
         p_world: hit.p,
         time: 0.0,
         p_rest: hit.p,
+        rest_in_object: false,
         dpdu,
         dpdv,
         n: hit.ns,
