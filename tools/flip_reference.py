@@ -1,12 +1,15 @@
 #!/usr/bin/env python3
-"""Mean LDR-FLIP of the image pairs in tests/fixtures/flip/, by NVIDIA's
+"""Mean FLIP of the image pairs in tests/fixtures/flip/, by NVIDIA's
 reference implementation (the `flip-evaluator` package from PyPI), printed as
-the table that tests/flip_reference.rs checks luster's LDR-FLIP against.
+the two tables that tests/flip_reference.rs checks luster's FLIP against:
+LDR-FLIP of the `*_ref.png` / `*_test.png` pairs, HDR-FLIP of the
+`*_ref.exr` / `*_test.exr` pairs.
 
     python3 -m venv /tmp/flipenv && /tmp/flipenv/bin/pip install flip-evaluator==1.7
     /tmp/flipenv/bin/python tools/flip_reference.py
 
-Defaults of both: LDR, sRGB inputs, 67 pixels per degree.
+Defaults of both: 67 pixels per degree; LDR inputs sRGB-encoded; HDR inputs
+linear, exposures and the ACES tone mapper chosen by FLIP.
 """
 import pathlib
 
@@ -14,8 +17,10 @@ import flip_evaluator as flip
 
 FIXTURES = pathlib.Path(__file__).resolve().parent.parent / "tests" / "fixtures" / "flip"
 
-for ref in sorted(FIXTURES.glob("*_ref.png")):
-    name = ref.name[: -len("_ref.png")]
-    test = ref.with_name(f"{name}_test.png")
-    _, mean, _ = flip.evaluate(str(ref), str(test), "LDR", applyMagma=False)
-    print(f'    ("{name}", {mean:.6f}),')
+for ext, mode in (("png", "LDR"), ("exr", "HDR")):
+    print(f"{mode}:")
+    for ref in sorted(FIXTURES.glob(f"*_ref.{ext}")):
+        name = ref.name[: -len(f"_ref.{ext}")]
+        test = ref.with_name(f"{name}_test.{ext}")
+        _, mean, _ = flip.evaluate(str(ref), str(test), mode, applyMagma=False)
+        print(f'    ("{name}", {mean:.6f}),')

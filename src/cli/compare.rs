@@ -64,16 +64,17 @@ pub fn run(args: &Args) -> ExitCode {
             say!("{:<10} {:.6} (mean (t − r)² / (r² + 0.01))", "rel. MSE", rel.mse);
         }
     }
+    let flip_name = if c.space == MetricSpace::Linear { "HDR-FLIP" } else { "LDR-FLIP" };
     if let Some(path) = &args.heatmap {
         match comparison_heatmap(&c, HeatmapSource::Flip).and_then(|h| write_heatmap(&h, path)) {
-            Ok(()) => say!("{:<10} {} (LDR-FLIP per pixel, magma colour map)", "heatmap", path.display()),
+            Ok(()) => say!("{:<10} {} ({flip_name} per pixel, magma colour map)", "heatmap", path.display()),
             Err(e) => return fail(e.to_string()),
         }
     }
     let mut unmet = Vec::new();
     if let Some(max) = args.max_error {
         if c.flip > max || c.flip.is_nan() {
-            unmet.push(format!("mean LDR-FLIP {:.4} is above --max-error {max}", c.flip));
+            unmet.push(format!("mean {flip_name} {:.4} is above --max-error {max}", c.flip));
         }
     }
     if let Some(min) = args.min_psnr {
@@ -111,7 +112,7 @@ fn print_comparison(args: &Args, reference: &Rgb32Image, test: &Rgb32Image, c: &
     let space = match c.space {
         MetricSpace::Display => "display values (sRGB-encoded, 0 to 1)".to_string(),
         MetricSpace::Linear => {
-            format!("linear light (both EXR/HDR; FLIP and SSIM after {:+} stops and clamping)", args.exposure)
+            format!("linear light (both EXR/HDR; HDR-FLIP; SSIM after {:+} stops and clamping)", args.exposure)
         }
     };
     say!("{:<10} {space}", "space");
@@ -121,7 +122,8 @@ fn print_comparison(args: &Args, reference: &Rgb32Image, test: &Rgb32Image, c: &
         say!("{:<10} {:.2} dB", "PSNR", c.psnr);
     }
     say!("{:<10} {:.4}", "SSIM", c.ssim);
-    say!("{:<10} {:.4} (mean LDR-FLIP, 0 = no visible difference)", "FLIP", c.flip);
+    let flip_name = if c.space == MetricSpace::Linear { "HDR-FLIP" } else { "LDR-FLIP" };
+    say!("{:<10} {:.4} (mean {flip_name}, 0 = no visible difference)", "FLIP", c.flip);
     let total = u64::from(c.width) * u64::from(c.height);
     say!(
         "{:<10} {} of {} pixels ({:.3}%) with an 8-bit channel differing by more than {}",

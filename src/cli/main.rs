@@ -88,7 +88,8 @@ enum Command {
     ///
     /// Reads PNG, JPEG, OpenEXR and Radiance HDR. FLIP is the mean LDR-FLIP
     /// error (Andersson et al., "FLIP: A Difference Evaluator for Alternating
-    /// Images", HPG 2020) in [0, 1]; 0 means no visible difference. PSNR is on
+    /// Images", HPG 2020) in [0, 1]; 0 means no visible difference; for two
+    /// EXR/HDR images it is HDR-FLIP (Andersson et al., EG 2021). PSNR is on
     /// display values with peak 1 (8-bit PSNR), or on linear light when both
     /// images are EXR/HDR. Exit code: 0 compared (and bounds met), 1 a bound
     /// given by --max-error or --min-psnr was not met, 2 an image could not be

@@ -9,22 +9,22 @@
 //! |---|---|---|---|
 //! | `mse`, `psnr`, `max_abs_diff`, `diff_map` | stored display values | linear values, unclamped | display values |
 //! | `ssim` | luma of display values | luma of display values | same |
-//! | `flip`, `flip_map` | LDR-FLIP on display values | LDR-FLIP after exposure + clamp | same |
+//! | `flip`, `flip_map` | LDR-FLIP on display values | HDR-FLIP on linear values | LDR-FLIP on display values |
 //! | `differing_pixels`, `diff_bbox` | 8-bit codes of display values | 8-bit codes of display values | same |
 //!
 //! "Display values" of a linear image are `srgb(clamp(2^exposure · v))` with
 //! [`CompareOptions::exposure`]; of an sRGB image, the stored values clamped to
 //! [0, 1]. PSNR on two linear images therefore measures error in linear light
 //! with peak 1, and can be negative where the images are brighter than 1.
-//! FLIP on linear images is LDR-FLIP of the exposed and clamped images, *not*
-//! HDR-FLIP (Andersson et al., EG 2021), which would sweep exposures through a
-//! tone mapper; highlights above 1 after exposure are therefore not compared.
+//! FLIP on two linear images is HDR-FLIP ([`super::hdr_flip`]: LDR-FLIP swept
+//! over the exposures the reference's luminance range calls for, through a
+//! tone mapper), so highlights above 1 are compared too; it does not depend on
+//! [`CompareOptions::exposure`].
 //!
 //! For two linear images, [`relative_error`] gives the HDR measures that do
 //! not depend on exposure: the relative mean absolute error
 //! `Σ|t − r| / Σ|r|` (over all channels of all pixels) and the relative MSE
-//! `mean((t − r)² / (r² + 0.01))` (Rousselle et al. 2011). No HDR-FLIP: no
-//! maintained Rust crate implements it (the `nv-flip` crate wraps LDR-FLIP).
+//! `mean((t − r)² / (r² + 0.01))` (Rousselle et al. 2011).
 //!
 //! PSNR is `10·log10(1 / MSE)` over all three channels of all pixels, i.e. the
 //! usual 8-bit PSNR with values scaled to [0, 1]; it is `+∞` when MSE is 0.
@@ -35,6 +35,7 @@ use rayon::prelude::*;
 use super::buffer::{quantize8, srgb_to_linear, Encoding, Rgb32Image};
 use super::error::ImageError;
 use super::flip::{ldr_flip_map, DEFAULT_PIXELS_PER_DEGREE};
+use super::hdr_flip::hdr_flip_map;
 use super::ssim::{luma, mean_ssim};
 
 /// Settings of a comparison.
@@ -81,9 +82,10 @@ pub struct Comparison {
     pub psnr: f64,
     /// Mean SSIM on luma (1 for identical images).
     pub ssim: f64,
-    /// Mean LDR-FLIP error in [0, 1] (0 for identical images).
+    /// Mean FLIP error in [0, 1] (0 for identical images): HDR-FLIP when
+    /// `space` is [`MetricSpace::Linear`], LDR-FLIP otherwise.
     pub flip: f64,
-    /// Per-pixel LDR-FLIP error, row-major.
+    /// Per-pixel FLIP error, row-major.
     pub flip_map: Vec<f32>,
     /// Per-pixel largest absolute channel difference, row-major.
     pub diff_map: Vec<f32>,
@@ -218,17 +220,24 @@ pub fn compare(
     let mse = stats.sum_sq / (3 * reference.len()) as f64;
     let psnr = if mse == 0.0 { f64::INFINITY } else { -10.0 * mse.log10() };
 
-    // SSIM on display luma; FLIP on display values decoded to linear.
+    // SSIM on display luma; LDR-FLIP on display values decoded to linear,
+    // HDR-FLIP on two linear images.
     let (ssim, flip_map) = rayon::join(
         || {
             let lx: Vec<f32> = ref_display.iter().map(|p| luma(*p)).collect();
             let ly: Vec<f32> = test_display.iter().map(|p| luma(*p)).collect();
             mean_ssim(&lx, &ly, width)
         },
-        || {
-            let lin =
-                |d: &[[f32; 3]]| -> Vec<[f32; 3]> { d.par_iter().map(|p| p.map(srgb_to_linear)).collect() };
-            ldr_flip_map(&lin(&ref_display), &lin(&test_display), width, opts.pixels_per_degree)
+        || match space {
+            MetricSpace::Linear => {
+                hdr_flip_map(&reference.pixels, &test.pixels, width, opts.pixels_per_degree)
+            }
+            MetricSpace::Display => {
+                let lin = |d: &[[f32; 3]]| -> Vec<[f32; 3]> {
+                    d.par_iter().map(|p| p.map(srgb_to_linear)).collect()
+                };
+                ldr_flip_map(&lin(&ref_display), &lin(&test_display), width, opts.pixels_per_degree)
+            }
         },
     );
     let flip = flip_map.iter().map(|&v| f64::from(v)).sum::<f64>() / flip_map.len() as f64;

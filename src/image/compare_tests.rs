@@ -196,14 +196,14 @@ fn linear_images_compare_in_linear_light() {
     // Only red differs, by 0.1: MSE = 0.01 / 3.
     assert!((c.mse - 0.01 / 3.0).abs() < 1e-7);
     assert!((c.max_abs_diff - 0.1).abs() < 1e-6);
-    // Red is clipped at exposure 0, so the display-referred metrics see nothing…
+    // Red is clipped at exposure 0, so the 8-bit counts see nothing…
     assert_eq!(c.differing_pixels, 0);
-    assert_eq!(c.flip, 0.0);
-    // …until the exposure brings it into range.
-    let darker = CompareOptions { exposure: -2.0, ..opts() };
-    let c = compare(&a, &b, &darker).unwrap();
-    assert_eq!(c.differing_pixels, 256);
+    // …but HDR-FLIP sweeps exposures and does.
     assert!(c.flip > 0.0);
+    let darker = CompareOptions { exposure: -2.0, ..opts() };
+    let d = compare(&a, &b, &darker).unwrap();
+    assert_eq!(d.differing_pixels, 256);
+    assert_eq!(d.flip, c.flip, "HDR-FLIP does not depend on the display exposure");
 
     // Mixed encodings compare display values.
     let srgb = flat(16, 16, 0.5);

@@ -6,7 +6,7 @@
 //! - [`compare`](mod@compare): PSNR/MSE, SSIM (Wang et al. 2004), LDR-FLIP
 //!   (Andersson et al. 2020) and pixel-exact statistics between a reference and
 //!   a test image — the core of `luster compare` and the golden-image tests.
-//! - [`flip`], [`ssim`](mod@ssim): the two perceptual metrics.
+//! - [`flip`], [`hdr_flip`], [`ssim`](mod@ssim): the perceptual metrics.
 //! - [`heatmap`](mod@heatmap): magma-coloured error maps for people to look at.
 //! - [`error`]: [`ImageError`], one sentence naming the file and the problem.
 
@@ -15,6 +15,7 @@ pub mod compare;
 pub mod error;
 mod filter;
 pub mod flip;
+pub mod hdr_flip;
 pub mod heatmap;
 pub mod output;
 pub mod ssim;
