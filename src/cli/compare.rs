@@ -112,7 +112,10 @@ fn print_comparison(args: &Args, reference: &Rgb32Image, test: &Rgb32Image, c: &
     let space = match c.space {
         MetricSpace::Display => "display values (sRGB-encoded, 0 to 1)".to_string(),
         MetricSpace::Linear => {
-            format!("linear light (both EXR/HDR; HDR-FLIP; SSIM after {:+} stops and clamping)", args.exposure)
+            format!(
+                "linear light (both EXR/HDR; HDR-FLIP; SSIM after {:+} stops and clamping)",
+                args.exposure
+            )
         }
     };
     say!("{:<10} {space}", "space");
