@@ -117,7 +117,8 @@ impl MeshAccel {
                 while m != 0 {
                     let i = m.trailing_zeros() as usize;
                     m &= m - 1;
-                    if !(h.t[i] < *t_max) || (cull != 0.0 && cull * b.triangle(i).normal().dot(ray.d) > 0.0) {
+                    // A lane's t passed `t > t_min`, so it is not NaN.
+                    if h.t[i] >= *t_max || (cull != 0.0 && cull * b.triangle(i).normal().dot(ray.d) > 0.0) {
                         continue;
                     }
                     *t_max = h.t[i];
