@@ -56,12 +56,13 @@ pub fn run(plys: &[PathBuf], threads: &[usize], reps: usize) -> anyhow::Result<(
         let accel = accel.context("no build ran")?;
         let bvh = accel.bvh();
         println!(
-            "   BVH build {:.1} ms (median of {BUILDS}; all cores); {} 4-wide nodes, depth {} (binary {}), {} leaves; accel {:.1} MiB",
+            "   BVH build {:.1} ms (median of {BUILDS}; all cores); {} 4-wide nodes, depth {} (binary {}), {} leaves, {} 4-triangle blocks; accel {:.1} MiB",
             median(&mut build_times) * 1e3,
             bvh.node_count(),
             bvh.depth(),
             bvh.binary_depth(),
             bvh.leaf_count(),
+            accel.block_count(),
             accel.memory_bytes() as f64 / (1 << 20) as f64
         );
 

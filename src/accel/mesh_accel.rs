@@ -1,12 +1,14 @@
-//! The triangle-mesh accelerator: a [`Bvh`] over a mesh's triangles with the
-//! triangles copied out in leaf order.
+//! The triangle-mesh accelerator: a [`Bvh`] over a mesh's triangles with
+//! each leaf's triangles copied into SIMD blocks of four ([`TriBlock`]).
 //!
-//! Copying the three vertices of every triangle (40 bytes with its index)
-//! instead of following `triangles[i]` into `positions` costs some memory but
-//! makes a leaf one contiguous run of memory: the traversal touches a node,
-//! then a few adjacent triangles, and never chases an index. The original
-//! triangle index travels along so a hit can be shaded with the mesh's own
-//! normals and texture coordinates.
+//! The tree is built with the SAH counting a leaf's cost in blocks, so leaves
+//! hold 4 or 8 triangles and few lanes sit idle; one block test costs about
+//! as much as one scalar triangle test. Copying the vertices (160 bytes per
+//! block) instead of following `triangles[i]` into `positions` makes a leaf
+//! one contiguous run of memory: the traversal touches a node, then one or
+//! two adjacent blocks, and never chases an index. The original triangle
+//! index travels along so a hit can be shaded with the mesh's own normals
+//! and texture coordinates.
 //!
 //! Triangles with zero area, a non-finite vertex or a vertex index out of
 //! range are dropped at build time: they can never be hit, and leaving them
@@ -16,6 +18,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::bvh::Bvh;
+use super::tri_block::TriBlock;
 use super::triangle::{Triangle, WatertightRay};
 use crate::math::{Aabb, Ray};
 
@@ -36,8 +39,10 @@ pub struct TriHit {
 #[derive(Clone, Debug)]
 pub struct MeshAccel {
     bvh: Bvh,
-    /// Triangles in leaf order: leaf range `r` is `tris[r]`.
-    tris: Vec<Triangle>,
+    /// Each leaf's triangles in blocks of four: leaf range `r` is `blocks[r]`.
+    blocks: Vec<TriBlock>,
+    /// Valid triangles (the used lanes of `blocks`).
+    count: usize,
 }
 
 impl MeshAccel {
@@ -45,27 +50,46 @@ impl MeshAccel {
     /// skipped, never a panic.
     pub fn build(positions: &[Vec3], triangles: &[[u32; 3]]) -> MeshAccel {
         let vertex = |i: u32| positions.get(i as usize).copied();
-        let tri_of = |(k, t): (usize, &[u32; 3])| -> Option<Triangle> {
-            let tri = Triangle::new(vertex(t[0])?, vertex(t[1])?, vertex(t[2])?, k as u32);
+        let tri_of = |k: u32| -> Option<Triangle> {
+            let t = triangles.get(k as usize)?;
+            let tri = Triangle::new(vertex(t[0])?, vertex(t[1])?, vertex(t[2])?, k);
             (!tri.is_degenerate()).then_some(tri)
         };
-        let bounds: Vec<Aabb> = triangles
-            .par_iter()
-            .enumerate()
-            .map(|kt| tri_of(kt).map_or(Aabb::EMPTY, |t| Aabb::from_points(t.v.map(Vec3::from))))
+        let bounds: Vec<Aabb> = (0..triangles.len() as u32)
+            .into_par_iter()
+            .map(|k| tri_of(k).map_or(Aabb::EMPTY, |t| Aabb::from_points(t.v.map(Vec3::from))))
             .collect();
-        let bvh = Bvh::build(&bounds);
+        let mut bvh = Bvh::build_blocked(&bounds, 4);
         drop(bounds);
-        let tris = bvh
-            .prim_order()
+        // Number the blocks leaf by leaf (serial and cheap), then fill them
+        // in parallel.
+        let mut groups: Vec<[u32; 4]> = Vec::new();
+        let mut lens: Vec<u8> = Vec::new();
+        bvh.remap_leaves(|prims| {
+            let first = groups.len();
+            for chunk in prims.chunks(4) {
+                let mut g = [u32::MAX; 4];
+                g[..chunk.len()].copy_from_slice(chunk);
+                groups.push(g);
+                lens.push(chunk.len() as u8);
+            }
+            first..groups.len()
+        });
+        let count = lens.iter().map(|&n| n as usize).sum();
+        let blocks = groups
             .par_iter()
-            .map(|&k| {
-                // Every index in prim_order had a non-empty box, so came from
-                // a valid triangle.
-                tri_of((k as usize, &triangles[k as usize])).expect("BVH holds only valid triangles")
+            .zip(&lens)
+            .map(|(g, &n)| {
+                // Every primitive in the tree had a non-empty box, so came
+                // from a valid triangle.
+                let tris: Vec<Triangle> = g[..n as usize]
+                    .iter()
+                    .map(|&k| tri_of(k).expect("BVH holds only valid triangles"))
+                    .collect();
+                TriBlock::new(&tris)
             })
             .collect();
-        MeshAccel { bvh, tris }
+        MeshAccel { bvh, blocks, count }
     }
 
     /// The closest hit with `t_min < t < t_max`, if any.
@@ -82,16 +106,23 @@ impl MeshAccel {
     pub fn intersect_culled(&self, ray: &Ray, t_min: f32, t_max: f32, cull: f32) -> Option<TriHit> {
         let wr = WatertightRay::new(ray);
         let mut best = None;
-        let tris = &self.tris[..];
+        let blocks = &self.blocks[..];
         self.bvh.closest(ray, t_max, |range, t_max| {
             let mut found = false;
-            for tri in &tris[range] {
-                if let Some(h) = wr.intersect(tri, t_min, *t_max) {
-                    if cull != 0.0 && cull * tri.normal().dot(ray.d) > 0.0 {
+            for b in &blocks[range] {
+                let h = b.intersect(&wr, t_min, *t_max);
+                // Lanes in order, each against the nearest hit so far: the
+                // same choice as testing the triangles one by one.
+                let mut m = h.mask;
+                while m != 0 {
+                    let i = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    // A lane's t passed `t > t_min`, so it is not NaN.
+                    if h.t[i] >= *t_max || (cull != 0.0 && cull * b.triangle(i).normal().dot(ray.d) > 0.0) {
                         continue;
                     }
-                    *t_max = h.t;
-                    best = Some(TriHit { t: h.t, prim: tri.prim, u: h.u, v: h.v });
+                    *t_max = h.t[i];
+                    best = Some(TriHit { t: h.t[i], prim: b.prim(i), u: h.u[i], v: h.v[i] });
                     found = true;
                 }
             }
@@ -104,9 +135,9 @@ impl MeshAccel {
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         let wr = WatertightRay::new(ray);
-        let tris = &self.tris[..];
+        let blocks = &self.blocks[..];
         self.bvh.any(ray, t_max, |range, t_max| {
-            tris[range].iter().any(|tri| wr.intersect(tri, t_min, t_max).is_some())
+            blocks[range].iter().any(|b| b.intersect(&wr, t_min, t_max).mask != 0)
         })
     }
 
@@ -118,7 +149,12 @@ impl MeshAccel {
     /// Number of triangles in the accelerator (invalid input triangles are
     /// not counted).
     pub fn triangle_count(&self) -> usize {
-        self.tris.len()
+        self.count
+    }
+
+    /// Number of 4-triangle blocks (some lanes of which may be unused).
+    pub fn block_count(&self) -> usize {
+        self.blocks.len()
     }
 
     /// The underlying hierarchy.
@@ -128,7 +164,7 @@ impl MeshAccel {
 
     /// Heap memory held by the accelerator.
     pub fn memory_bytes(&self) -> usize {
-        self.bvh.memory_bytes() + self.tris.capacity() * size_of::<Triangle>()
+        self.bvh.memory_bytes() + self.blocks.capacity() * size_of::<TriBlock>()
     }
 }
 

@@ -22,6 +22,7 @@
 pub mod bvh;
 mod bvh_build;
 pub mod mesh_accel;
+pub mod tri_block;
 pub mod triangle;
 
 pub use bvh::Bvh;

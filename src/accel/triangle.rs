@@ -32,16 +32,16 @@ pub struct Triangle {
 /// The per-ray part of the test, computed once per traversal.
 #[derive(Clone, Copy, Debug)]
 pub struct WatertightRay {
-    o: [f32; 3],
+    pub(super) o: [f32; 3],
     /// Axis along which the ray's direction is largest, and the other two
     /// in cyclic order (swapped if that component is negative, keeping the
     /// sign of the edge functions consistent with the winding).
-    kx: usize,
-    ky: usize,
-    kz: usize,
-    sx: f32,
-    sy: f32,
-    sz: f32,
+    pub(super) kx: usize,
+    pub(super) ky: usize,
+    pub(super) kz: usize,
+    pub(super) sx: f32,
+    pub(super) sy: f32,
+    pub(super) sz: f32,
 }
 
 /// A hit: distance and barycentrics (`u` of vertex 1, `v` of vertex 2).

@@ -20,6 +20,7 @@ pub use outputs::{plan_outputs, Output, OutputKind};
 pub use tonemap::{Gamma, Operator, Tonemap};
 
 use crate::math::Vec3;
+use rayon::prelude::*;
 
 /// How a pixel's samples are combined.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -122,7 +123,13 @@ impl Film {
 
     /// The pixels as `f32` RGB triples (for the HDR writers and comparisons).
     pub fn rgb32f(&self) -> Vec<f32> {
-        self.pixels.iter().flat_map(|p| p.to_array()).collect()
+        let mut out = vec![0.0f32; 3 * self.pixels.len()];
+        out.par_chunks_mut(3 * 4096).zip(self.pixels.par_chunks(4096)).for_each(|(o, px)| {
+            for (o, p) in o.chunks_exact_mut(3).zip(px) {
+                o.copy_from_slice(&p.to_array());
+            }
+        });
+        out
     }
 }
 

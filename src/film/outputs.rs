@@ -101,16 +101,21 @@ pub fn first_ldr(image_name: &str, tonemaps: &[Tonemap]) -> Option<Output> {
 /// Tone mapping runs before any file is opened, so a failure to write one
 /// file is the only way to end with some of them.
 pub fn write_outputs(film: &Film, outdir: &Path, outputs: &[Output]) -> Result<Vec<PathBuf>, WriteError> {
-    let mut written = Vec::with_capacity(outputs.len());
-    for o in outputs {
-        let path = outdir.join(&o.name);
-        match rgb8(film, &o.kind) {
-            None => write_rgb32f(&path, film.width, film.height, &film.rgb32f())?,
-            Some(rgb) => write_rgb8(&path, film.width, film.height, &rgb)?,
-        }
-        written.push(path);
-    }
-    Ok(written)
+    use rayon::prelude::*;
+    // All at once: the EXR's encoding and file write are serial, and the
+    // tone mapping beside it keeps the other cores busy.
+    let results: Vec<Result<PathBuf, WriteError>> = outputs
+        .par_iter()
+        .map(|o| {
+            let path = outdir.join(&o.name);
+            match rgb8(film, &o.kind) {
+                None => write_rgb32f(&path, film.width, film.height, &film.rgb32f())?,
+                Some(rgb) => write_rgb8(&path, film.width, film.height, &rgb)?,
+            }
+            Ok(path)
+        })
+        .collect();
+    results.into_iter().collect()
 }
 
 /// The first file name that two outputs (of one camera or of several) share,

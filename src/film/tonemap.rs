@@ -224,11 +224,9 @@ impl Tonemap {
         let log_avg = if lum.is_empty() { 1.0 } else { (log_sum / lum.len() as f64).exp() };
         let scale = (f64::from(self.key) / log_avg) as f32;
         let l_white = (self.burn_percent > 0.0 && !lum.is_empty()).then(|| {
-            let mut sorted: Vec<f32> = lum.iter().map(|&y| y * scale).collect();
-            let n = sorted.len();
+            let n = lum.len();
             let at = (((1.0 - f64::from(self.burn_percent) / 100.0) * n as f64) as usize).min(n - 1);
-            let (_, w, _) = sorted.select_nth_unstable_by(at, f32::total_cmp);
-            w.max(f32::MIN_POSITIVE)
+            nth_scaled(&lum, scale, at).max(f32::MIN_POSITIVE)
         });
         let t = *self;
         let q = Quantizer::new(t.gamma);
@@ -246,6 +244,48 @@ impl Tonemap {
         });
         out
     }
+}
+
+/// The `at`-th smallest of `y * scale` over `lum` (in `f32::total_cmp`
+/// order), as a full sort would give it, without sorting on one thread: the
+/// values' bit patterns order them like the numbers (all are non-negative:
+/// [`luminance`] makes them so), so a parallel histogram of the top 16 bits
+/// finds the bucket holding rank `at`, and only that bucket is selected in.
+fn nth_scaled(lum: &[f32], scale: f32, at: usize) -> f32 {
+    const BUCKETS: usize = 1 << 16;
+    let key = |y: f32| (y * scale).to_bits();
+    if lum.iter().any(|&y| key(y) >> 31 != 0) {
+        // A negative scale or NaN sign: bits no longer order the values.
+        let mut v: Vec<f32> = lum.iter().map(|&y| y * scale).collect();
+        return *v.select_nth_unstable_by(at, f32::total_cmp).1;
+    }
+    let hist = lum
+        .par_chunks(1 << 15)
+        .map(|c| {
+            let mut h = vec![0u32; BUCKETS];
+            for &y in c {
+                h[(key(y) >> 16) as usize] += 1;
+            }
+            h
+        })
+        .reduce(
+            || vec![0u32; BUCKETS],
+            |mut a, b| {
+                a.iter_mut().zip(&b).for_each(|(a, b)| *a += b);
+                a
+            },
+        );
+    let (mut below, mut bucket) = (0usize, 0usize);
+    for (i, &c) in hist.iter().enumerate() {
+        if below + c as usize > at {
+            bucket = i;
+            break;
+        }
+        below += c as usize;
+    }
+    let mut inside: Vec<f32> =
+        lum.par_iter().map(|&y| y * scale).filter(|v| (v.to_bits() >> 16) as usize == bucket).collect();
+    *inside.select_nth_unstable_by(at - below, f32::total_cmp).1
 }
 
 /// Luminance of linear sRGB primaries (Rec. 709 weights), non-finite and

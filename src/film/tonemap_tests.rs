@@ -100,3 +100,34 @@ fn the_quantizer_table_agrees_with_the_formula() {
         assert_eq!((q.code(-1.0), q.code(1.0), q.code(7.0), q.code(f32::NAN)), (0, 255, 255, 0));
     }
 }
+
+#[test]
+fn percentile_by_histogram_matches_a_full_sort() {
+    // Zeros, ties, values spread over many octaves and some in one bucket.
+    let mut x = 0x2545_f491u32;
+    let mut next = || {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        x
+    };
+    let lum: Vec<f32> = (0..100_000)
+        .map(|i| match i % 5 {
+            0 => 0.0,
+            1 => 1.5,
+            2 => 1.5 + (next() % 1000) as f32 * 1e-7,
+            _ => (next() % 1_000_000) as f32 * 10f32.powi((next() % 9) as i32 - 4),
+        })
+        .collect();
+    for scale in [1.0f32, 0.37, 1e-3] {
+        let mut sorted: Vec<f32> = lum.iter().map(|&y| y * scale).collect();
+        sorted.sort_by(f32::total_cmp);
+        for at in [0, 1, 19_999, 20_000, 50_000, 98_999, 99_999] {
+            assert_eq!(
+                super::nth_scaled(&lum, scale, at).to_bits(),
+                sorted[at].to_bits(),
+                "scale {scale} at {at}"
+            );
+        }
+    }
+}

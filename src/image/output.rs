@@ -104,17 +104,18 @@ fn write_exr(
     width: usize,
     height: usize,
     rgb: &[f32],
-    clean: impl Fn(f32) -> f32,
+    clean: impl Fn(f32) -> f32 + Sync,
 ) -> Result<(), String> {
     use exr::prelude::{
         AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, SmallVec,
         WritableImage,
     };
-    let plane = |c: usize| FlatSamples::F32(rgb.iter().skip(c).step_by(3).map(|&v| clean(v)).collect());
+    let plane = |c: usize| FlatSamples::F32(rgb.chunks_exact(3).map(|p| clean(p[c])).collect());
+    let (r, (g, b)) = rayon::join(|| plane(0), || rayon::join(|| plane(1), || plane(2)));
     let channels = AnyChannels::sort(SmallVec::from_vec(vec![
-        AnyChannel::new("R", plane(0)),
-        AnyChannel::new("G", plane(1)),
-        AnyChannel::new("B", plane(2)),
+        AnyChannel::new("R", r),
+        AnyChannel::new("G", g),
+        AnyChannel::new("B", b),
     ]));
     let layer = Layer::new((width, height), LayerAttributes::default(), Encoding::UNCOMPRESSED, channels);
     Image::from_layer(layer).write().non_parallel().to_buffered(w).map_err(|e| e.to_string())

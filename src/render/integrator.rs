@@ -108,6 +108,7 @@ use crate::bsdf::Frame;
 use crate::material::Material;
 use crate::material::Specular;
 use crate::math::{orthonormal_basis, Ray, Vec2, Vec3};
+use crate::render::dielectric;
 use crate::render::sampler::PixelSampler;
 use crate::render::scene::{Hit, Scene};
 use crate::render::volumes;
@@ -224,17 +225,18 @@ fn shade(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, weight: f32, st: &mut 
             Specular::Dielectric { ior, .. } => {
                 let (n1, n2) = if entering { (1.0, ior) } else { (ior, 1.0) };
                 let (f, cos_t) = fresnel::dielectric(cos_i, n1, n2);
-                if st.spawn(weight * f) {
+                // Both rays at one sample per pixel, one of them otherwise.
+                let (wr, wt) = dielectric::branch_weights(f, cos_t.is_some(), &mut st.sampler);
+                if wr > 0.0 && st.spawn(weight * wr) {
                     let r = reflected(st);
-                    color += f * radiance(scene, &r, depth + 1, weight * f, st);
+                    color += wr * radiance(scene, &r, depth + 1, weight * wr, st);
                 }
-                if let Some(cos_t) = cos_t {
+                if let (Some(cos_t), true) = (cos_t, wt > 0.0) {
                     let eta = n1 / n2;
                     let dir = glossy((ray.d * eta + n * (eta * cos_i - cos_t)).normalize(), roughness, st);
-                    let w = weight * (1.0 - f);
+                    let w = weight * wt;
                     if st.spawn(w) {
-                        color +=
-                            (1.0 - f) * radiance(scene, &Ray::new(hit.p - ng * eps, dir), depth + 1, w, st);
+                        color += wt * radiance(scene, &Ray::new(hit.p - ng * eps, dir), depth + 1, w, st);
                     }
                 }
             }

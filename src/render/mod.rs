@@ -2,6 +2,7 @@
 //! multi-threaded loop that fills a [`Film`] with linear radiance.
 
 pub mod camera;
+pub mod dielectric;
 pub mod integrator;
 pub mod sampler;
 pub mod scene;

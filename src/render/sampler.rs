@@ -38,6 +38,12 @@ impl PixelSampler {
         cmj(self.index % self.count, self.count, p)
     }
 
+    /// How many samples the pixel takes.
+    #[inline]
+    pub fn count(&self) -> u32 {
+        self.count
+    }
+
     /// The next 1D dimension: a value in `[0, 1)` stratified over the samples.
     #[inline]
     pub fn next_1d(&mut self) -> f32 {

@@ -88,9 +88,9 @@ pub fn shadow(scene: &Scene, ray: &Ray, t_max: f32, st: &mut PathState) -> Vec3 
     }
     let vols = &scene.volumes;
     if !vols.surfaces.is_empty() {
-        match vols.surface_hit(ray, scene.intersection_epsilon, t_max, st.time) {
-            Ok(Some(_)) => return Vec3::ZERO,
-            Ok(None) => {}
+        match vols.surface_blocks(ray, scene.intersection_epsilon, t_max, st.time) {
+            Ok(true) => return Vec3::ZERO,
+            Ok(false) => {}
             Err(e) => {
                 st.fail(e);
                 return Vec3::ZERO;

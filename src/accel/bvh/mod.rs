@@ -236,8 +236,15 @@ impl Bvh {
     /// # Panics
     /// With more than [`MAX_PRIMS`] primitives (a 20 GB mesh).
     pub fn build(prim_bounds: &[Aabb]) -> Bvh {
+        Bvh::build_blocked(prim_bounds, 1)
+    }
+
+    /// [`Bvh::build`] for a caller that intersects `block` primitives at a
+    /// time: the SAH prices a leaf by its number of blocks, so leaves come
+    /// out with (up to [`MAX_LEAF`]) primitives filling whole blocks.
+    pub fn build_blocked(prim_bounds: &[Aabb], block: u32) -> Bvh {
         assert!(prim_bounds.len() <= MAX_PRIMS, "more than 2^28 primitives in one BVH");
-        let Some((b2, prim_order, binary_depth)) = build_binary(prim_bounds) else {
+        let Some((b2, prim_order, binary_depth)) = build_binary(prim_bounds, block) else {
             return Bvh {
                 nodes: Vec::new(),
                 root: EMPTY,
@@ -255,6 +262,35 @@ impl Bvh {
         drop(b2);
         nodes.shrink_to_fit();
         Bvh { nodes, root, bounds, prim_order, depth: depth + 1, binary_depth }
+    }
+
+    /// Replaces every leaf's range, in depth-first order, by `f(prims)`,
+    /// where `prims` are the leaf's entries of [`Bvh::prim_order`]: for a
+    /// caller that regroups each leaf's primitives into its own storage
+    /// (SIMD blocks). `f` must return a non-empty range of at most
+    /// [`MAX_LEAF`] items starting below [`MAX_PRIMS`]. The tree then no
+    /// longer indexes `prim_order`, which is emptied.
+    pub fn remap_leaves(&mut self, mut f: impl FnMut(&[u32]) -> Range<usize>) {
+        let order = std::mem::take(&mut self.prim_order);
+        let mut enc = |r: u32| -> u32 {
+            if r == EMPTY || r & LEAF == 0 {
+                return r;
+            }
+            let new = f(&order[leaf_range(r)]);
+            assert!(!new.is_empty() && new.len() <= MAX_LEAF && new.start < MAX_PRIMS, "bad leaf remap");
+            LEAF | (new.start as u32) << 3 | (new.len() as u32 - 1)
+        };
+        if self.nodes.is_empty() {
+            self.root = enc(self.root);
+        } else {
+            // Nodes are in depth-first order, so leaves are numbered in the
+            // order a traversal tends to meet them: neighbours stay close.
+            for n in &mut self.nodes {
+                for c in &mut n.child {
+                    *c = enc(*c);
+                }
+            }
+        }
     }
 
     /// The permutation of input primitive indices that leaf ranges index

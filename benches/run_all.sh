@@ -1,0 +1,105 @@
+#!/usr/bin/env bash
+# Every speed figure of docs/performance.md from one run, as ratios against
+# references measured in the same run. Runs alternate A B A B ... and medians
+# are quoted, because a small shared machine drifts by tens of percent.
+#
+#   benches/run_all.sh [REPS]          (default 3 alternations)
+#
+# Needs: a release build (cargo build --release), the course folder at
+# ../shared/scenes/ceng795 (or COURSE=...), the benchmark generator and Embree
+# script at ../shared/bench (or BENCH=...), and a Python with numpy and
+# embreex (PYTHON=..., default python3) for the Embree reference. Set
+# WINE_SPP=900 for the full wine_glass render (about 15 minutes on two
+# cores); the default renders fewer samples and says so. POV-Ray is compared
+# if `povray` is on the PATH.
+set -u
+cd "$(dirname "$0")/.."
+REPS=${1:-3}
+LUSTER=${LUSTER:-target/release/luster}
+COURSE=${COURSE:-../shared/scenes/ceng795}
+BENCH=${BENCH:-../shared/bench}
+PYTHON=${PYTHON:-python3}
+WINE_SPP=${WINE_SPP:-16}
+WORK=$(mktemp -d)
+trap 'rm -rf "$WORK"' EXIT
+
+median() { sort -g | awk '{a[NR]=$1} END {if (NR) print a[int((NR+1)/2)]; else print "nan"}'; }
+ratio() { awk -v a="$1" -v b="$2" 'BEGIN { if (b > 0) printf "%.2f", a / b; else print "nan" }'; }
+# Wall seconds of a command (its output discarded).
+wall() {
+    local t0 t1
+    t0=$(date +%s.%N)
+    "$@" >/dev/null 2>&1
+    t1=$(date +%s.%N)
+    awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.3f\n", b - a }'
+}
+
+[ -x "$LUSTER" ] || { echo "no $LUSTER: run cargo build --release first" >&2; exit 2; }
+LUSTER=$(realpath "$LUSTER")
+
+echo "== 1. BVH against Embree (bumpy sphere, 1.31M triangles, 1920x1080 primary rays)"
+MESH=$WORK/bumpy_sphere_L8.ply
+if "$PYTHON" "$BENCH/genmesh.py" 8 "$WORK" >/dev/null 2>&1 && [ -f "$MESH" ]; then
+    : >"$WORK/l1"; : >"$WORK/l2"; : >"$WORK/lb"; : >"$WORK/e1"; : >"$WORK/e2"; : >"$WORK/eb"; : >"$WORK/rss"
+    for _ in $(seq "$REPS"); do
+        out=$("$LUSTER" bench "$MESH" --threads 1,2 --reps 3)
+        echo "$out" | awk '/threads=1 /{for(i=1;i<=NF;i++) if($i=="Mrays/s") print $(i-1)}' >>"$WORK/l1"
+        echo "$out" | awk '/threads=2 /{for(i=1;i<=NF;i++) if($i=="Mrays/s") print $(i-1)}' >>"$WORK/l2"
+        echo "$out" | awk '/BVH build/{print $3}' >>"$WORK/lb"
+        echo "$out" | awk '/peak RSS/{print $5}' >>"$WORK/rss"
+        if out=$("$PYTHON" "$BENCH/embree_rays.py" "$MESH" --reps 3 --threads 1,2 2>/dev/null); then
+            echo "$out" | awk '/threads=1 INTERSECT/{for(i=1;i<=NF;i++) if($i=="Mrays/s") print $(i-1)}' >>"$WORK/e1"
+            echo "$out" | awk '/threads=2 INTERSECT/{for(i=1;i<=NF;i++) if($i=="Mrays/s") print $(i-1)}' >>"$WORK/e2"
+            echo "$out" | awk '/BVH build/{for(i=1;i<=NF;i++) if($i=="build+commit") print $(i+1)}' >>"$WORK/eb"
+        fi
+    done
+    l1=$(median <"$WORK/l1"); l2=$(median <"$WORK/l2"); lb=$(median <"$WORK/lb")
+    e1=$(median <"$WORK/e1"); e2=$(median <"$WORK/e2"); eb=$(median <"$WORK/eb")
+    echo "   luster: $l1 Mrays/s (1 thread), $l2 (2 threads), build $lb ms, peak RSS $(median <"$WORK/rss") MiB"
+    echo "   Embree: $e1 Mrays/s (1 thread), $e2 (2 threads), build $eb ms"
+    echo "   ratio luster/Embree: 1 thread $(ratio "$l1" "$e1"), 2 threads $(ratio "$l2" "$e2"), build time $(ratio "$lb" "$eb") (target >= 0.9, >= 0.9, <= 1)"
+else
+    echo "   skipped: $BENCH/genmesh.py did not run with $PYTHON"
+fi
+
+echo "== 2. Two threads against one (whole process, hw4)"
+for s in sphere_perlin_bump brickwall_with_normalmap; do
+    scene=$COURSE/hw4/xml/$s.xml
+    [ -f "$scene" ] || { echo "   $s: not found under $COURSE"; continue; }
+    : >"$WORK/t1"; : >"$WORK/t2"
+    for _ in $(seq $((REPS * 3))); do
+        wall "$LUSTER" render "$scene" -o "$WORK" -q -t 1 >>"$WORK/t1"
+        wall "$LUSTER" render "$scene" -o "$WORK" -q -t 2 >>"$WORK/t2"
+    done
+    t1=$(median <"$WORK/t1"); t2=$(median <"$WORK/t2")
+    echo "   $s: 1 thread $t1 s, 2 threads $t2 s, speed-up $(ratio "$t1" "$t2") (target >= 1.8)"
+done
+
+echo "== 3. Film: EXR + tone-mapped PNG against the course PNG"
+cargo bench --bench film -- --reps "$((REPS * 2 + 1))" 2>/dev/null | grep -E '^(A|B|parts)'
+
+echo "== 4. wine_glass (hw3, JSON) at $WINE_SPP samples per pixel (the scene asks for 900)"
+wine=$COURSE/hw3/json/ramazan_tokay/wine_glass_scene.json
+if [ -f "$wine" ]; then
+    t=$(wall "$LUSTER" render "$wine" -o "$WORK" -q --spp "$WINE_SPP")
+    echo "   $t s for $WINE_SPP spp$([ "$WINE_SPP" != 900 ] && awk -v t="$t" -v n="$WINE_SPP" 'BEGIN { printf " (%.0f s per 900 spp at this rate; target <= 120 s)", t * 900 / n }')"
+    "$LUSTER" compare "$COURSE/hw3/expected/wine_glass.png" "$WORK/wine_glass.png" 2>/dev/null | grep -E '^(PSNR|FLIP)' | sed 's/^/   /'
+fi
+
+echo "== 5. fuzzy hypertexture example"
+: >"$WORK/fz"
+for _ in $(seq "$REPS"); do (cd examples/scenes && wall "$LUSTER" render fuzzy.xml -o "$WORK" -q) >>"$WORK/fz"; done
+echo "   median $(median <"$WORK/fz") s (target <= 5 s)"
+
+if command -v povray >/dev/null; then
+    echo "== 6. POV-Ray 3.7, 4x4 supersampling, against luster at 16 spp"
+    : >"$WORK/pv"; : >"$WORK/pl"
+    for _ in $(seq "$REPS"); do
+        (cd "$BENCH/povray" && wall povray +Ibench.pov +O"$WORK/aa16.png" +W800 +H800 +AM1 +A0.0 +R4 -J +WT2 -D) >>"$WORK/pv"
+        (cd "$BENCH/povray" && wall "$LUSTER" render bench.xml -o "$WORK" -q --spp 16) >>"$WORK/pl"
+    done
+    pv=$(median <"$WORK/pv"); pl=$(median <"$WORK/pl")
+    echo "   POV-Ray $pv s, luster $pl s, ratio $(ratio "$pl" "$pv") (target <= 0.5)"
+else
+    echo "== 6. POV-Ray: not installed (apt-get install povray), skipped"
+fi
