@@ -218,7 +218,10 @@ impl Textures {
                     let local = bump::height_bump(f, map.bump_factor, bump::bump_step(f), |pts| {
                         set.heights3(id, &pts.map(|(p, uv)| input(f, p, uv, world_n))).map_err(Box::new)
                     })?;
-                    *n = f.normal_to_world(local);
+                    // No slope: the normal stays exactly as the renderer had it.
+                    if let Some(local) = local {
+                        *n = f.normal_to_world(local);
+                    }
                 }
             }
             DecalMode::ReplaceNormal | DecalMode::ReplaceBackground => {}
