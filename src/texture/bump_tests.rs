@@ -18,6 +18,7 @@ fn frame(p: Vec3) -> TexFrame {
         n: dpdu.cross(dpdv).normalize(),
         to_world: None,
         footprint: 0.0,
+        ctx: Default::default(),
     }
 }
 
