@@ -369,15 +369,21 @@ local function filtered_square(t, w)
   return (square_integral(t + w / 2) - square_integral(t - w / 2)) / w
 end
 -- checker(x, y, [z], [fw]) or checker(p, [fw]): 0 or 1 on unit cells; with a
--- filter width, the cells' average over the footprint (a box filter per axis).
+-- filter width, the cells' average over the footprint (a box filter per
+-- axis). fw is one width or a vec3 of widths per axis (filterwidth_xyz):
+-- on a surface the footprint has no depth across it, and a cube-shaped box
+-- would blur a plane lying on a cell boundary to grey.
 local function checker(x, y, z, fw)
   if type(x) ~= "number" then
     fw = y
     x, y, z = xyz(x, "checker")
   end
   z = z or 0
-  if not fw or fw <= 0 then return (floor(x) + floor(y) + floor(z)) % 2 end
-  return 0.5 - 0.5 * filtered_square(x, fw) * filtered_square(y, fw) * filtered_square(z, fw)
+  if not fw then return (floor(x) + floor(y) + floor(z)) % 2 end
+  local wx, wy, wz
+  if isvec(fw) then wx, wy, wz = fw.x, fw.y, fw.z else wx, wy, wz = fw, fw, fw end
+  if wx <= 0 and wy <= 0 and wz <= 0 then return (floor(x) + floor(y) + floor(z)) % 2 end
+  return 0.5 - 0.5 * filtered_square(x, wx) * filtered_square(y, wy) * filtered_square(z, wz)
 end
 -- aastep(edge, x, [fw]): step(edge, x) box-filtered over a footprint of width
 -- fw in the units of x (0 or nil: the hard step).
@@ -392,6 +398,12 @@ end
 -- to give the filtered built-ins for a pattern of `scale * s.P`.
 local function filterwidth(s, scale)
   return s.filterwidth * abs(scale or 1)
+end
+-- filterwidth_xyz(s, [scale]): the footprint's extent along each object
+-- axis, |dPdx| + |dPdy| per component (OSL's filterwidth of a point).
+local function filterwidth_xyz(s, scale)
+  local k, dx, dy = abs(scale or 1), s.dPdx, s.dPdy
+  return vec3_t(k * (abs(dx.x) + abs(dy.x)), k * (abs(dx.y) + abs(dy.y)), k * (abs(dx.z) + abs(dy.z)))
 end
 -- 32-bit integer hashing (the lowbias32 finaliser by Chris Wellons). Lua
 -- numbers are doubles, so products are split to stay exact below 2^53.
@@ -534,7 +546,7 @@ local BUILTINS = {
   fbm = fbm, fbm_grad = fbm_grad, turbulence = turbulence, ridged = ridged,
   voronoi = voronoi, voronoi2 = voronoi2, texture = texture, vperlin = vperlin, vfbm = vfbm,
   clamp = clamp, mix = mix, lerp = mix, smoothstep = smoothstep, step = step, fract = fract,
-  aastep = aastep, filterwidth = filterwidth,
+  aastep = aastep, filterwidth = filterwidth, filterwidth_xyz = filterwidth_xyz,
   checker = checker, brick = brick, ramp = ramp, hash = hash,
   collectgarbage = safe_collectgarbage,
 }

@@ -172,11 +172,13 @@ impl ShadeCtx {
     /// camera's right and down axes scaled by the width, carried along the
     /// incident ray onto the surface's tangent plane (Igehy's transfer of ray
     /// differentials, exact for camera rays of a pinhole; after a bounce the
-    /// cone keeps only its width, so the vectors are an estimate).
+    /// cone keeps only its width, so the vectors are an estimate). At grazing
+    /// angles the stretch is capped at 20×, as for the texture footprint.
     pub fn set_footprint(&mut self, width: f32) {
         let (d, n) = (self.incident, self.ng);
         let dn = d.dot(n);
-        let onto = |v: Vec3| if dn.abs() > 1e-4 { v - d * (v.dot(n) / dn) } else { v };
+        let dn = if dn < 0.0 { dn.min(-0.05) } else { dn.max(0.05) };
+        let onto = |v: Vec3| v - d * (v.dot(n) / dn);
         self.dpdx = onto(self.view.right * width);
         self.dpdy = onto(-self.view.up * width);
     }
