@@ -43,7 +43,10 @@ const CHECKER: &str = "params { filtered = 1, frequency = 4 }
 function color(s)
   local f = param.frequency
   local fw = filterwidth_xyz(s, f) * param.filtered
-  local c = 255 * checker(s.P * f, fw)
+  -- y held mid-cell: the plane lies on a cell boundary, where rounding
+  -- would flip cells at random.
+  local p = s.P * f
+  local c = 255 * checker(vec3(p.x, 0.5, p.z), fw)
   return c, c, c
 end";
 

@@ -12,6 +12,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 /// Renders every scene; errors in one scene do not stop the others.
+#[allow(clippy::too_many_arguments)] // the command's options, passed through as given
 pub fn run(
     scenes: &[PathBuf],
     outdir: &Path,

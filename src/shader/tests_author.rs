@@ -95,7 +95,7 @@ fn built_ins_take_a_vec3_where_a_point_is_meant() {
     }
     let v = rgb_of("function color(s) return vperlin(s.P):unpack() end", &[], &p);
     assert!(v[0] != v[1] && v[1] != v[2], "{v:?}");
-    assert_eq!(v[0], perlin::noise3(0.3, 1.7, -2.2) as f32);
+    assert_eq!(v[0], perlin::noise3(0.3, 1.7, -2.2));
 }
 
 /// Filtering: a zero width changes nothing; a width past the Nyquist limit
