@@ -22,6 +22,18 @@ pub struct FrameArgs {
     /// --scale); the image is that window.
     #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = parse_crop)]
     pub crop: Option<[u32; 4]>,
+    /// Print every shader call at pixel X,Y (of the image after --size,
+    /// --scale and --crop): its inputs and result; `print` in shaders shows
+    /// only there.
+    #[arg(long, value_name = "X,Y", value_parser = parse_pixel)]
+    pub debug_pixel: Option<[u32; 2]>,
+}
+
+fn parse_pixel(s: &str) -> Result<[u32; 2], String> {
+    match s.split_once(',').map(|(x, y)| (x.trim().parse::<u32>(), y.trim().parse::<u32>())) {
+        Some((Ok(x), Ok(y))) => Ok([x, y]),
+        _ => Err(format!("\"{s}\" is not X,Y (pixels)")),
+    }
 }
 
 fn parse_scale(s: &str) -> Result<f32, String> {
@@ -41,6 +53,7 @@ fn parse_crop(s: &str) -> Result<[u32; 4], String> {
 
 /// Applies `size` (from `--size`), `--scale` and `--crop` to every camera.
 pub fn apply(desc: &mut Description, size: Option<(u32, u32)>, args: &FrameArgs) -> anyhow::Result<()> {
+    luster::shader::set_debug_pixel(args.debug_pixel);
     if size.is_none() && args.scale.is_none() && args.crop.is_none() {
         return Ok(());
     }

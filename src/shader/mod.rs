@@ -71,6 +71,24 @@ use std::time::Duration;
 
 pub use error::{ShaderError, ShaderErrorKind};
 
+/// The pixel `--debug-pixel` names, packed (`u64::MAX`: none).
+static DEBUG_PIXEL: AtomicU64 = AtomicU64::new(u64::MAX);
+
+/// Makes every shader call at pixel `p` print its inputs and result to
+/// standard error, and `print` in scripts show only there (`None`: every
+/// `print` shows, nothing else). Process-wide: it is a debugging aid for
+/// the command line.
+pub fn set_debug_pixel(p: Option<[u32; 2]>) {
+    let packed = p.map_or(u64::MAX, |[x, y]| (u64::from(x) << 32) | u64::from(y));
+    DEBUG_PIXEL.store(packed, Ordering::Relaxed);
+}
+
+/// The pixel of [`set_debug_pixel`].
+pub(crate) fn debug_pixel() -> Option<[u32; 2]> {
+    let p = DEBUG_PIXEL.load(Ordering::Relaxed);
+    (p != u64::MAX).then(|| [(p >> 32) as u32, p as u32])
+}
+
 /// The default per-call time limit: generous, since a shader that needs it is
 /// broken, and a false stop would lose a render.
 pub const DEFAULT_TIMEOUT: Duration = Duration::from_secs(10);

@@ -663,7 +663,7 @@ local function make_env(shader_name, params)
     local n = select("#", ...)
     local parts = { ... }
     for i = 1, n do parts[i] = tostring(parts[i]) end
-    log(shader_name, table.concat(parts, "\t", 1, n))
+    log(shader_name, table.concat(parts, "\t", 1, n), shade.pixel_x, shade.pixel_y)
   end
   local param = {}
   for k, v in pairs(params) do

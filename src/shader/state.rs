@@ -61,8 +61,13 @@ impl ThreadState {
         let _ = lua.set_memory_limit(MEMORY_LIMIT);
 
         let log = lua
-            .create_function(|_, (name, text): (String, String)| {
-                eprintln!("[shader {name}] {text}");
+            .create_function(|_, (name, text, x, y): (String, String, i64, i64)| {
+                // The top level runs at pixel -1: its prints always show.
+                match super::debug_pixel() {
+                    Some([dx, dy]) if x >= 0 && (x != i64::from(dx) || y != i64::from(dy)) => {}
+                    Some(_) if x >= 0 => eprintln!("[shader {name} at pixel {x},{y}] {text}"),
+                    _ => eprintln!("[shader {name}] {text}"),
+                }
                 Ok(())
             })
             .map_err(internal)?;
@@ -182,7 +187,7 @@ impl ThreadState {
             .set_environment(env.clone())
             .into_function()
             .map_err(lua_err)?;
-        self.io.begin(&Shade::default());
+        self.io.begin(&Shade { pixel_x: -1, pixel_y: -1, ..Shade::default() });
         chunk.call::<()>(tick.clone()).map_err(lua_err)?;
         self.check_deadline(name)?;
         if !declared.call::<bool>(()).map_err(lua_err)? {
@@ -264,14 +269,30 @@ impl ThreadState {
             ));
         };
         self.io.begin(&shade_of(input));
-        match f.call::<()>(()) {
+        let result = match f.call::<()>(()) {
             Ok(()) => {
                 self.check_deadline(&shader.name)?;
                 let o = self.io.out();
                 Ok([o.r, o.g, o.b])
             }
             Err(e) => Err(self.error(&shader.name, &e)),
+        };
+        if super::debug_pixel() == Some(input.pixel) {
+            let out = match &result {
+                Ok(c) if matches!(entry, Entry::Height | Entry::Density) => format!("{}", c[0]),
+                Ok(c) => format!("{} {} {}", c[0], c[1], c[2]),
+                Err(e) => format!("error: {}", e.message),
+            };
+            eprintln!(
+                "[shader {} at pixel {},{}] {}(s) -> {out}\n  s = {}",
+                shader.name,
+                input.pixel[0],
+                input.pixel[1],
+                entry.name(),
+                describe(input)
+            );
         }
+        result
     }
 
     /// The shader `id` of this state, or a usage error.
@@ -333,6 +354,32 @@ fn shade_of(i: &ShadeInput) -> Shade {
         pixel_y: int(i.pixel[1]),
         pad: 0,
     }
+}
+
+/// The shading point as `--debug-pixel` prints it.
+fn describe(i: &ShadeInput) -> String {
+    let v = |a: [f32; 3]| format!("({}, {}, {})", a[0], a[1], a[2]);
+    format!(
+        "{{ P = {}, Pw = {}, Pc = {}, N = {}, Ng = {}, I = {}, uv = ({}, {}), dPdu = {}, dPdv = {}, \
+         dPdx = {}, dPdy = {}, filterwidth = {}, object_id = {}, instance_id = {}, depth = {}, time = {} }}",
+        v(i.p),
+        v(i.pw),
+        v(i.pc),
+        v(i.n),
+        v(i.ng),
+        v(i.i),
+        i.uv[0],
+        i.uv[1],
+        v(i.dpdu),
+        v(i.dpdv),
+        v(i.dpdx),
+        v(i.dpdy),
+        i.filterwidth,
+        i.object_id,
+        i.instance_id,
+        i.depth,
+        i.time
+    )
 }
 
 /// A repeatable number in [0, 1) per object (SplitMix64's finaliser): the
