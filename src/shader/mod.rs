@@ -86,7 +86,7 @@ pub fn set_debug_pixel(p: Option<[u32; 2]>) {
 /// The pixel of [`set_debug_pixel`].
 pub(crate) fn debug_pixel() -> Option<[u32; 2]> {
     let p = DEBUG_PIXEL.load(Ordering::Relaxed);
-    (p != u64::MAX).then(|| [(p >> 32) as u32, p as u32])
+    (p != u64::MAX).then_some([(p >> 32) as u32, p as u32])
 }
 
 /// The default per-call time limit: generous, since a shader that needs it is
