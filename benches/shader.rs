@@ -60,7 +60,7 @@ fn points() -> Vec<ShadeInput> {
         .map(|i| {
             let f = i as f32;
             let p = [f * 0.0137 % 1.0, f * 0.0291 % 1.0, f * 0.0073 % 1.0];
-            ShadeInput { p, pw: p, n: [0.0, 0.6, 0.8], uv: [p[0], p[1]], time: 0.0 }
+            ShadeInput { p, pw: p, n: [0.0, 0.6, 0.8], uv: [p[0], p[1]], ..ShadeInput::default() }
         })
         .collect()
 }

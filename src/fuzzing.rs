@@ -104,8 +104,13 @@ fn shader(data: &[u8]) {
     let _ = crate::shader::instrument_script(code);
     let src = ShaderSource::new("fuzz", "fuzz.lua", code);
     let Ok(set) = ShaderSet::new(vec![src], Duration::from_millis(20)) else { return };
-    let input =
-        ShadeInput { p: [0.1, 0.2, 0.3], pw: [1.0, 2.0, 3.0], n: [0.0, 0.0, 1.0], uv: [0.5, 0.5], time: 0.0 };
+    let input = ShadeInput {
+        p: [0.1, 0.2, 0.3],
+        pw: [1.0, 2.0, 3.0],
+        n: [0.0, 0.0, 1.0],
+        uv: [0.5, 0.5],
+        ..ShadeInput::default()
+    };
     if set.has_color(0) {
         let _ = set.color(0, &input);
     }

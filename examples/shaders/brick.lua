@@ -1,7 +1,13 @@
 -- A brick wall in the x-y plane: running bond, each brick its own shade,
 -- mottled, with recessed mortar joints in the height.
 -- Parameters: width and height of a brick (0.5, 0.22), mortar (0.025).
-local bw, bh, mw = param.width or 0.5, param.height or 0.22, param.mortar or 0.025
+-- The parameters a scene's <Parameter> may set, with their defaults.
+params {
+  width = 0.5,
+  height = 0.22,
+  mortar = 0.025,
+}
+local bw, bh, mw = param.width, param.height, param.mortar
 local mortar_c = vec3(0.62, 0.60, 0.56)
 local tones = ramp({ 0, 0.5, 1 }, { { 0.45, 0.16, 0.10 }, { 0.60, 0.25, 0.15 }, { 0.70, 0.38, 0.24 } })
 

@@ -1,9 +1,15 @@
 -- A cumulus-like cloud: fBm noise shaped by a soft ball, so the density
 -- fades to nothing at the bound. Parameters: scale (noise features per unit,
 -- 2.5), octaves (5), coverage (how much of the ball is cloud, 0.55).
-local scale = param.scale or 2.5
-local octaves = param.octaves or 5
-local coverage = param.coverage or 0.55
+-- The parameters a scene's <Parameter> may set, with their defaults.
+params {
+  scale = 2.5,
+  octaves = 5,
+  coverage = 0.55,
+}
+local scale = param.scale
+local octaves = param.octaves
+local coverage = param.coverage
 
 function density(s)
   local p = s.P

@@ -2,8 +2,13 @@
 -- fine fBm; color() calls height() so corrosion collects in the pits, and
 -- reflect() makes the bare metal a mirror and the verdigris matte.
 -- Parameters: scale (dents per unit, 5), tint (the bare metal's colour).
-local sc = param.scale or 5
-local copper = param.tint or vec3(0.85, 0.45, 0.28)
+-- The parameters a scene's <Parameter> may set, with their defaults.
+params {
+  scale = 5,
+  tint = rgb(0.85, 0.45, 0.28),
+}
+local sc = param.scale
+local copper = param.tint
 local patina = ramp({ 0, 0.5, 1 }, { { 0.30, 0.55, 0.45 }, { 0.35, 0.70, 0.58 }, { 0.55, 0.80, 0.70 } })
 
 function height(s)

@@ -3,9 +3,15 @@
 -- through a black-body-like ramp. Parameters: scale (turbulence features,
 -- 3), brightness (emission multiplier, 1), rise (how fast the turbulence
 -- drifts over the shutter, 0).
-local scale = param.scale or 3
-local brightness = param.brightness or 1
-local rise = param.rise or 0
+-- The parameters a scene's <Parameter> may set, with their defaults.
+params {
+  scale = 3,
+  brightness = 1,
+  rise = 0,
+}
+local scale = param.scale
+local brightness = param.brightness
+local rise = param.rise
 local glow = ramp({ 0, 0.15, 0.4, 0.7, 1 }, {
   vec3(0, 0, 0), vec3(90, 10, 0), vec3(255, 70, 5), vec3(255, 170, 40), vec3(255, 245, 210),
 })

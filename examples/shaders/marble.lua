@@ -2,10 +2,17 @@
 -- the sine become thin veins. Parameters: frequency (layers per unit, 4),
 -- warp (how far turbulence bends them, 3), stone and vein (vec3 colours).
 local sin, abs = math.sin, math.abs
-local f = param.frequency or 4
-local warp = param.warp or 3
-local stone = param.stone or vec3(0.92, 0.90, 0.86)
-local vein = param.vein or vec3(0.30, 0.26, 0.28)
+-- The parameters a scene's <Parameter> may set, with their defaults.
+params {
+  frequency = 4,
+  warp = 3,
+  stone = rgb(0.92, 0.90, 0.86),
+  vein = rgb(0.30, 0.26, 0.28),
+}
+local f = param.frequency
+local warp = param.warp
+local stone = param.stone
+local vein = param.vein
 local body = ramp({ 0, 0.25, 1 }, { vein, mix(vein, stone, 0.7), stone })
 
 function color(s)

@@ -2,8 +2,13 @@
 -- through a colour ramp, with ridged filaments and dark dust where the
 -- field is thin. Parameters: scale (features per unit, 1.6), brightness
 -- (emission multiplier, 1).
-local scale = param.scale or 1.6
-local brightness = param.brightness or 1
+-- The parameters a scene's <Parameter> may set, with their defaults.
+params {
+  scale = 1.6,
+  brightness = 1,
+}
+local scale = param.scale
+local brightness = param.brightness
 local glow = ramp({ 0, 0.3, 0.55, 0.8, 1 }, {
   vec3(0, 0, 0), vec3(40, 8, 70), vec3(170, 30, 90), vec3(255, 140, 70), vec3(255, 235, 190),
 })

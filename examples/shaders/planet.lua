@@ -3,8 +3,13 @@
 -- The bump uses the same height, flat over the sea. Parameters: sea (sea
 -- level, 0.05), seed (moves the continents, 0).
 local abs, max = math.abs, math.max
-local sea = param.sea or 0.05
-local seed = param.seed or 0
+-- The parameters a scene's <Parameter> may set, with their defaults.
+params {
+  sea = 0.05,
+  seed = 0,
+}
+local sea = param.sea
+local seed = param.seed
 local land = ramp({ 0, 0.08, 0.3, 0.55, 0.8 }, {
   { 0.76, 0.70, 0.50 }, { 0.22, 0.45, 0.16 }, { 0.36, 0.42, 0.20 }, { 0.45, 0.36, 0.28 }, { 0.92, 0.92, 0.95 },
 })

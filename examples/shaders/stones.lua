@@ -1,7 +1,11 @@
 -- Cobblestones from Voronoi cells: F2 - F1 is the distance to the cell's
 -- edge, so stones are rounded domes separated by grout; each stone gets its
 -- own colour from its cell id. Parameters: scale (stones per unit, 3).
-local sc = param.scale or 3
+-- The parameters a scene's <Parameter> may set, with their defaults.
+params {
+  scale = 3,
+}
+local sc = param.scale
 local rock = ramp({ 0, 0.35, 0.7, 1 }, {
   { 0.42, 0.40, 0.38 }, { 0.55, 0.50, 0.44 }, { 0.50, 0.52, 0.55 }, { 0.62, 0.56, 0.48 },
 })

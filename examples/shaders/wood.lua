@@ -2,9 +2,15 @@
 -- fine grain streaks along the trunk. Parameters: rings (per unit, 6),
 -- light and dark (vec3 colours of early and late wood).
 local sqrt, floor = math.sqrt, math.floor
-local rings = param.rings or 6
-local light = param.light or vec3(0.80, 0.58, 0.34)
-local dark = param.dark or vec3(0.45, 0.26, 0.12)
+-- The parameters a scene's <Parameter> may set, with their defaults.
+params {
+  rings = 6,
+  light = rgb(0.80, 0.58, 0.34),
+  dark = rgb(0.45, 0.26, 0.12),
+}
+local rings = param.rings
+local light = param.light
+local dark = param.dark
 
 function color(s)
   local x, y, z = s.P.x, s.P.y, s.P.z

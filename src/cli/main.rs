@@ -11,6 +11,7 @@ macro_rules! say {
 }
 
 mod compare;
+mod reframe;
 mod render;
 mod suite;
 mod tonemap;
@@ -65,6 +66,8 @@ enum Command {
         shader_timeout: f64,
         #[command(flatten)]
         model: ModelArgs,
+        #[command(flatten)]
+        frame: reframe::FrameArgs,
     },
     /// Benchmark the BVH on PLY meshes (build time, memory, Mrays/s).
     ///
@@ -191,7 +194,18 @@ fn main() -> ExitCode {
         eprintln!("warning: Ctrl-C will not remove half-written images: {e}");
     }
     match cli.command {
-        Command::Render { scenes, outdir, threads, quiet, spp, seed, filter, shader_timeout, model } => {
+        Command::Render {
+            scenes,
+            outdir,
+            threads,
+            quiet,
+            spp,
+            seed,
+            filter,
+            shader_timeout,
+            model,
+            frame,
+        } => {
             let filter = match filter {
                 FilterArg::Box => luster::render::Filter::Box,
                 FilterArg::Gaussian => luster::render::Filter::Gaussian,
@@ -200,7 +214,8 @@ fn main() -> ExitCode {
             let build = luster::render::BuildOptions {
                 shader_timeout: std::time::Duration::from_secs_f64(shader_timeout),
             };
-            render::run(&scenes, &outdir, threads, quiet, &opts, &build, &model.view())
+            let frame = (model.size, frame);
+            render::run(&scenes, &outdir, threads, quiet, &opts, &build, &model.view(), &frame)
         }
         Command::Bench { plys, threads, reps } => match luster::bench::run(&plys, &threads, reps) {
             Ok(()) => ExitCode::SUCCESS,
@@ -251,9 +266,10 @@ fn parse_timeout(s: &str) -> Result<f64, String> {
 #[derive(clap::Args)]
 #[command(next_help_heading = "OBJ models")]
 struct ModelArgs {
-    /// Image size of a model's render.
-    #[arg(long, value_name = "WxH", value_parser = parse_size, default_value = "800x600")]
-    size: (u32, u32),
+    /// Image size: of a model's render (default 800x600), or of every camera
+    /// of a scene, keeping its view.
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    size: Option<(u32, u32)>,
     /// Camera direction around the model, degrees from the front (+z), positive to the right.
     #[arg(long, value_name = "DEG", default_value_t = 35.0, allow_negative_numbers = true)]
     azimuth: f32,
@@ -276,8 +292,8 @@ struct ModelArgs {
 impl ModelArgs {
     fn view(&self) -> luster::scene::obj::ModelView {
         luster::scene::obj::ModelView {
-            width: self.size.0,
-            height: self.size.1,
+            width: self.size.map_or(800, |s| s.0),
+            height: self.size.map_or(600, |s| s.1),
             azimuth: self.azimuth,
             elevation: self.elevation,
             fov_y: self.fov,

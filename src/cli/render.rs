@@ -12,6 +12,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 /// Renders every scene; errors in one scene do not stop the others.
+#[allow(clippy::too_many_arguments)] // the command's options, passed through as given
 pub fn run(
     scenes: &[PathBuf],
     outdir: &Path,
@@ -20,6 +21,7 @@ pub fn run(
     opts: &RenderOptions,
     build: &BuildOptions,
     view: &ModelView,
+    frame: &(Option<(u32, u32)>, super::reframe::FrameArgs),
 ) -> ExitCode {
     let pool = match super::pool(threads) {
         Ok(p) => p,
@@ -27,7 +29,7 @@ pub fn run(
     };
     let mut failed = 0;
     for s in scenes {
-        if let Err(e) = pool.install(|| render_scene(s, outdir, quiet, opts, build, view)) {
+        if let Err(e) = pool.install(|| render_scene(s, outdir, quiet, opts, build, view, frame)) {
             eprintln!("error: {e:#}");
             failed += 1;
         }
@@ -50,13 +52,15 @@ fn render_scene(
     opts: &RenderOptions,
     build: &BuildOptions,
     view: &ModelView,
+    frame: &(Option<(u32, u32)>, super::reframe::FrameArgs),
 ) -> anyhow::Result<()> {
     let t0 = Instant::now();
-    let desc = if luster::scene::is_obj(path) {
-        luster::scene::obj::model_scene(path, view)?
-    } else {
-        luster::scene::load(path)?
-    };
+    let obj = luster::scene::is_obj(path);
+    let mut desc =
+        if obj { luster::scene::obj::model_scene(path, view)? } else { luster::scene::load(path)? };
+    // A model's --size already made its camera; --scale and --crop apply to both.
+    super::reframe::apply(&mut desc, if obj { None } else { frame.0 }, &frame.1)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     for w in &desc.warnings {
         eprintln!("warning: {}: {w}", path.display());
     }

@@ -92,6 +92,13 @@ impl Camera {
         }
     }
 
+    /// The camera's frame for shaders' camera space: x right, y up, z back.
+    pub fn view(&self) -> crate::texture::View {
+        let right = self.du.normalize_or_zero();
+        let up = -self.dv.normalize_or_zero();
+        crate::texture::View { eye: self.eye, right, up, back: right.cross(up) }
+    }
+
     /// Whether the camera has a lens (depth of field).
     pub fn has_lens(&self) -> bool {
         self.lens_u != Vec3::ZERO

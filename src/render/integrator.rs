@@ -58,6 +58,10 @@ pub struct PathState {
     pub spread: f32,
     /// Distance the path has covered before the current ray.
     travelled: f32,
+    /// The pixel being rendered and the camera's frame (for shaders).
+    pub pixel: [u32; 2],
+    /// See `pixel`.
+    pub view: crate::texture::View,
     /// The first shader failure on this path, naming the object. The path
     /// then contributes black and the render loop stops (see `render_tiles`).
     pub error: Option<Box<ShaderError>>,
@@ -74,6 +78,8 @@ impl PathState {
             screen: Vec2::ZERO,
             spread: 0.0,
             travelled: 0.0,
+            pixel: [0; 2],
+            view: crate::texture::View::default(),
             error: None,
         }
     }
@@ -113,7 +119,7 @@ use crate::render::sampler::PixelSampler;
 use crate::render::scene::{Hit, Scene};
 use crate::render::volumes;
 use crate::shader::ShaderError;
-use crate::texture::Applied;
+use crate::texture::{Applied, ShadeCtx};
 
 /// Ray counts, for the Mrays/s summary.
 #[derive(Clone, Copy, Debug, Default)]
@@ -173,7 +179,11 @@ fn shade(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, weight: f32, st: &mut 
         // The ray cone's width here, widened by the slant of the surface.
         let cos = ray.d.dot(hit.ns).abs().max(0.05);
         let footprint = st.spread * st.travelled / cos;
-        let frame = scene.tex_frame(hit, ray, st.time, footprint);
+        let mut frame = scene.tex_frame(hit, ray, st.time, footprint);
+        let (object, instance) = scene.object_ids(hit);
+        let (incident, ng, pixel, view) = (ray.d.normalize(), hit.ng, st.pixel, st.view);
+        frame.ctx = ShadeCtx { incident, ng, object, instance, depth, pixel, view, ..ShadeCtx::default() };
+        frame.ctx.set_footprint(st.spread * st.travelled);
         match scene.textures.apply(hit.textures, &frame, &mut material, &mut ns) {
             Ok(Applied::Lit) => {}
             Ok(Applied::Unlit(c)) => return c,

@@ -111,6 +111,7 @@ fn render_tiles(
     let spp = opts.spp.unwrap_or(camera.num_samples).max(1);
     let (w, h) = (camera.width, camera.height);
     let spread = camera.pixel_spread();
+    let view = camera.view();
     let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
         .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
         .collect();
@@ -133,6 +134,7 @@ fn render_tiles(
                         let ray = camera.lens_ray(x as f32 + jx, y as f32 + jy, lens);
                         let screen = Vec2::new((x as f32 + jx) / w as f32, (y as f32 + jy) / h as f32);
                         let mut st = PathState::new(stats, time, sampler).for_pixel(screen, spread);
+                        (st.pixel, st.view) = ([x, y], view);
                         st.stats.primary += 1;
                         let l = radiance(scene, &ray, 0, 1.0, &mut st);
                         tile.add_sample(x, y, jx, jy, l);

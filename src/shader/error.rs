@@ -17,6 +17,9 @@ pub enum ShaderErrorKind {
     Runtime,
     /// An entry point returned something other than numbers, or NaN.
     BadResult,
+    /// A scene parameter the script does not declare or read, or one of the
+    /// wrong type.
+    Parameter,
     /// A call ran past the per-call time limit and was stopped.
     Timeout,
     /// A Lua state ran out of its memory allowance.

@@ -64,9 +64,25 @@ pub(crate) struct Vec2 {
 pub(crate) struct Shade {
     pub p: Vec3,
     pub pw: Vec3,
+    pub pc: Vec3,
     pub n: Vec3,
+    pub ng: Vec3,
+    pub i: Vec3,
+    pub v: Vec3,
+    pub dpdu: Vec3,
+    pub dpdv: Vec3,
+    pub dpdx: Vec3,
+    pub dpdy: Vec3,
     pub uv: Vec2,
     pub time: f64,
+    pub filterwidth: f64,
+    pub random: f64,
+    pub object_id: i32,
+    pub instance_id: i32,
+    pub depth: i32,
+    pub pixel_x: i32,
+    pub pixel_y: i32,
+    pub pad: i32,
 }
 
 /// Where an entry wrapper writes its result (`luster_out`); a height uses `r`.

@@ -52,11 +52,14 @@
 mod error;
 mod ffi;
 mod instrument;
+mod params;
 /// The instrumenter, for the fuzz entry points.
 pub(crate) use instrument::instrument as instrument_script;
 mod state;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_author;
 #[cfg(test)]
 mod tests_sandbox;
 mod threads;
@@ -67,6 +70,24 @@ use std::sync::Arc;
 use std::time::Duration;
 
 pub use error::{ShaderError, ShaderErrorKind};
+
+/// The pixel `--debug-pixel` names, packed (`u64::MAX`: none).
+static DEBUG_PIXEL: AtomicU64 = AtomicU64::new(u64::MAX);
+
+/// Makes every shader call at pixel `p` print its inputs and result to
+/// standard error, and `print` in scripts show only there (`None`: every
+/// `print` shows, nothing else). Process-wide: it is a debugging aid for
+/// the command line.
+pub fn set_debug_pixel(p: Option<[u32; 2]>) {
+    let packed = p.map_or(u64::MAX, |[x, y]| (u64::from(x) << 32) | u64::from(y));
+    DEBUG_PIXEL.store(packed, Ordering::Relaxed);
+}
+
+/// The pixel of [`set_debug_pixel`].
+pub(crate) fn debug_pixel() -> Option<[u32; 2]> {
+    let p = DEBUG_PIXEL.load(Ordering::Relaxed);
+    (p != u64::MAX).then_some([(p >> 32) as u32, p as u32])
+}
 
 /// The default per-call time limit: generous, since a shader that needs it is
 /// broken, and a false stop would lose a render.
@@ -114,19 +135,47 @@ pub enum ParamValue {
     Text(String),
 }
 
-/// The shading point a script receives as `s`.
+/// The shading point a script receives as `s` (`docs/shaders.md` lists the
+/// fields as scripts see them). Points and vectors are `[x, y, z]`.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct ShadeInput {
     /// Object-space position (`s.P`).
     pub p: [f32; 3],
     /// World-space position (`s.Pw`).
     pub pw: [f32; 3],
+    /// Camera-space position (`s.Pc`): x right, y up, z towards the viewer.
+    pub pc: [f32; 3],
     /// Shading normal, world space, unit length (`s.N`).
     pub n: [f32; 3],
+    /// Geometric normal, world space, unit length (`s.Ng`).
+    pub ng: [f32; 3],
+    /// The incident ray's unit direction, world space (`s.I`; `s.V` is `-I`).
+    pub i: [f32; 3],
+    /// Object-space ∂P/∂u and ∂P/∂v (`s.dPdu`, `s.dPdv`).
+    pub dpdu: [f32; 3],
+    /// See `dpdu`.
+    pub dpdv: [f32; 3],
+    /// Object-space change of `P` to the next pixel right and down (`s.dPdx`,
+    /// `s.dPdy`): the ray's footprint on the surface.
+    pub dpdx: [f32; 3],
+    /// See `dpdx`.
+    pub dpdy: [f32; 3],
     /// Texture coordinates (`s.uv.u`, `s.uv.v`).
     pub uv: [f32; 2],
     /// The ray's time within the shutter, 0 to 1 (`s.time`).
     pub time: f32,
+    /// The footprint's width in object space (`s.filterwidth`): the larger
+    /// of `|dPdx|` and `|dPdy|`.
+    pub filterwidth: f32,
+    /// The geometry's object index (`s.object_id`): a mesh's instances share it.
+    pub object_id: u32,
+    /// The shaded object's own index (`s.instance_id`); `s.random` is a
+    /// repeatable number in [0, 1) derived from it.
+    pub instance_id: u32,
+    /// Ray depth: 0 for camera rays (`s.depth`).
+    pub depth: u32,
+    /// The pixel being shaded (`s.pixel_x`, `s.pixel_y`).
+    pub pixel: [u32; 2],
 }
 
 /// The entry points a script may define: three for surfaces, two for

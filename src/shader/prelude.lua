@@ -8,13 +8,19 @@
 local builtins_address, log, images_ctx, image_names = ...
 local ffi = ffi
 local error, type, tostring, select, pairs, ipairs = error, type, tostring, select, pairs, ipairs
-local floor, sqrt, format = math.floor, math.sqrt, string.format
+local setmetatable, tonumber = setmetatable, tonumber
+local floor, sqrt, format, abs, min = math.floor, math.sqrt, string.format, math.abs, math.min
 local band, bxor, rshift, tobit = bit.band, bit.bxor, bit.rshift, bit.tobit
 
 ffi.cdef [[
 typedef struct { double x, y, z; } luster_vec3;
 typedef struct { double u, v; } luster_vec2;
-typedef struct { luster_vec3 P, Pw, N; luster_vec2 uv; double time; } luster_shade;
+typedef struct {
+  luster_vec3 P, Pw, Pc, N, Ng, I, V, dPdu, dPdv, dPdx, dPdy;
+  luster_vec2 uv;
+  double time, filterwidth, random;
+  int32_t object_id, instance_id, depth, pixel_x, pixel_y, __luster_pad;
+} luster_shade;
 typedef struct { double r, g, b; int32_t bad; } luster_out;
 typedef struct { uint64_t start_ns, timeout_ns; int32_t expired; } luster_clock;
 typedef struct { double f1, f2, px, py, pz, id; } luster_cell;
@@ -84,11 +90,44 @@ local vec3_t
 local vec3_methods = {}
 local vec3_mt = { __index = vec3_methods }
 local function isvec(v) return type(v) == "cdata" and ffi.istype(vec3_t, v) end
+local shade_t = ffi.typeof("luster_shade")
+local vec2_t = ffi.typeof("luster_vec2")
+-- Names in the author's terms: LuaJIT calls all three "cdata".
+local function typename(v)
+  if type(v) ~= "cdata" then return type(v) end
+  if isvec(v) then return "vec3" end
+  if ffi.istype(shade_t, v) then return "shading point" end
+  if ffi.istype(vec2_t, v) then return "uv" end
+  return "runtime value"
+end
+local VEC3_FIELDS = "x, y, z and the methods dot, cross, length, normalize, unpack"
+setmetatable(vec3_methods, {
+  __index = function(_, k)
+    error(format("a vec3 has no field '%s' (it has %s)", tostring(k), VEC3_FIELDS), 2)
+  end,
+})
+local SHADE_FIELDS = "P, Pw, Pc, N, Ng, I, V, dPdu, dPdv, dPdx, dPdy, uv, time, filterwidth, random, "
+  .. "object_id, instance_id, depth, pixel_x, pixel_y"
+local function no_field(what, fields)
+  return function(_, k)
+    error(format("%s has no field '%s' (its fields: %s)", what, tostring(k), fields), 2)
+  end
+end
+ffi.metatype(shade_t, {
+  __index = no_field("the shading point s", SHADE_FIELDS),
+  __newindex = no_field("the shading point s", SHADE_FIELDS),
+  __tostring = function(s) return format("shading point at P = (%g, %g, %g)", s.P.x, s.P.y, s.P.z) end,
+})
+ffi.metatype(vec2_t, {
+  __index = no_field("s.uv", "u, v"),
+  __newindex = no_field("s.uv", "u, v"),
+  __tostring = function(t) return format("uv(%g, %g)", t.u, t.v) end,
+})
 -- Operands are vec3s or numbers (a number applies to every component). A
 -- wrong operand is reported at the script's line, not inside the prelude.
 local function operand(v, op)
   if type(v) == "number" or isvec(v) then return end
-  error(format("vec3 %s: expected a vec3 or a number, got %s", op, type(v)), 3)
+  error(format("vec3 %s: expected a vec3 or a number, got a %s", op, typename(v)), 3)
 end
 local function binary(op, f)
   return function(a, b)
@@ -129,35 +168,130 @@ end
 -- Noise: thin wrappers over the Rust built-ins (the JIT inlines them into a
 -- direct native call). Defaults match docs/shaders.md.
 ---------------------------------------------------------------------------
+-- Every built-in that takes a point takes x, y, z or one vec3; xyz() turns a
+-- vec3 into its numbers (a type test the JIT folds away for numbers).
+local function xyz(v, fname)
+  if isvec(v) then return v.x, v.y, v.z end
+  error(format("%s: expected numbers x, y, z or a vec3, got a %s", fname, typename(v)), 3)
+end
 local function perlin1(x) return B.perlin1(x) end
 local function perlin2(x, y) return B.perlin2(x, y) end
-local function perlin3(x, y, z) return B.perlin3(x, y, z) end
-local function perlin4(x, y, z, w) return B.perlin4(x, y, z, w) end
-local function course_noise(x, y, z) return B.course_noise(x, y, z) end
+local function perlin3(x, y, z)
+  if type(x) ~= "number" then x, y, z = xyz(x, "perlin3") end
+  return B.perlin3(x, y, z)
+end
+local function perlin4(x, y, z, w)
+  if type(x) ~= "number" then w = y; x, y, z = xyz(x, "perlin4") end
+  return B.perlin4(x, y, z, w)
+end
+local function course_noise(x, y, z)
+  if type(x) ~= "number" then x, y, z = xyz(x, "course_noise") end
+  return B.course_noise(x, y, z)
+end
 local function perlin3_grad(x, y, z)
+  if type(x) ~= "number" then x, y, z = xyz(x, "perlin3_grad") end
   local v = B.perlin3_grad(x, y, z, grad)
   return v, grad.x, grad.y, grad.z
 end
-local function pperlin3(x, y, z, px, py, pz) return B.pperlin3(x, y, z, px, py, pz) end
+local function pperlin3(x, y, z, px, py, pz)
+  if type(x) ~= "number" then
+    local per = y
+    x, y, z = xyz(x, "pperlin3")
+    if isvec(per) then px, py, pz = per.x, per.y, per.z else px, py, pz = per, per, per end
+  end
+  return B.pperlin3(x, y, z, px, py, pz)
+end
 local function simplex2(x, y) return B.simplex2(x, y) end
-local function simplex3(x, y, z) return B.simplex3(x, y, z) end
-local function simplex4(x, y, z, w) return B.simplex4(x, y, z, w) end
+local function simplex3(x, y, z)
+  if type(x) ~= "number" then x, y, z = xyz(x, "simplex3") end
+  return B.simplex3(x, y, z)
+end
+local function simplex4(x, y, z, w)
+  if type(x) ~= "number" then w = y; x, y, z = xyz(x, "simplex4") end
+  return B.simplex4(x, y, z, w)
+end
 local function simplex3_grad(x, y, z)
+  if type(x) ~= "number" then x, y, z = xyz(x, "simplex3_grad") end
   local v = B.simplex3_grad(x, y, z, grad)
   return v, grad.x, grad.y, grad.z
 end
-local function fbm(x, y, z, octaves, lacunarity, gain)
-  return B.fbm(x, y, z, octaves or 4, lacunarity or 2, gain or 0.5)
+
+-- Antialiasing. An octave of frequency f, seen through a footprint of width
+-- fw (in the same units as the point), keeps its full weight while a pixel
+-- spans under a quarter of its lattice cell and none once it spans half (the
+-- Nyquist limit), with a smooth fade between: the octaves a pixel cannot
+-- resolve are replaced by their mean instead of aliasing into noise.
+local function octave_weight(fw, f)
+  local t = fw * f
+  if t <= 0.25 then return 1 end
+  if t >= 0.5 then return 0 end
+  local u = (t - 0.25) * 4
+  return 1 - u * u * (3 - 2 * u)
+end
+-- The mean of |perlin3| over space (measured in tests.rs): what a faded
+-- turbulence octave contributes.
+local MEAN_ABS_PERLIN = 0.2209
+local function fractal_aa(x, y, z, octaves, lacunarity, gain, fw, fold)
+  local sum, amp, f = 0, 1, 1
+  for _ = 1, min(octaves, 16) do
+    local w = octave_weight(fw, f)
+    if w == 0 then
+      if fold then sum = sum + amp * MEAN_ABS_PERLIN end
+    else
+      local n = B.perlin3(x * f, y * f, z * f)
+      if fold then n = w * abs(n) + (1 - w) * MEAN_ABS_PERLIN else n = w * n end
+      sum = sum + amp * n
+    end
+    amp, f = amp * gain, f * lacunarity
+  end
+  return sum
+end
+-- fbm(x, y, z, [octaves], [lacunarity], [gain], [fw]) or fbm(p, ...): with a
+-- filter width fw > 0 the octaves finer than the footprint fade out.
+local function fractal_args(fname, x, y, z, a, b, c, d)
+  if type(x) ~= "number" then
+    a, b, c, d = y, z, a, b
+    x, y, z = xyz(x, fname)
+  end
+  return x, y, z, a or 4, b or 2, c or 0.5, d
+end
+local function fbm(x, y, z, octaves, lacunarity, gain, fw)
+  x, y, z, octaves, lacunarity, gain, fw = fractal_args("fbm", x, y, z, octaves, lacunarity, gain, fw)
+  if fw and fw > 0 then return fractal_aa(x, y, z, octaves, lacunarity, gain, fw, false) end
+  return B.fbm(x, y, z, octaves, lacunarity, gain)
 end
 local function fbm_grad(x, y, z, octaves, lacunarity, gain)
-  local v = B.fbm_grad(x, y, z, octaves or 4, lacunarity or 2, gain or 0.5, grad)
+  x, y, z, octaves, lacunarity, gain = fractal_args("fbm_grad", x, y, z, octaves, lacunarity, gain)
+  local v = B.fbm_grad(x, y, z, octaves, lacunarity, gain, grad)
   return v, grad.x, grad.y, grad.z
 end
-local function turbulence(x, y, z, octaves, lacunarity, gain)
-  return B.turbulence(x, y, z, octaves or 4, lacunarity or 2, gain or 0.5)
+local function turbulence(x, y, z, octaves, lacunarity, gain, fw)
+  x, y, z, octaves, lacunarity, gain, fw =
+    fractal_args("turbulence", x, y, z, octaves, lacunarity, gain, fw)
+  if fw and fw > 0 then return fractal_aa(x, y, z, octaves, lacunarity, gain, fw, true) end
+  return B.turbulence(x, y, z, octaves, lacunarity, gain)
 end
 local function ridged(x, y, z, octaves, lacunarity, gain, offset)
+  if type(x) ~= "number" then
+    octaves, lacunarity, gain, offset = y, z, octaves, lacunarity
+    x, y, z = xyz(x, "ridged")
+  end
   return B.ridged(x, y, z, octaves or 4, lacunarity or 2, gain or 0.5, offset or 1)
+end
+-- Vector-valued noise: three Perlin noises at far-apart offsets, so the
+-- components are uncorrelated (for warping a point, or a random direction).
+local function vperlin(x, y, z)
+  if type(x) ~= "number" then x, y, z = xyz(x, "vperlin") end
+  return vec3_t(B.perlin3(x, y, z), B.perlin3(x + 31.416, y - 47.853, z + 12.679),
+    B.perlin3(x - 19.27, y + 33.31, z - 71.13))
+end
+local function vfbm(x, y, z, octaves, lacunarity, gain, fw)
+  x, y, z, octaves, lacunarity, gain, fw = fractal_args("vfbm", x, y, z, octaves, lacunarity, gain, fw)
+  local function one(ox, oy, oz)
+    if fw and fw > 0 then return fractal_aa(x + ox, y + oy, z + oz, octaves, lacunarity, gain, fw, false) end
+    return B.fbm(x + ox, y + oy, z + oz, octaves, lacunarity, gain)
+  end
+  return vec3_t(one(0, 0, 0), one(31.416, -47.853, 12.679), one(-19.27, 33.31, -71.13))
 end
 local METRICS = { euclidean = 0, manhattan = 1, chebyshev = 2 }
 local function metric_of(m)
@@ -168,6 +302,10 @@ local function metric_of(m)
   return id
 end
 local function voronoi(x, y, z, metric, jitter)
+  if type(x) ~= "number" then
+    jitter, metric = z, y
+    x, y, z = xyz(x, "voronoi")
+  end
   local m = metric_of(metric)
   B.voronoi3(x, y, z, m, jitter or 1, cell)
   return cell.f1, cell.f2, cell.id, cell.px, cell.py, cell.pz
@@ -183,6 +321,7 @@ end
 local FILTERS = { nearest = 0, bilinear = 1 }
 local texel = ffi.new("luster_vec3")
 local function texture(name, u, v, filter)
+  if type(u) == "cdata" and ffi.istype(vec2_t, u) then filter = v; u, v = u.u, u.v end
   local index = image_names[name]
   if index == nil and type(name) == "number" then index = image_names[tostring(name)] end
   if index == nil then
@@ -193,7 +332,7 @@ local function texture(name, u, v, filter)
     error(format("texture: the scene has no image %s (its images: %s)", tostring(name), list), 2)
   end
   if type(u) ~= "number" or type(v) ~= "number" then
-    error(format("texture: u and v must be numbers, got %s and %s", type(u), type(v)), 2)
+    error(format("texture: u and v must be numbers (or one s.uv), got a %s and a %s", typename(u), typename(v)), 2)
   end
   local f = FILTERS[filter or "bilinear"]
   if f == nil then
@@ -219,8 +358,52 @@ local function smoothstep(e0, e1, x)
 end
 local function step(edge, x) if x < edge then return 0 end return 1 end
 local function fract(x) return x - floor(x) end
-local function checker(x, y, z)
-  return (floor(x) + floor(y) + floor(z or 0)) % 2
+-- The box-filtered square wave, +1 on [0, 1) and -1 on [1, 2), averaged over
+-- [t - w/2, t + w/2]: the difference of its integral, a triangle wave.
+local function square_integral(t)
+  local h = t / 2 - floor(t / 2)
+  return 1 - abs(2 * h - 1)
+end
+local function filtered_square(t, w)
+  if w <= 0 then return (floor(t) % 2 == 0) and 1 or -1 end
+  return (square_integral(t + w / 2) - square_integral(t - w / 2)) / w
+end
+-- checker(x, y, [z], [fw]) or checker(p, [fw]): 0 or 1 on unit cells; with a
+-- filter width, the cells' average over the footprint (a box filter per
+-- axis). fw is one width or a vec3 of widths per axis (filterwidth_xyz):
+-- on a surface the footprint has no depth across it, and a cube-shaped box
+-- would blur a plane lying on a cell boundary to grey.
+local function checker(x, y, z, fw)
+  if type(x) ~= "number" then
+    fw = y
+    x, y, z = xyz(x, "checker")
+  end
+  z = z or 0
+  if not fw then return (floor(x) + floor(y) + floor(z)) % 2 end
+  local wx, wy, wz
+  if isvec(fw) then wx, wy, wz = fw.x, fw.y, fw.z else wx, wy, wz = fw, fw, fw end
+  if wx <= 0 and wy <= 0 and wz <= 0 then return (floor(x) + floor(y) + floor(z)) % 2 end
+  return 0.5 - 0.5 * filtered_square(x, wx) * filtered_square(y, wy) * filtered_square(z, wz)
+end
+-- aastep(edge, x, [fw]): step(edge, x) box-filtered over a footprint of width
+-- fw in the units of x (0 or nil: the hard step).
+local function aastep(edge, x, fw)
+  if not fw or fw <= 0 then
+    if x < edge then return 0 end
+    return 1
+  end
+  return clamp((x - edge) / fw + 0.5, 0, 1)
+end
+-- filterwidth(s, [scale]): the footprint of s.P scaled by `scale`, the width
+-- to give the filtered built-ins for a pattern of `scale * s.P`.
+local function filterwidth(s, scale)
+  return s.filterwidth * abs(scale or 1)
+end
+-- filterwidth_xyz(s, [scale]): the footprint's extent along each object
+-- axis, |dPdx| + |dPdy| per component (OSL's filterwidth of a point).
+local function filterwidth_xyz(s, scale)
+  local k, dx, dy = abs(scale or 1), s.dPdx, s.dPdy
+  return vec3_t(k * (abs(dx.x) + abs(dy.x)), k * (abs(dx.y) + abs(dy.y)), k * (abs(dx.z) + abs(dy.z)))
 end
 -- 32-bit integer hashing (the lowbias32 finaliser by Chris Wellons). Lua
 -- numbers are doubles, so products are split to stay exact below 2^53.
@@ -240,7 +423,10 @@ local function hash_int(a, b, c)
   h = mix32(bxor(h, tobit(c or 0)))
   return band(h, 0x7fffffff)
 end
-local function hash(a, b, c) return hash_int(floor(a), floor(b or 0), floor(c or 0)) / 0x80000000 end
+local function hash(a, b, c)
+  if isvec(a) then a, b, c = a.x, a.y, a.z end
+  return hash_int(floor(a), floor(b or 0), floor(c or 0)) / 0x80000000
+end
 local function brick(x, y, width, height, mortar)
   width, height, mortar = width or 1, height or 0.5, mortar or 0.05
   local row = floor(y / height)
@@ -358,20 +544,118 @@ local BUILTINS = {
   perlin3_grad = perlin3_grad, pperlin3 = pperlin3, course_noise = course_noise,
   simplex2 = simplex2, simplex3 = simplex3, simplex4 = simplex4, simplex3_grad = simplex3_grad,
   fbm = fbm, fbm_grad = fbm_grad, turbulence = turbulence, ridged = ridged,
-  voronoi = voronoi, voronoi2 = voronoi2, texture = texture,
+  voronoi = voronoi, voronoi2 = voronoi2, texture = texture, vperlin = vperlin, vfbm = vfbm,
   clamp = clamp, mix = mix, lerp = mix, smoothstep = smoothstep, step = step, fract = fract,
+  aastep = aastep, filterwidth = filterwidth, filterwidth_xyz = filterwidth_xyz,
   checker = checker, brick = brick, ramp = ramp, hash = hash,
   collectgarbage = safe_collectgarbage,
 }
+
+-- What a script gets instead of a removed global or library function: an
+-- error saying it was removed on purpose, and why.
+local REMOVED = {
+  io = "shaders cannot read or write files",
+  os = "shaders cannot reach the operating system, and its clock would make images differ between runs",
+  debug = "it would reach past the sandbox",
+  ffi = "it would reach past the sandbox",
+  jit = "it would reach past the sandbox",
+  package = "shaders cannot load modules",
+  require = "shaders cannot load modules",
+  module = "shaders cannot load modules",
+  load = "shaders cannot compile code while they run",
+  loadstring = "shaders cannot compile code while they run",
+  loadfile = "shaders cannot read files",
+  dofile = "shaders cannot read files",
+  getfenv = "it would reach past the sandbox",
+  setfenv = "it would reach past the sandbox",
+  newproxy = "it would reach past the sandbox",
+}
+local RANDOM_WHY = "images must not depend on which thread shades which pixel; "
+  .. "use hash(...) or the noise functions for repeatable randomness"
+local function removed(lib, why)
+  return {
+    __index = function(_, k)
+      local reason = why[k]
+      if reason then error(format("%s%s was removed from shaders: %s", lib, tostring(k), reason), 2) end
+      return nil
+    end,
+    __metatable = false,
+  }
+end
+
+-- Declared parameters: params{ name = default, ... } at the top level. The
+-- default's kind is the parameter's type; rgb() and image() mark the kinds a
+-- plain value cannot show.
+local KIND_MARK = {}
+local function rgb(r, g, b)
+  local v
+  if isvec(r) then v = r elseif g == nil and b == nil then v = vec3(r) else v = vec3_t(r, g, b) end
+  return { [KIND_MARK] = "rgb", value = v }
+end
+local function image_param(name)
+  if type(name) ~= "string" and type(name) ~= "number" then
+    error(format("image(name): expected the name of one of the scene's images, got a %s", typename(name)), 2)
+  end
+  return { [KIND_MARK] = "image", value = tostring(name) }
+end
+local function kind_of(v)
+  if type(v) == "table" and v[KIND_MARK] then return v[KIND_MARK], v.value end
+  if type(v) == "number" then return "number", v end
+  if type(v) == "string" then return "string", v end
+  if isvec(v) then return "vec3", v end
+  return nil
+end
+local function show(kind, v)
+  if kind == "rgb" or kind == "vec3" then return format("(%g, %g, %g)", v.x, v.y, v.z) end
+  if kind == "string" or kind == "image" then return format("%q", v) end
+  return tostring(v)
+end
+local function image_list()
+  local known = {}
+  for k in pairs(image_names) do known[#known + 1] = format("%q", k) end
+  table.sort(known)
+  return #known > 0 and table.concat(known, ", ") or "none"
+end
+-- What the scene gave, as the scene gave it: "number", "vec3" or "string".
+local function scene_kind(v)
+  if type(v) == "table" then return "vec3" end
+  return type(v)
+end
+-- The scene's value converted to the declared kind, or nil and the reason.
+local function convert(kind, v)
+  local given = scene_kind(v)
+  if kind == "number" then
+    if given == "number" then return v end
+  elseif kind == "rgb" then
+    if given == "vec3" then return vec3_t(v[1], v[2], v[3]) end
+    if given == "number" then return vec3(v) end
+  elseif kind == "vec3" then
+    if given == "vec3" then return vec3_t(v[1], v[2], v[3]) end
+  elseif kind == "string" then
+    if given == "string" or given == "number" then return tostring(v) end
+  elseif kind == "image" then
+    if given == "string" or given == "number" then
+      local name = tostring(v)
+      if image_names[name] == nil then
+        return nil, format("names no image of the scene (its images: %s)", image_list())
+      end
+      return name
+    end
+  end
+  local want = { number = "one number", rgb = "an rgb colour (three numbers, or one for grey)",
+    vec3 = "a vec3 (three numbers)", string = "text", image = "an image's name" }
+  local got = { number = "a number", vec3 = "three numbers", string = "text" }
+  return nil, format("is %s, but the script declares %s", got[given] or given, want[kind])
+end
 
 local function make_env(shader_name, params)
   local env = {}
   for _, k in ipairs(SAFE_GLOBALS) do env[k] = real_globals[k] end
   for k, v in pairs(BUILTINS) do env[k] = v end
-  -- math.random would make images depend on thread scheduling; hash() and
-  -- the noise functions give repeatable randomness instead.
   env.math = copy(math, { random = true, randomseed = true })
+  setmetatable(env.math, removed("math.", { random = RANDOM_WHY, randomseed = RANDOM_WHY }))
   env.string = copy(string)
+  setmetatable(env.string, removed("string.", { dump = "it would expose compiled code" }))
   env.table = copy(table)
   env.bit = copy(bit)
   env.coroutine = copy(coroutine)
@@ -379,7 +663,7 @@ local function make_env(shader_name, params)
     local n = select("#", ...)
     local parts = { ... }
     for i = 1, n do parts[i] = tostring(parts[i]) end
-    log(shader_name, table.concat(parts, "\t", 1, n))
+    log(shader_name, table.concat(parts, "\t", 1, n), shade.pixel_x, shade.pixel_y)
   end
   local param = {}
   for k, v in pairs(params) do
@@ -387,8 +671,60 @@ local function make_env(shader_name, params)
     param[k] = v
   end
   env.param = param
+  env.rgb = rgb
+  env.image = image_param
+  local declared = false
+  env.params = function(decl)
+    if declared then error("params{...} may be called only once", 2) end
+    if type(decl) ~= "table" then error("params{...} takes a table of name = default", 2) end
+    declared = true
+    local names, kinds = {}, {}
+    for name, default in pairs(decl) do
+      local kind, value = kind_of(default)
+      if type(name) ~= "string" or kind == nil then
+        error(format("params: '%s' has a default of type %s; use a number, rgb(r, g, b), vec3(x, y, z), "
+          .. "image(\"name\") or a string", tostring(name), typename(default)), 2)
+      end
+      names[#names + 1] = name
+      kinds[name] = { kind, value }
+    end
+    table.sort(names)
+    local listed = {}
+    for i, name in ipairs(names) do
+      local k = kinds[name]
+      listed[i] = format("%s (%s, default %s)", name, k[1], show(k[1], k[2]))
+    end
+    local declares = #listed > 0 and table.concat(listed, ", ") or "none"
+    local given = {}
+    for name in pairs(params) do given[#given + 1] = name end
+    table.sort(given)
+    for _, name in ipairs(given) do
+      if kinds[name] == nil then
+        error(format("the scene's parameter '%s' is not one the script declares; it declares: %s",
+          name, declares), 2)
+      end
+    end
+    for _, name in ipairs(names) do
+      local kind, default = kinds[name][1], kinds[name][2]
+      if params[name] == nil then
+        param[name] = default
+      else
+        local v, why = convert(kind, params[name])
+        if v == nil then
+          error(format("the scene's parameter '%s' %s; the script declares: %s", name, why, declares), 2)
+        end
+        param[name] = v
+      end
+    end
+    setmetatable(param, {
+      __index = function(_, k)
+        error(format("param.%s is not declared; the script declares: %s", tostring(k), declares), 2)
+      end,
+    })
+  end
   env._G = env
-  return env
+  setmetatable(env, removed("", REMOVED))
+  return env, function() return declared end
 end
 
 ---------------------------------------------------------------------------
@@ -406,7 +742,7 @@ local function describe(v)
   if v == -math.huge then return "-inf" end
   if v == nil then return "nothing (nil)" end
   if type(v) == "number" then return tostring(v) end
-  return "a " .. type(v)
+  return "a " .. typename(v)
 end
 local function bad(shader_name, entry, what)
   out.bad = 1
@@ -481,6 +817,10 @@ return {
   make_entry = make_entry,
   make_height3 = make_height3,
   tick = tick,
+  -- LuaJIT's messages name the records by number ('struct 97'): the names
+  -- the author knows them by.
+  ctypes = { vec3 = tostring(ffi.typeof("luster_vec3")), ["shading point"] = tostring(shade_t),
+    uv = tostring(vec2_t) },
   shade = address(shade),
   shade3 = address(shade3),
   out = address(out),

@@ -9,6 +9,7 @@ use mlua::{Function, LightUserData, Lua, LuaOptions, StdLib, Table, Value};
 use super::error::{ShaderError, ShaderErrorKind};
 use super::ffi::{self, IoBlock, Shade};
 use super::instrument::{instrument, ScanError};
+use super::params;
 use super::{Entry, ImageSampler, ParamValue, ShadeInput, ShaderSource, Shared, ENTRIES};
 use std::sync::Arc;
 
@@ -37,6 +38,8 @@ pub(crate) struct ThreadState {
     /// address (a thin pointer) for the life of the state; declared after
     /// `lua` so it outlives every Lua value that refers to it.
     _images: Option<Box<Arc<dyn ImageSampler>>>,
+    /// LuaJIT's names for the records (`struct 97`) and luster's (`vec3`).
+    ctype_names: Vec<(String, String)>,
 }
 
 impl ThreadState {
@@ -58,8 +61,13 @@ impl ThreadState {
         let _ = lua.set_memory_limit(MEMORY_LIMIT);
 
         let log = lua
-            .create_function(|_, (name, text): (String, String)| {
-                eprintln!("[shader {name}] {text}");
+            .create_function(|_, (name, text, x, y): (String, String, i64, i64)| {
+                // The top level runs at pixel -1: its prints always show.
+                match super::debug_pixel() {
+                    Some([dx, dy]) if x >= 0 && (x != i64::from(dx) || y != i64::from(dy)) => {}
+                    Some(_) if x >= 0 => eprintln!("[shader {name} at pixel {x},{y}] {text}"),
+                    _ => eprintln!("[shader {name}] {text}"),
+                }
                 Ok(())
             })
             .map_err(internal)?;
@@ -102,8 +110,23 @@ impl ThreadState {
                 )
             })?;
 
-        let mut state =
-            ThreadState { io, shaders: Vec::with_capacity(sources.len()), timeout, lua, _images: images };
+        let ctypes: Table = api.get("ctypes").map_err(internal)?;
+        let mut ctype_names = Vec::new();
+        for pair in ctypes.pairs::<String, String>() {
+            let (name, ctype) = pair.map_err(internal)?;
+            // "ctype<struct 97>" in tostring, "'struct 97'" in messages.
+            let inner = ctype.trim_start_matches("ctype<").trim_end_matches('>');
+            ctype_names.push((format!("'{inner}'"), format!("'{name}'")));
+            ctype_names.push((inner.to_string(), name));
+        }
+        let mut state = ThreadState {
+            io,
+            shaders: Vec::with_capacity(sources.len()),
+            timeout,
+            lua,
+            _images: images,
+            ctype_names,
+        };
         let make_env: Function = api.get("make_env").map_err(internal)?;
         let make_entry: Function = api.get("make_entry").map_err(internal)?;
         let make_height3: Function = api.get("make_height3").map_err(internal)?;
@@ -155,7 +178,7 @@ impl ThreadState {
             };
             params.set(key.as_str(), v).map_err(lua_err)?;
         }
-        let env: Table = make_env.call((name, params)).map_err(lua_err)?;
+        let (env, declared): (Table, Function) = make_env.call((name, params)).map_err(lua_err)?;
         // Lua shortens long chunk names from the left, keeping the file name.
         let chunk = self
             .lua
@@ -164,9 +187,13 @@ impl ThreadState {
             .set_environment(env.clone())
             .into_function()
             .map_err(lua_err)?;
-        self.io.begin(&Shade::default());
+        self.io.begin(&Shade { pixel_x: -1, pixel_y: -1, ..Shade::default() });
         chunk.call::<()>(tick.clone()).map_err(lua_err)?;
         self.check_deadline(name)?;
+        if !declared.call::<bool>(()).map_err(lua_err)? {
+            params::check_undeclared(src)
+                .map_err(|m| ShaderError::new(ShaderErrorKind::Parameter, name, format!("{file}: {m}")))?;
+        }
 
         let mut entries: [Option<Function>; ENTRIES] = Default::default();
         for entry in Entry::ALL {
@@ -202,7 +229,22 @@ impl ThreadState {
     }
 
     fn error(&self, shader: &str, e: &mlua::Error) -> ShaderError {
-        ShaderError::from_lua(shader, e, self.io.timed_out(), self.io.bad_result(), self.timeout)
+        let mut err =
+            ShaderError::from_lua(shader, e, self.io.timed_out(), self.io.bad_result(), self.timeout);
+        err.message = self.in_author_terms(&err.message);
+        err
+    }
+
+    /// LuaJIT's messages with luster's type names for its records (`'struct
+    /// 97'` is a `vec3`) and without the word "cdata", which means nothing to
+    /// a shader author.
+    fn in_author_terms(&self, message: &str) -> String {
+        let mut m = message.to_string();
+        for (ctype, name) in &self.ctype_names {
+            m = m.replace(ctype.as_str(), name);
+        }
+        m.replace("a cdata value", "a luster value (vec3, s or s.uv)")
+            .replace("cdata", "luster value (vec3, s or s.uv)")
     }
 
     /// Which entry points shader `id` defines.
@@ -227,14 +269,30 @@ impl ThreadState {
             ));
         };
         self.io.begin(&shade_of(input));
-        match f.call::<()>(()) {
+        let result = match f.call::<()>(()) {
             Ok(()) => {
                 self.check_deadline(&shader.name)?;
                 let o = self.io.out();
                 Ok([o.r, o.g, o.b])
             }
             Err(e) => Err(self.error(&shader.name, &e)),
+        };
+        if super::debug_pixel() == Some(input.pixel) {
+            let out = match &result {
+                Ok(c) if matches!(entry, Entry::Height | Entry::Density) => format!("{}", c[0]),
+                Ok(c) => format!("{} {} {}", c[0], c[1], c[2]),
+                Err(e) => format!("error: {}", e.message),
+            };
+            eprintln!(
+                "[shader {} at pixel {},{}] {}(s) -> {out}\n  s = {}",
+                shader.name,
+                input.pixel[0],
+                input.pixel[1],
+                entry.name(),
+                describe(input)
+            );
         }
+        result
     }
 
     /// The shader `id` of this state, or a usage error.
@@ -272,11 +330,64 @@ impl ThreadState {
 
 fn shade_of(i: &ShadeInput) -> Shade {
     let v = |a: [f32; 3]| ffi::Vec3 { x: a[0].into(), y: a[1].into(), z: a[2].into() };
+    let int = |x: u32| i32::try_from(x).unwrap_or(i32::MAX);
     Shade {
         p: v(i.p),
         pw: v(i.pw),
+        pc: v(i.pc),
         n: v(i.n),
+        ng: v(i.ng),
+        i: v(i.i),
+        v: v(i.i.map(|c| -c)),
+        dpdu: v(i.dpdu),
+        dpdv: v(i.dpdv),
+        dpdx: v(i.dpdx),
+        dpdy: v(i.dpdy),
         uv: ffi::Vec2 { u: i.uv[0].into(), v: i.uv[1].into() },
         time: i.time.into(),
+        filterwidth: i.filterwidth.into(),
+        random: object_random(i.instance_id),
+        object_id: int(i.object_id),
+        instance_id: int(i.instance_id),
+        depth: int(i.depth),
+        pixel_x: int(i.pixel[0]),
+        pixel_y: int(i.pixel[1]),
+        pad: 0,
     }
+}
+
+/// The shading point as `--debug-pixel` prints it.
+fn describe(i: &ShadeInput) -> String {
+    let v = |a: [f32; 3]| format!("({}, {}, {})", a[0], a[1], a[2]);
+    format!(
+        "{{ P = {}, Pw = {}, Pc = {}, N = {}, Ng = {}, I = {}, uv = ({}, {}), dPdu = {}, dPdv = {}, \
+         dPdx = {}, dPdy = {}, filterwidth = {}, object_id = {}, instance_id = {}, depth = {}, time = {} }}",
+        v(i.p),
+        v(i.pw),
+        v(i.pc),
+        v(i.n),
+        v(i.ng),
+        v(i.i),
+        i.uv[0],
+        i.uv[1],
+        v(i.dpdu),
+        v(i.dpdv),
+        v(i.dpdx),
+        v(i.dpdy),
+        i.filterwidth,
+        i.object_id,
+        i.instance_id,
+        i.depth,
+        i.time
+    )
+}
+
+/// A repeatable number in [0, 1) per object (SplitMix64's finaliser): the
+/// same on every thread and run, different between neighbouring ids.
+pub(crate) fn object_random(id: u32) -> f64 {
+    let mut z = u64::from(id).wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^= z >> 31;
+    (z >> 11) as f64 / (1u64 << 53) as f64
 }

@@ -11,7 +11,14 @@ pub(super) fn set_of(code: &str) -> Result<ShaderSet, ShaderError> {
 }
 
 pub(super) fn input(p: [f32; 3]) -> ShadeInput {
-    ShadeInput { p, pw: [p[0] + 10.0, p[1], p[2]], n: [0.0, 0.0, 1.0], uv: [0.25, 0.75], time: 0.5 }
+    ShadeInput {
+        p,
+        pw: [p[0] + 10.0, p[1], p[2]],
+        n: [0.0, 0.0, 1.0],
+        uv: [0.25, 0.75],
+        time: 0.5,
+        ..ShadeInput::default()
+    }
 }
 
 pub(super) fn color_err(code: &str) -> ShaderError {

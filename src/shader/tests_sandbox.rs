@@ -37,7 +37,7 @@ fn dangerous_globals_are_absent() {
         "math.random()",
     ] {
         let e = escape(expr);
-        assert!(e.message.contains("nil"), "{expr}: {e}");
+        assert!(e.message.contains("was removed from shaders"), "{expr}: {e}");
     }
 }
 
@@ -59,12 +59,13 @@ fn globals_tricks_do_not_reach_the_real_environment() {
         "function color(s)
            local reach = 0
            if rawget(_G, 'os') ~= nil or rawget(_G, 'ffi') ~= nil then reach = reach + 1 end
-           if _G.io ~= nil or _G._G.debug ~= nil then reach = reach + 1 end
+           if rawget(_G, 'io') ~= nil or rawget(_G._G, 'debug') ~= nil then reach = reach + 1 end
+           if pcall(function() return _G.io end) then reach = reach + 1 end
            for k, v in pairs(_G) do
              if k == 'ffi' or k == 'jit' or k == 'os' or k == 'io' or k == 'package' then reach = reach + 1 end
            end
-           local mt = getmetatable(_G)
-           if mt ~= nil then reach = reach + 1 end
+           -- The globals' metatable (which explains removed names) is hidden.
+           if getmetatable(_G) ~= false then reach = reach + 1 end
            if getmetatable(s) ~= 'ffi' then reach = reach + 1 end
            return reach, 0, 0
          end",
@@ -117,7 +118,7 @@ fn builtins_do_not_leak_the_prelude() {
            for _, f in ipairs({ perlin3, fbm, voronoi, vec3, ramp, brick }) do
              if type(f) ~= 'function' then leaks = leaks + 1 end
            end
-           if getfenv ~= nil or debug ~= nil then leaks = leaks + 1 end
+           if rawget(_G, 'getfenv') ~= nil or rawget(_G, 'debug') ~= nil then leaks = leaks + 1 end
            return leaks, 0, 0
          end",
     )

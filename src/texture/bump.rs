@@ -84,25 +84,32 @@ pub fn bump(tex: &Textures, map: &TextureMap, f: &TexFrame) -> Vec3 {
 
 /// Bump mapping from a height function of object-space points (a shader's
 /// `height`), scaled by `k`: the object-space normal of the displaced surface
-/// `p + k h(p) n`. `h3` gets three (point, texture coordinates) pairs and
-/// returns the three heights, so a shader can evaluate them in one call.
+/// `p + k h(p) n`, or `None` when the height has no slope here (the caller
+/// then keeps its normal bit for bit). `h3` gets three (point, texture
+/// coordinates) pairs and returns the three heights, so a shader can evaluate
+/// them in one call.
 ///
 /// The method: forward differences along the surface's own tangents. With
 /// steps `a = δu ∂p/∂u` and `b = δv ∂p/∂v` (texture coordinates moved by
-/// `δu`, `δv` with them, so a height written in `uv` works too) the displaced
-/// surface's tangents are `a + k (h(p+a) − h(p)) n` and
-/// `b + k (h(p+b) − h(p)) n`, and their cross product is its normal (Blinn's
-/// construction with the derivatives replaced by differences). Three calls of
-/// `height`, against the six of the central differences along x, y, z that
-/// the shading-language papers use, or four for tetrahedral differences; only
-/// the tangential part of the gradient tilts the normal, so the two tangent
-/// directions suffice. The error is first order, `|Δg| ≈ ε/2 · |h''|`: for
-/// `h = 0.05 sin(8x) sin(8y) + …` and `ε = 10⁻³` the normal differs from the
-/// central-difference one by at most 0.11° where the bump tilts it by up to
-/// 23° (`bump_tests.rs` measures it; tetrahedral differences, also first
-/// order since a tetrahedron is not symmetric, err by 0.05° for a fourth
-/// call), far below what shading shows. Where the parameterization degenerates (a
-/// sphere's poles) any orthonormal frame around `n` is used, with `uv` fixed.
+/// `δu`, `δv` with them, so a height written in `uv` works too) the height
+/// changes by `Δa = k (h(p+a) − h(p))` and `Δb = k (h(p+b) − h(p))`. The
+/// gradient `g` in the plane of `a` and `b` with `g·a = Δa`, `g·b = Δb` is
+/// the slope; its part across the shading normal `n` tilts it,
+/// `n' = normalize(n − (g − (g·n) n))`. On a flat surface this is the normal
+/// of Blinn's displaced tangents `a + Δa n`, `b + Δb n`; on a smooth-shaded
+/// mesh, whose `n` is interpolated while `a` and `b` lie in the flat
+/// triangle, it tilts the interpolated normal rather than rebuilding the
+/// triangle's (which turned such meshes faceted).
+///
+/// Three calls of `height`, against the six of the central differences along
+/// x, y, z that the shading-language papers use, or four for tetrahedral
+/// differences; only the tangential part of the gradient tilts the normal,
+/// so the two tangent directions suffice. The error is first order,
+/// `|Δg| ≈ ε/2 · |h''|`: for `h = 0.05 sin(8x) sin(8y) + …` and `ε = 10⁻³`
+/// the normal differs from the central-difference one by at most 0.11° where
+/// the bump tilts it by up to 23° (`bump_tests.rs` measures it). Where the
+/// parameterization degenerates (a sphere's poles) any orthonormal frame
+/// around `n` is used, with `uv` fixed.
 ///
 /// `eps` is the step length in object space; [`bump_step`] chooses it.
 pub fn height_bump<E>(
@@ -110,7 +117,7 @@ pub fn height_bump<E>(
     k: f32,
     eps: f32,
     h3: impl FnOnce([(Vec3, Vec2); 3]) -> Result<[f32; 3], E>,
-) -> Result<Vec3, E> {
+) -> Result<Option<Vec3>, E> {
     let (lu, lv) = (f.dpdu.length(), f.dpdv.length());
     let usable = lu > 1e-12 && lv > 1e-12 && f.dpdu.cross(f.dpdv).length() > 1e-6 * lu * lv;
     let (a, ua, b, ub) = if usable {
@@ -121,11 +128,25 @@ pub fn height_bump<E>(
         (t * eps, Vec2::ZERO, s * eps, Vec2::ZERO)
     };
     let [h0, ha, hb] = h3([(f.p_object, f.uv), (f.p_object + a, f.uv + ua), (f.p_object + b, f.uv + ub)])?;
-    let pa = a + f.n * (k * (ha - h0));
-    let pb = b + f.n * (k * (hb - h0));
-    let n = pa.cross(pb);
-    let n = if n.dot(f.n) < 0.0 { -n } else { n };
-    Ok(n.try_normalize().unwrap_or(f.n))
+    let (da, db) = (k * (ha - h0), k * (hb - h0));
+    if da == 0.0 && db == 0.0 {
+        return Ok(None);
+    }
+    Ok(Some(tilt(f.n, a, b, da, db)))
+}
+
+/// The unit normal `n` tilted by the gradient `g` in the plane of `a` and `b`
+/// that has `g·a = da` and `g·b = db` (solved in the dual basis of `a`, `b`).
+fn tilt(n: Vec3, a: Vec3, b: Vec3, da: f32, db: f32) -> Vec3 {
+    let (aa, ab, bb) = (a.dot(a), a.dot(b), b.dot(b));
+    let det = aa * bb - ab * ab;
+    if det.abs() <= f32::MIN_POSITIVE {
+        return n;
+    }
+    let (ca, cb) = ((da * bb - db * ab) / det, (db * aa - da * ab) / det);
+    let g = a * ca + b * cb;
+    let along = g - n * g.dot(n);
+    (n - along).try_normalize().unwrap_or(n)
 }
 
 /// The object-space step of [`height_bump`] at a frame: half the pixel's

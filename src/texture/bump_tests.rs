@@ -19,6 +19,7 @@ fn frame(p: Vec3) -> TexFrame {
         n: dpdu.cross(dpdv).normalize(),
         to_world: None,
         footprint: 0.0,
+        ctx: Default::default(),
     }
 }
 
@@ -59,7 +60,10 @@ fn tetrahedral(f: &TexFrame, k: f32, e: f32) -> Vec3 {
 }
 
 fn forward(f: &TexFrame, k: f32, e: f32) -> Vec3 {
-    height_bump(f, k, e, |pts| Ok::<_, ()>(pts.map(|(p, _)| h(p)))).unwrap_or(Vec3::ZERO)
+    match height_bump(f, k, e, |pts| Ok::<_, ()>(pts.map(|(p, _)| h(p)))) {
+        Ok(n) => n.unwrap_or(f.n),
+        Err(()) => Vec3::ZERO,
+    }
 }
 
 /// The angle between unit vectors; atan2 keeps its precision near 0, where
@@ -88,9 +92,6 @@ fn forward_differences_match_central_differences() {
         let f = frame(Vec3::new(rnd(), rnd(), rnd()));
         let exact = tilt(&f, k, grad(f.p_object));
         let (fw, c, t) = (forward(&f, k, e), central(&f, k, e), tetrahedral(&f, k, e));
-        // The forward method builds the displaced surface's tangents exactly
-        // (not only to first order in k): compare like with like through the
-        // first-order tilt of the same differences.
         let errs = [degrees(fw, c), degrees(c, exact), degrees(t, exact), degrees(fw, exact)];
         for (w, x) in worst.iter_mut().zip(errs) {
             *w = w.max(x);
@@ -109,15 +110,30 @@ fn forward_differences_match_central_differences() {
 #[test]
 fn a_flat_height_keeps_the_normal_and_the_poles_fall_back_to_any_frame() {
     let f = frame(Vec3::new(0.1, 0.2, 0.3));
-    let n = height_bump(&f, 2.0, 1e-3, |_| Ok::<_, ()>([0.25; 3])).unwrap();
-    assert!(degrees(n, f.n) < 1e-3);
+    assert_eq!(height_bump(&f, 2.0, 1e-3, |_| Ok::<_, ()>([0.25; 3])), Ok(None));
     // Degenerate ∂p/∂u (a sphere's pole): still a sensible tilt towards −x.
     let pole = TexFrame { dpdu: Vec3::ZERO, ..f };
-    let n = height_bump(&pole, 1.0, 1e-3, |pts| Ok::<_, ()>(pts.map(|(p, _)| 0.1 * p.x))).unwrap();
+    let n = height_bump(&pole, 1.0, 1e-3, |pts| Ok::<_, ()>(pts.map(|(p, _)| 0.1 * p.x))).unwrap().unwrap();
     let expected = tilt(&pole, 1.0, Vec3::new(0.1, 0.0, 0.0));
     assert!(degrees(n, expected) < 0.01, "{n} vs {expected}");
     // Errors pass through.
     assert_eq!(height_bump(&f, 1.0, 1e-3, |_| Err::<[f32; 3], &str>("boom")), Err("boom"));
+}
+
+/// A smooth-shaded triangle: the interpolated normal leans 20° away from the
+/// flat triangle's. A slope tilts that normal, not the triangle's: a gentle
+/// slope leaves it within a degree of the interpolated one.
+#[test]
+fn a_slope_tilts_the_interpolated_normal_not_the_triangles() {
+    let lean = 20f32.to_radians();
+    let n = Vec3::new(lean.sin(), 0.0, lean.cos());
+    let f = TexFrame { n, ..frame(Vec3::new(0.1, 0.2, 0.0)) };
+    assert!(degrees(f.dpdu.cross(f.dpdv).normalize(), n) > 19.0);
+    let gentle =
+        height_bump(&f, 1.0, 1e-3, |pts| Ok::<_, ()>(pts.map(|(p, _)| 0.01 * p.y))).unwrap().unwrap();
+    assert!(degrees(gentle, n) < 1.0, "{gentle} vs {n}");
+    // And the tilt is towards the downhill side: −y for a height rising in y.
+    assert!(gentle.y < 0.0 && gentle.dot(n) > 0.99);
 }
 
 #[test]

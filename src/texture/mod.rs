@@ -123,6 +123,71 @@ pub struct TexFrame {
     pub to_world: Option<Transform>,
     /// World-space width of the pixel's footprint at the point (for mipmaps).
     pub footprint: f32,
+    /// What only shaders read (the rest of a script's `s`).
+    pub ctx: ShadeCtx,
+}
+
+/// The camera's frame, for camera-space points: its eye and unit axes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct View {
+    /// The eye.
+    pub eye: Vec3,
+    /// Unit right, up and backward (towards the viewer) axes.
+    pub right: Vec3,
+    /// See `right`.
+    pub up: Vec3,
+    /// See `right`.
+    pub back: Vec3,
+}
+
+impl View {
+    /// A world point in camera space: x right, y up, z towards the viewer.
+    pub fn to_camera(&self, p: Vec3) -> Vec3 {
+        let d = p - self.eye;
+        Vec3::new(d.dot(self.right), d.dot(self.up), d.dot(self.back))
+    }
+}
+
+/// The parts of a shader's shading context that the texture maps themselves
+/// do not need: where the ray came from, which object and pixel, and the
+/// footprint as two vectors.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ShadeCtx {
+    /// Unit direction of the incident ray, world space.
+    pub incident: Vec3,
+    /// Unit geometric normal, world space.
+    pub ng: Vec3,
+    /// World-space change of the point to the next pixel right and down.
+    pub dpdx: Vec3,
+    /// See `dpdx`.
+    pub dpdy: Vec3,
+    /// The geometry's object index (an instance gives its mesh's).
+    pub object: u32,
+    /// The shaded object's own index.
+    pub instance: u32,
+    /// Ray depth, 0 for camera rays.
+    pub depth: u32,
+    /// The pixel.
+    pub pixel: [u32; 2],
+    /// The camera.
+    pub view: View,
+}
+
+impl ShadeCtx {
+    /// Sets `dpdx`, `dpdy` from a ray cone of width `width` at the point: the
+    /// camera's right and down axes scaled by the width, carried along the
+    /// incident ray onto the surface's tangent plane (Igehy's transfer of ray
+    /// differentials, exact for camera rays of a pinhole; after a bounce the
+    /// cone keeps only its width, so the vectors are an estimate). At grazing
+    /// angles the stretch is capped at 20×, as for the texture footprint.
+    pub fn set_footprint(&mut self, width: f32) {
+        let (d, n) = (self.incident, self.ng);
+        let dn = d.dot(n);
+        let dn = if dn < 0.0 { dn.min(-0.05) } else { dn.max(0.05) };
+        let onto = |v: Vec3| v - d * (v.dot(n) / dn);
+        self.dpdx = onto(self.view.right * width);
+        self.dpdy = onto(-self.view.up * width);
+    }
 }
 
 impl TexFrame {

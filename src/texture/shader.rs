@@ -182,7 +182,31 @@ fn input(f: &TexFrame, p: Vec3, uv: Vec2, n: Vec3) -> ShadeInput {
             None => f.p_world + (p - f.p_object),
         }
     };
-    ShadeInput { p: p.to_array(), pw: pw.to_array(), n: n.to_array(), uv: uv.to_array(), time: f.time }
+    let c = &f.ctx;
+    let to_object = |v: Vec3| match &f.to_world {
+        Some(xf) => xf.inv_vector(v),
+        None => v,
+    };
+    let (dpdx, dpdy) = (to_object(c.dpdx), to_object(c.dpdy));
+    ShadeInput {
+        p: p.to_array(),
+        pw: pw.to_array(),
+        pc: c.view.to_camera(pw).to_array(),
+        n: n.to_array(),
+        ng: c.ng.to_array(),
+        i: c.incident.to_array(),
+        dpdu: f.dpdu.to_array(),
+        dpdv: f.dpdv.to_array(),
+        dpdx: dpdx.to_array(),
+        dpdy: dpdy.to_array(),
+        uv: uv.to_array(),
+        time: f.time,
+        filterwidth: dpdx.length().max(dpdy.length()),
+        object_id: c.object,
+        instance_id: c.instance,
+        depth: c.depth,
+        pixel: c.pixel,
+    }
 }
 
 impl Textures {
@@ -218,7 +242,10 @@ impl Textures {
                     let local = bump::height_bump(f, map.bump_factor, bump::bump_step(f), |pts| {
                         set.heights3(id, &pts.map(|(p, uv)| input(f, p, uv, world_n))).map_err(Box::new)
                     })?;
-                    *n = f.normal_to_world(local);
+                    // No slope: the normal stays exactly as the renderer had it.
+                    if let Some(local) = local {
+                        *n = f.normal_to_world(local);
+                    }
                 }
             }
             DecalMode::ReplaceNormal | DecalMode::ReplaceBackground => {}
@@ -261,6 +288,7 @@ mod tests {
             n: Vec3::Z,
             to_world: None,
             footprint: 0.0,
+            ctx: Default::default(),
         }
     }
 

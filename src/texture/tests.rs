@@ -18,6 +18,7 @@ fn frame(n: Vec3, dpdu: Vec3, dpdv: Vec3, uv: Vec2) -> TexFrame {
         n,
         to_world: None,
         footprint: 0.0,
+        ctx: Default::default(),
     }
 }
 

@@ -163,6 +163,7 @@ impl Bound {
             n: n_local,
             to_world: self.xf,
             footprint,
+            ctx: Default::default(),
         }
     }
 

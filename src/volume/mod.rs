@@ -180,9 +180,8 @@ impl Volumes {
         let input = ShadeInput {
             p: vol.bound.to_local(p).to_array(),
             pw: p.to_array(),
-            n: [0.0; 3],
-            uv: [0.0; 2],
             time,
+            ..ShadeInput::default()
         };
         f(set, id, &input)
     }

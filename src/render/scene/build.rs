@@ -125,6 +125,16 @@ impl Scene {
             tlas,
             planes,
             object_labels: desc.objects.iter().map(|o| object_label(&o.loc.path)).collect(),
+            // Shaders' s.object_id: an instance shows its mesh's index.
+            geometry_objects: desc
+                .objects
+                .iter()
+                .enumerate()
+                .map(|(i, o)| match o.shape {
+                    Shape::Instance { mesh } => mesh as u32,
+                    _ => i as u32,
+                })
+                .collect(),
             textures,
             volumes,
             materials: desc.materials.iter().map(Material::from_desc).collect(),

@@ -126,6 +126,8 @@ pub struct Scene {
     planes: Vec<(Plane, u32, TexList, u32)>,
     /// Every object's name for messages, `Sphere[id=2]`, by description index.
     object_labels: Vec<String>,
+    /// Every object's geometry: its own index, or an instance's mesh's.
+    geometry_objects: Vec<u32>,
     /// Images and texture maps.
     pub textures: Textures,
     /// Participating media and hypertextures.
@@ -166,6 +168,21 @@ impl Scene {
             }
         };
         object.and_then(|o| self.object_labels.get(o as usize)).map_or("an object", String::as_str)
+    }
+
+    /// The indices a shader sees as `s.object_id` and `s.instance_id`: the
+    /// geometry's object (an instance's mesh) and the object hit itself.
+    pub fn object_ids(&self, hit: &Hit) -> (u32, u32) {
+        let object = match hit.geom {
+            HitGeom::Plane(i) => self.planes.get(i as usize).map(|p| p.3),
+            HitGeom::Triangle { prim, .. } | HitGeom::Sphere { prim } | HitGeom::Ellipsoid { prim } => {
+                self.prims.get(prim as usize).map(|p| p.object)
+            }
+            // A hypertexture's surface is no object of the description.
+            HitGeom::Volume(_) => None,
+        };
+        let instance = object.unwrap_or(0);
+        (self.geometry_objects.get(instance as usize).copied().unwrap_or(instance), instance)
     }
 
     /// Total triangles over all meshes (instances not counted again).
@@ -329,6 +346,7 @@ impl Scene {
             n,
             to_world,
             footprint,
+            ctx: Default::default(),
         }
     }
 
@@ -370,5 +388,6 @@ fn flat_frame(hit: &Hit, footprint: f32) -> TexFrame {
         n: hit.ns,
         to_world: None,
         footprint,
+        ctx: Default::default(),
     }
 }
