@@ -112,6 +112,22 @@ fn parts_merge_to_the_bytes_of_a_single_render() {
         assert_eq!(m.code, Some(0), "{}", m.stderr);
         assert_same_images(&single, &parts);
     }
+    // The Slurm scripts of the last split: one array task per part.
+    let mut c = luster();
+    c.arg("slurm").arg("-o").arg(d.join("slurm")).args(["--tasks", "3", "--spp", "2"]).args(&both);
+    ok(c);
+    let array = std::fs::read_to_string(d.join("slurm/luster.sbatch")).unwrap();
+    for want in [
+        "#SBATCH --array=1-3",
+        "#SBATCH --requeue",
+        "--part \"$SLURM_ARRAY_TASK_ID/3\" --resume",
+        "'--spp' '2'",
+    ] {
+        assert!(array.contains(want), "{want} missing from\n{array}");
+    }
+    assert!(array.contains(&format!("'{}'", d.join("b.xml").display())), "{array}");
+    let merge = std::fs::read_to_string(d.join("slurm/luster-merge.sbatch")).unwrap();
+    assert!(merge.contains(&format!("merge '{}'", d.join("slurm").display())), "{merge}");
 }
 
 fn assert_refused(run: &common::Run, says: &str, out: &Path) {
@@ -191,6 +207,7 @@ fn a_killed_part_resumes_from_its_checkpoint_to_the_same_bytes() {
     let args = ["--part", "1/1", "--resume", "--checkpoint", "0", "--threads", "1"];
     let checkpoint = parts.join("k.png.part-1-of-1.checkpoint");
     let mut child = render(&s, &parts, &args).stdout(std::process::Stdio::null()).spawn().unwrap();
+    // 160×120 is 10×8 tiles; 16 tiles a chunk on one thread.
     let start = Instant::now();
     while !checkpoint.exists() {
         assert!(child.try_wait().unwrap().is_none(), "the part ended before writing a checkpoint");
@@ -204,6 +221,15 @@ fn a_killed_part_resumes_from_its_checkpoint_to_the_same_bytes() {
         "the first camera's part finished before it was killed: make the test scene heavier"
     );
 
+    let status =
+        Command::new(env!("CARGO_BIN_EXE_luster")).arg("slurm").arg("status").arg(&parts).output().unwrap();
+    let status = String::from_utf8_lossy(&status.stdout);
+    assert!(
+        status.contains("0 of 2 part files finished")
+            && status.contains("k.png in progress")
+            && status.contains("of 80 tiles checkpointed"),
+        "{status}"
+    );
     // Not quiet, to read how many tiles came from the checkpoint.
     let out = Command::new(env!("CARGO_BIN_EXE_luster"))
         .arg("render")

@@ -239,7 +239,7 @@ pub fn transform_all(
             Projection::Plane { gaze, .. } => gaze,
             Projection::LookAt { gaze_point, .. } => gaze_point - d.position,
         };
-        if !(gaze.length_squared() > 0.0 && d.up.length_squared() > 0.0) || !d.position.is_finite() {
+        if !(gaze.length_squared() > 0.0 && d.up.length_squared() > 0.0 && d.position.is_finite()) {
             return Err(r.err(el, "the camera's <Transformations> leave it without a direction to look in"));
         }
     }
