@@ -29,6 +29,34 @@ fn load(path: &Path, view: &ModelView) -> anyhow::Result<Description> {
     })
 }
 
+/// The `ImageName`s of a scene's cameras, in order, from its element tree
+/// alone: numbering the images must not cost every part a load of every
+/// scene (the statue orbit is 360 scenes around a 2 MB mesh). A scene that
+/// fails to load fails in the part that renders it.
+fn image_names(path: &Path, view: &ModelView) -> anyhow::Result<Vec<String>> {
+    if luster::scene::is_obj(path) {
+        return Ok(load(path, view)?.cameras.into_iter().map(|c| c.image_name).collect());
+    }
+    let text = luster::scene::file::read_text(path, 1 << 30)
+        .map_err(|why| anyhow::anyhow!("{}: cannot read the scene: {why}", path.display()))?;
+    let is_json = match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("json") => true,
+        Some("xml") => false,
+        _ => text.trim_start().starts_with('{'),
+    };
+    let root = if is_json {
+        luster::scene::json::parse(path, &text)?
+    } else {
+        luster::scene::xml::parse(path, &text)?
+    };
+    let cameras =
+        root.child("Cameras").map(|c| c.children_named("Camera").collect::<Vec<_>>()).unwrap_or_default();
+    Ok(cameras
+        .iter()
+        .map(|c| c.child("ImageName").map(|n| n.text.trim().to_string()).unwrap_or_default())
+        .collect())
+}
+
 /// Renders this part's share of every image of `scenes`.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
@@ -68,15 +96,15 @@ fn run_in_pool(
     // is not (a render it stops fails instead of writing a part).
     let options = format!("spp={:?} seed={} filter={:?} view={view:?}", opts.spp, opts.seed, opts.filter);
     let job = JobId::new(part.n, scenes, &options)?;
-    // Every part numbers the images of the job alike, so each loads every
-    // scene once to count its cameras; the names must not clash across
-    // scenes, since the parts of all images share one folder.
+    // Every part numbers the images of the job alike, from every scene's
+    // cameras; the names must not clash across scenes, since the parts of
+    // all images share one folder.
     let mut counts = Vec::with_capacity(scenes.len());
     let mut names = Vec::new();
     for s in scenes {
-        let desc = load(s, view)?;
-        counts.push(desc.cameras.len() as u32);
-        names.extend(desc.cameras.iter().map(|c| (c.image_name.clone(), s.clone())));
+        let own = image_names(s, view)?;
+        counts.push(own.len() as u32);
+        names.extend(own.into_iter().map(|n| (n, s.clone())));
     }
     let mut seen = std::collections::HashMap::new();
     for (name, scene) in &names {
@@ -101,6 +129,9 @@ fn run_in_pool(
         let desc = load(s, view)?;
         for w in &desc.warnings {
             eprintln!("warning: {}: {w}", s.display());
+        }
+        if desc.cameras.len() as u32 != count {
+            anyhow::bail!("{}: the scene changed while it was being rendered", s.display());
         }
         let scene = Scene::build_with(&desc, build)?;
         for w in &scene.warnings {

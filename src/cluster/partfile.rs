@@ -27,6 +27,7 @@ use super::ClusterError;
 use crate::film::{Gamma, Operator, Tonemap};
 use crate::math::Vec3;
 use crate::render::{tile_origins, TILE};
+use crate::scene::ceng795::camera::{MAX_PIXELS, MAX_SIDE};
 use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"LUSTPART";
@@ -149,7 +150,19 @@ impl PartFile {
             let [n, k, images, image, width, height, tile] = [(); 7].map(|_| r.u32());
             let (n, k, images, image, width, height, tile) =
                 (n?, k?, images?, image?, width?, height?, tile?);
-            if tile != TILE || n == 0 || k == 0 || k > n || image >= images || width == 0 || height == 0 {
+            // The scene reader's size limits bound what a header may claim, so a
+            // forged one cannot make the reader build a huge tile list.
+            let too_big =
+                width > MAX_SIDE || height > MAX_SIDE || u64::from(width) * u64::from(height) > MAX_PIXELS;
+            if tile != TILE
+                || n == 0
+                || k == 0
+                || k > n
+                || image >= images
+                || width == 0
+                || height == 0
+                || too_big
+            {
                 return None;
             }
             let len = r.u32()? as usize;
