@@ -32,7 +32,10 @@ fail() {
 if [ -n "${SLURM_CONF:-}" ] || [ -e /etc/slurm/slurm.conf ] || [ -e /etc/slurm-llnl/slurm.conf ]; then
     fail "a Slurm is configured on this machine (slurm.conf or SLURM_CONF); refusing to run beside it"
 fi
-if pgrep -x slurmctld >/dev/null || pgrep -x slurmd >/dev/null; then
+running() { # name: whether a process of that name runs (procps may be absent)
+    grep -qx "$1" /proc/[0-9]*/comm 2>/dev/null
+}
+if running slurmctld || running slurmd; then
     fail "slurmctld or slurmd is already running here; refusing to run beside it"
 fi
 
