@@ -15,6 +15,7 @@
 pub mod accel;
 pub mod bench;
 pub mod bsdf;
+pub mod cluster;
 pub mod conformance;
 pub mod film;
 pub mod fuzzing;

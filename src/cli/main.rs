@@ -11,8 +11,11 @@ macro_rules! say {
 }
 
 mod compare;
+mod merge;
+mod part;
 mod reframe;
 mod render;
+mod slurm;
 mod suite;
 mod tonemap;
 
@@ -64,11 +67,44 @@ enum Command {
         #[arg(long, value_name = "SECONDS", value_parser = parse_timeout,
               default_value_t = luster::shader::DEFAULT_TIMEOUT.as_secs_f64())]
         shader_timeout: f64,
+        /// Render only part K of N of the images (for a cluster: see `luster
+        /// slurm`), into OUTDIR/<ImageName>.part-K-of-N; `luster merge OUTDIR`
+        /// then writes the images. Not with --size, --scale or --crop (a part
+        /// file records the scene's own cameras).
+        #[arg(long, value_name = "K/N", conflicts_with_all = ["size", "scale", "crop"])]
+        part: Option<luster::cluster::Part>,
+        /// With --part: keep this render's finished part files and continue
+        /// from its checkpoints (a killed or requeued part loses little work).
+        #[arg(long, requires = "part")]
+        resume: bool,
+        /// With --resume: least time between two checkpoints.
+        #[arg(long, value_name = "SECONDS", default_value_t = 60, requires = "resume")]
+        checkpoint: u64,
         #[command(flatten)]
         model: ModelArgs,
         #[command(flatten)]
         frame: reframe::FrameArgs,
     },
+    /// Join the part files of a split render (`render --part`) into its images.
+    ///
+    /// Writes every OUTDIR/<ImageName> (and the EXR/HDR's tone-mapped PNGs)
+    /// byte for byte as a single `luster render` would. Every part file is
+    /// checked first: a missing, duplicated, corrupt or truncated part, or
+    /// parts of different renders (another scene, other options, another
+    /// number of parts), is an error and no image is written. Exit code: 0
+    /// merged, 2 an error.
+    Merge {
+        /// The folder holding the part files.
+        outdir: PathBuf,
+    },
+    /// Write (and submit) Slurm batch scripts that render scenes as a job array.
+    ///
+    /// Writes OUTDIR/luster.sbatch (one array task per part, each running
+    /// `luster render --part $SLURM_ARRAY_TASK_ID/N --resume`, requeued when
+    /// preempted) and OUTDIR/luster-merge.sbatch (`luster merge OUTDIR`, to
+    /// run after the array succeeds). `luster slurm status OUTDIR` reports
+    /// progress from the part files.
+    Slurm(slurm::Cli),
     /// Benchmark the BVH on PLY meshes (build time, memory, Mrays/s).
     ///
     /// Prints BVH build time, memory and closest-hit primary-ray throughput
@@ -203,20 +239,31 @@ fn main() -> ExitCode {
             seed,
             filter,
             shader_timeout,
+            part,
+            resume,
+            checkpoint,
             model,
             frame,
         } => {
-            let filter = match filter {
-                FilterArg::Box => luster::render::Filter::Box,
-                FilterArg::Gaussian => luster::render::Filter::Gaussian,
-            };
-            let opts = luster::render::RenderOptions { spp, seed, filter };
+            let filter = filter.filter();
+            let opts = luster::render::RenderOptions { spp, seed, filter, ..Default::default() };
             let build = luster::render::BuildOptions {
                 shader_timeout: std::time::Duration::from_secs_f64(shader_timeout),
             };
-            let frame = (model.size, frame);
-            render::run(&scenes, &outdir, threads, quiet, &opts, &build, &model.view(), &frame)
+            match part {
+                Some(part) => {
+                    let split =
+                        part::Split { part, resume, checkpoint: std::time::Duration::from_secs(checkpoint) };
+                    part::run(&scenes, &outdir, threads, quiet, &opts, &build, &model.view(), &split)
+                }
+                None => {
+                    let frame = (model.size, frame);
+                    render::run(&scenes, &outdir, threads, quiet, &opts, &build, &model.view(), &frame)
+                }
+            }
         }
+        Command::Merge { outdir } => merge::run(&outdir),
+        Command::Slurm(cli) => slurm::run(cli),
         Command::Bench { plys, threads, reps } => match luster::bench::run(&plys, &threads, reps) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
@@ -344,6 +391,15 @@ fn parse_distance(s: &str) -> Result<f32, String> {
 enum FilterArg {
     Box,
     Gaussian,
+}
+
+impl FilterArg {
+    fn filter(self) -> luster::render::Filter {
+        match self {
+            FilterArg::Box => luster::render::Filter::Box,
+            FilterArg::Gaussian => luster::render::Filter::Gaussian,
+        }
+    }
 }
 
 /// Most worker threads accepted: far beyond any machine's cores, and far

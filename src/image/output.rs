@@ -138,7 +138,7 @@ fn check_folder(dir: &Path) -> Result<(), String> {
     }
 }
 
-fn write_atomic(
+pub(crate) fn write_atomic(
     path: &Path,
     encode: impl FnOnce(&mut std::io::BufWriter<&std::fs::File>) -> Result<(), String>,
 ) -> Result<(), WriteError> {

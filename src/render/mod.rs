@@ -22,7 +22,34 @@ use std::sync::OnceLock;
 
 /// Tile edge in pixels: small enough to balance two to sixty-four threads on
 /// an 800×800 image, large enough that per-tile overhead vanishes.
-const TILE: u32 = 16;
+pub const TILE: u32 = 16;
+
+/// The top-left corners of the tiles of a `w`×`h` image, numbered row by
+/// row: tile `i` of [`TileSelection`] is the `i`-th of these.
+pub fn tile_origins(w: u32, h: u32) -> Vec<(u32, u32)> {
+    (0..h.div_ceil(TILE)).flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE))).collect()
+}
+
+/// Some of an image's tiles (numbered as by [`tile_origins`]): `first`,
+/// `first + step`, ... below `end`. A render of a selection leaves the other
+/// tiles black; the parts of a cluster render are selections
+/// ([`crate::cluster`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TileSelection {
+    /// The first tile.
+    pub first: u32,
+    /// The distance between two selected tiles (at least 1).
+    pub step: u32,
+    /// One past the last tile that may be selected.
+    pub end: u32,
+}
+
+impl TileSelection {
+    /// Whether tile `i` is selected.
+    pub fn contains(&self, i: u32) -> bool {
+        i >= self.first && i < self.end && (i - self.first) % self.step.max(1) == 0
+    }
+}
 
 /// A rendered image: the film (linear radiance) and the rays it took. What
 /// files it becomes is the film's business ([`crate::film::outputs`]); it
@@ -51,6 +78,8 @@ pub struct RenderOptions {
     pub seed: u32,
     /// Reconstruction filter.
     pub filter: Filter,
+    /// Only these tiles (`None`: all).
+    pub tiles: Option<TileSelection>,
 }
 
 /// Renders camera `cam` of `scene` with default options on the current rayon
@@ -112,9 +141,11 @@ fn render_tiles(
     let (w, h) = (camera.width, camera.height);
     let spread = camera.pixel_spread();
     let view = camera.view();
-    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
-        .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
-        .collect();
+    let mut tiles = tile_origins(w, h);
+    if let Some(sel) = opts.tiles {
+        tiles =
+            tiles.into_iter().enumerate().filter(|&(i, _)| sel.contains(i as u32)).map(|(_, t)| t).collect();
+    }
     let done: Vec<(Tile, RayStats)> = tiles
         .par_iter()
         .map(|&(x0, y0)| {

@@ -13,6 +13,7 @@
 //! | `NumSamples` | samples per pixel (default 1) |
 //! | `ApertureSize` | edge of the square lens (default 0: a pinhole) |
 //! | `FocusDistance` | distance along the gaze that is in focus (needed with an aperture) |
+//! | `Transformations` | named transforms (as for objects) moving the camera: `Position` and `GazePoint` as points, `Gaze` and `Up` as directions (see [`transform_all`]) |
 //!
 //! No two cameras (nor an `.exr` and its derived `.png`) may write the same
 //! file: that is an error before anything is rendered.
@@ -22,6 +23,7 @@
 
 use super::Warnings;
 use crate::film::outputs::{file_key, plan_outputs};
+use crate::math::Transform;
 use crate::scene::description::{CameraDesc, Projection};
 use crate::scene::element::{Element, Reader};
 use crate::scene::error::SceneError;
@@ -94,6 +96,7 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
         "ApertureSize",
         "FocusDistance",
         "Tonemap",
+        "Transformations",
     ];
     w.unknown_children(c, known);
 
@@ -207,6 +210,40 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
         focus_distance,
         loc: c.loc.clone(),
     })
+}
+
+/// Moves every camera of `cams` (read by [`read_all`], in the same order) by
+/// its `<Transformations>`, once the scene's named transforms are known. The
+/// course's animations orbit the camera this way (a `Rotation` whose angle
+/// grows by a degree a frame). The view's sizes (`NearPlane`, `FovY`,
+/// `NearDistance`) stay as written; the directions are renormalised where
+/// the camera is built, so a scaling only moves the eye.
+pub fn transform_all(
+    r: &Reader,
+    cams: &Element,
+    descs: &mut [CameraDesc],
+    named: &std::collections::HashMap<String, Transform>,
+) -> Result<(), SceneError> {
+    for (c, d) in cams.children_named("Camera").zip(descs.iter_mut()) {
+        let Some(el) = c.child("Transformations") else { continue };
+        let t = super::transforms::compose(r, el, named)?;
+        d.position = t.point(d.position);
+        d.up = t.vector(d.up);
+        d.projection = match d.projection {
+            Projection::Plane { gaze, near_plane } => Projection::Plane { gaze: t.vector(gaze), near_plane },
+            Projection::LookAt { gaze_point, fov_y } => {
+                Projection::LookAt { gaze_point: t.point(gaze_point), fov_y }
+            }
+        };
+        let gaze = match d.projection {
+            Projection::Plane { gaze, .. } => gaze,
+            Projection::LookAt { gaze_point, .. } => gaze_point - d.position,
+        };
+        if !(gaze.length_squared() > 0.0 && d.up.length_squared() > 0.0 && d.position.is_finite()) {
+            return Err(r.err(el, "the camera's <Transformations> leave it without a direction to look in"));
+        }
+    }
+    Ok(())
 }
 
 /// Scene files come from strangers: the image name must stay inside the output

@@ -113,7 +113,7 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
         }
     }
 
-    let cameras = match root.child("Cameras") {
+    let mut cameras = match root.child("Cameras") {
         Some(c) => camera::read_all(&r, c, &mut w)?,
         None => Vec::new(),
     };
@@ -134,6 +134,9 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
         Some(t) => transforms::read_all(&r, t, &mut w)?,
         None => HashMap::new(),
     };
+    if let Some(c) = root.child("Cameras") {
+        camera::transform_all(&r, c, &mut cameras, &transforms)?;
+    }
     let vertices = match root.child("VertexData") {
         Some(v) => objects::read_vertices(&r, v)?,
         None => Vec::new(),
