@@ -19,6 +19,7 @@ pub mod conformance;
 pub mod film;
 pub mod fuzzing;
 pub mod geometry;
+pub mod integrator;
 pub mod image;
 pub mod light;
 pub mod material;

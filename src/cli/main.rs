@@ -63,6 +63,12 @@ enum Command {
         #[arg(long, value_name = "SECONDS", value_parser = parse_timeout,
               default_value_t = luster::shader::DEFAULT_TIMEOUT.as_secs_f64())]
         shader_timeout: f64,
+        /// Render each camera for about this many seconds: samples are taken
+        /// in passes over the whole image, and the render stops before a pass
+        /// that would end later (at least one sample per pixel; never more
+        /// than the camera's or --spp's count). Prints the samples used.
+        #[arg(long, value_name = "SECONDS", value_parser = parse_timeout)]
+        time: Option<f64>,
         #[command(flatten)]
         model: ModelArgs,
     },
@@ -190,12 +196,13 @@ fn main() -> ExitCode {
         eprintln!("warning: Ctrl-C will not remove half-written images: {e}");
     }
     match cli.command {
-        Command::Render { scenes, outdir, threads, quiet, spp, seed, filter, shader_timeout, model } => {
+        Command::Render { scenes, outdir, threads, quiet, spp, seed, filter, shader_timeout, time, model } => {
             let filter = match filter {
                 FilterArg::Box => luster::render::Filter::Box,
                 FilterArg::Gaussian => luster::render::Filter::Gaussian,
             };
-            let opts = luster::render::RenderOptions { spp, seed, filter };
+            let time_limit = time.map(std::time::Duration::from_secs_f64);
+            let opts = luster::render::RenderOptions { spp, seed, filter, time_limit };
             let build = luster::render::BuildOptions {
                 shader_timeout: std::time::Duration::from_secs_f64(shader_timeout),
             };
