@@ -30,7 +30,7 @@ use std::path::Path;
 const CASES: &[(&str, usize, &str, u32, &str)] = &[
     ("cornellbox_jaroslav_diffuse_area.xml", 0, "cornellbox_jaroslav_diffuse_area", 4, "mesh light, direct"),
     ("cornellbox_jaroslav_glossy_area_sphere.xml", 0, "cornellbox_jaroslav_glossy_area_sphere", 4, "sphere light"),
-    ("cornellbox_jaroslav_path_diffuse.xml", 0, "diffuse_next", 4, "path tracing with NEE and a point light"),
+    ("cornellbox_jaroslav_path_diffuse.xml", 0, "diffuse_next", 8, "NEE, point light; heavy-tailed: 8 spp"),
     ("cornellbox_jaroslav_path_glass.xml", 6, "glass_importance", 4, "cosine bounces, glass and mirror"),
 ];
 
