@@ -14,7 +14,7 @@
 //! | `ImportanceSampling` | cosine-weighted bounces, `p = cos/π` |
 //! | `NextEventEstimation` | every light sampled at every hit; an emitter a bounce then hits adds nothing (it was counted already) |
 //! | `RussianRoulette` | no depth limit: a path goes on with probability `q = min(1, max(throughput))` and its estimate is divided by `q` |
-//! | `MIS` (luster) | bounces drawn from the BSDF; light and bounce samples both count, weighed by the power heuristic `p_a² / (p_a² + p_b²)`; the environment light is sampled and hit alike |
+//! | `MIS` (luster) | bounces drawn from the BSDF; one light, chosen uniformly, sampled per hit (its estimate times the number of lights); light and bounce samples both count, weighed by the power heuristic `p_a² / (p_a² + p_b²)` with the light's density times the chance of choosing it; the environment light is sampled and hit alike |
 //!
 //! Without `RussianRoulette` a path ends after `MaxRecursionDepth` bounces,
 //! as the course's reflections do. Mirrors, conductors and dielectrics are
@@ -96,7 +96,7 @@ fn escaped(scene: &Scene, ray: &Ray, came: Came, p: &PathParams, st: &PathState)
     let d = ray.d.normalize();
     let w = match came {
         Came::Direct => 1.0,
-        Came::Bounce { pdf } if p.mis => power_heuristic(pdf, env.pdf(d)),
+        Came::Bounce { pdf } if p.mis => power_heuristic(pdf, env.pdf(d) / scene.lights.len() as f32),
         Came::Bounce { .. } if p.next_event => 0.0,
         Came::Bounce { .. } => 1.0,
     };
@@ -128,8 +128,8 @@ fn shade(
         let w = match came {
             Came::Direct => 1.0,
             Came::Bounce { pdf } if p.mis => {
-                let origin = ray.o;
-                power_heuristic(pdf, light_pdf(&scene.lights[li_index], origin, hit, ray.d))
+                let pick = 1.0 / scene.lights.len() as f32;
+                power_heuristic(pdf, pick * light_pdf(&scene.lights[li_index], ray.o, hit, ray.d))
             }
             Came::Bounce { .. } if p.next_event => 0.0,
             Came::Bounce { .. } => 1.0,
@@ -173,7 +173,16 @@ fn next_event(
 ) -> Vec3 {
     let eps = scene.shadow_epsilon;
     let mut color = Vec3::ZERO;
-    for light in &scene.lights {
+    // MIS takes one light per hit, chosen uniformly: a shadow ray per hit
+    // whatever the number of lights. The course's variant samples them all.
+    let (lights, scale) = if p.mis && scene.lights.len() > 1 {
+        let k = scene.lights.len();
+        let i = ((st.sampler.next_1d() * k as f32) as usize).min(k - 1);
+        (&scene.lights[i..=i], k as f32)
+    } else {
+        (&scene.lights[..], 1.0)
+    };
+    for light in lights {
         let Some(ls) = light.sample(origin, hit.p, Some(n), &mut st.sampler) else { continue };
         let cos = n.dot(ls.wi);
         if cos <= 0.0 || ls.e == Vec3::ZERO {
@@ -185,9 +194,9 @@ fn next_event(
             continue;
         }
         let w = if p.mis && hittable(light) {
-            power_heuristic(ls.pdf, bounce_pdf(m, n, ray.d, ls.wi, p))
+            power_heuristic(ls.pdf / scale, bounce_pdf(m, n, ray.d, ls.wi, p)) * scale
         } else {
-            1.0
+            scale
         };
         color += reflectance(m, n, ls.wi, ray.d, cos) * (tr * ls.e) * w;
     }
