@@ -123,3 +123,31 @@ fn passes_threads_and_time_limits_keep_the_image_exact() {
     });
     assert_eq!(total.into_inner(), luster::render::work(&scene, 0, &opts));
 }
+
+#[test]
+fn json_scenes_name_object_lights_and_renderers_alike() {
+    // The 2025 JSON encoding of the floor scene: attributes with `_`, every
+    // value a string, `_data` for text beside attributes.
+    let json = r#"{"Scene": {
+  "MaxRecursionDepth": "1",
+  "Cameras": {"Camera": {"_id": "1", "_type": "lookAt", "Position": "0 1 3", "GazePoint": "0 0 0", "Up": "0 1 0",
+    "FovY": "1", "NearDistance": "1", "ImageResolution": "16 16", "ImageName": "a.exr",
+    "Renderer": "PathTracing", "RendererParams": "NextEventEstimation ImportanceSampling"}},
+  "BRDFs": {"ModifiedPhong": {"_id": "1", "_normalized": "true", "Exponent": "1"}},
+  "Materials": {"Material": [
+    {"_id": "1", "_BRDF": "1", "DiffuseReflectance": "0.5 0.5 0.5", "SpecularReflectance": "0 0 0"},
+    {"_id": "2", "DiffuseReflectance": "0 0 0", "SpecularReflectance": "0 0 0"}]},
+  "VertexData": {"_data": "0 0 0  0 2 0"},
+  "Objects": {
+    "Plane": {"_id": "1", "Material": "1", "Point": "1", "Normal": "0 1 0"},
+    "LightSphere": {"_id": "1", "Material": "2", "Center": "2", "Radius": "0.5", "Radiance": "10 10 10"}}
+}}"#;
+    let dir = tempfile::tempdir().expect("temp dir");
+    let p = dir.path().join("s.json");
+    std::fs::write(&p, json).expect("temp file");
+    let desc = luster::scene::load(&p).expect("the JSON scene loads");
+    assert_eq!(desc.emitters.len(), 1);
+    let img = render(&desc, &RenderOptions { spp: Some(4), ..Default::default() });
+    let (m, _) = mean_and_se(&img);
+    assert!((m - 0.3125).abs() < 0.01 * 0.3125, "mean {m:.4}, expected 0.3125");
+}
