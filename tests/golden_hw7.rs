@@ -29,7 +29,13 @@ use std::path::Path;
 /// samples per pixel, what it tests).
 const CASES: &[(&str, usize, &str, u32, &str)] = &[
     ("cornellbox_jaroslav_diffuse_area.xml", 0, "cornellbox_jaroslav_diffuse_area", 4, "mesh light, direct"),
-    ("cornellbox_jaroslav_glossy_area_sphere.xml", 0, "cornellbox_jaroslav_glossy_area_sphere", 4, "sphere light"),
+    (
+        "cornellbox_jaroslav_glossy_area_sphere.xml",
+        0,
+        "cornellbox_jaroslav_glossy_area_sphere",
+        4,
+        "sphere light",
+    ),
     ("cornellbox_jaroslav_path_diffuse.xml", 0, "diffuse_next", 8, "NEE, point light; heavy-tailed: 8 spp"),
     ("cornellbox_jaroslav_path_glass.xml", 6, "glass_importance", 4, "cosine bounces, glass and mirror"),
 ];
@@ -107,7 +113,11 @@ fn hw7_images_match_the_course_within_their_noise() {
         let a = render(&scene, cam, spp, 0);
         let b = render(&scene, cam, spp, 1);
         let (z2, out, lum) = judge(&a, &b, &reference, f64::from(spp) / 100.0);
-        println!("{:<48} {spp:>4} {z2:>8.2} {:>6.2}% {lum:>9.2}", format!("{expected} ({what})"), out * 100.0);
+        println!(
+            "{:<48} {spp:>4} {z2:>8.2} {:>6.2}% {lum:>9.2}",
+            format!("{expected} ({what})"),
+            out * 100.0
+        );
         if z2 > MAX_MEAN_Z2 || out > MAX_OUTLIERS || lum.abs() > MAX_LUMINANCE_SIGMAS {
             failures.push(format!(
                 "{expected}: mean z² {z2:.2} (≤ {MAX_MEAN_Z2}), |z|>5 in {:.2}% (≤ {:.1}%), mean luminance \

@@ -68,7 +68,10 @@ fn every_variant_finds_the_known_radiance_under_a_sphere_light() {
         ("<Renderer>PathTracing</Renderer><RendererParams>ImportanceSampling RussianRoulette</RendererParams>", 256),
     ];
     for (renderer, spp) in variants {
-        let img = render(&load(dir.path(), &floor_scene(renderer)), &RenderOptions { spp: Some(spp), ..Default::default() });
+        let img = render(
+            &load(dir.path(), &floor_scene(renderer)),
+            &RenderOptions { spp: Some(spp), ..Default::default() },
+        );
         let (m, se) = mean_and_se(&img);
         // The pixels see points up to 0.03 from the origin, where the
         // radiance is lower by less than 0.1%: well inside 1%.
@@ -98,7 +101,10 @@ fn next_event_estimation_does_not_count_an_emitter_twice() {
 #[test]
 fn passes_threads_and_time_limits_keep_the_image_exact() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let desc = load(dir.path(), &floor_scene("<Renderer>PathTracing</Renderer><RendererParams>MIS</RendererParams>"));
+    let desc = load(
+        dir.path(),
+        &floor_scene("<Renderer>PathTracing</Renderer><RendererParams>MIS</RendererParams>"),
+    );
     let scene = Scene::build(&desc).expect("builds");
     let opts = RenderOptions { spp: Some(24), ..Default::default() };
     let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).build().expect("pool");

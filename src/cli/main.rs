@@ -196,7 +196,18 @@ fn main() -> ExitCode {
         eprintln!("warning: Ctrl-C will not remove half-written images: {e}");
     }
     match cli.command {
-        Command::Render { scenes, outdir, threads, quiet, spp, seed, filter, shader_timeout, time, model } => {
+        Command::Render {
+            scenes,
+            outdir,
+            threads,
+            quiet,
+            spp,
+            seed,
+            filter,
+            shader_timeout,
+            time,
+            model,
+        } => {
             let filter = match filter {
                 FilterArg::Box => luster::render::Filter::Box,
                 FilterArg::Gaussian => luster::render::Filter::Gaussian,

@@ -72,7 +72,15 @@ pub fn radiance(scene: &Scene, ray: &Ray, p: &PathParams, st: &mut PathState) ->
 
 /// Radiance along `ray`, which is bounce `depth` of a path of throughput
 /// `beta` so far.
-fn li(scene: &Scene, ray: &Ray, depth: u32, beta: Vec3, came: Came, p: &PathParams, st: &mut PathState) -> Vec3 {
+fn li(
+    scene: &Scene,
+    ray: &Ray,
+    depth: u32,
+    beta: Vec3,
+    came: Came,
+    p: &PathParams,
+    st: &mut PathState,
+) -> Vec3 {
     let hit = volumes::trace(scene, ray, depth == 0, st);
     let (t, color) = match hit {
         Some(hit) => {

@@ -100,4 +100,3 @@ impl RayStats {
         self.shadow += o.shadow;
     }
 }
-

@@ -33,6 +33,7 @@
 //! plausible light), and a camera ray may spawn at most [`SECONDARY_BUDGET`](super::SECONDARY_BUDGET)
 //! reflection and refraction rays. Neither changes any course image.
 
+use super::{surface_at, PathState, Surface};
 use crate::bsdf::fresnel;
 use crate::bsdf::Frame;
 use crate::material::Material;
@@ -40,7 +41,6 @@ use crate::material::Specular;
 use crate::math::{orthonormal_basis, Ray, Vec3};
 use crate::render::scene::{Hit, Scene};
 use crate::render::volumes;
-use super::{surface_at, PathState, Surface};
 
 /// Radiance arriving along `ray`, which is at recursion `depth` (0 for camera rays).
 /// `weight` is the path's accumulated weight so far (1 for camera rays).
@@ -139,7 +139,14 @@ fn shade(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, weight: f32, st: &mut 
 
 /// Ambient plus the light that reaches the hit directly from every light,
 /// with shadow rays (see [`crate::light`] for what each light contributes).
-pub(crate) fn direct(scene: &Scene, m: &Material, hit: &Hit, ns: Vec3, ray: &Ray, st: &mut PathState) -> Vec3 {
+pub(crate) fn direct(
+    scene: &Scene,
+    m: &Material,
+    hit: &Hit,
+    ns: Vec3,
+    ray: &Ray,
+    st: &mut PathState,
+) -> Vec3 {
     let mut color = m.ambient * scene.ambient;
     // The winding normals, not ones flipped towards the eye: see the module doc.
     let (n, ng) = (ns, hit.ng);

@@ -39,7 +39,11 @@ pub struct LightMesh {
 impl LightMesh {
     /// From object-space corners and the object's transform; `None` when the
     /// mesh has no area.
-    pub fn new(corners: impl Iterator<Item = [Vec3; 3]>, xf: &Transform, radiance: Vec3) -> Option<LightMesh> {
+    pub fn new(
+        corners: impl Iterator<Item = [Vec3; 3]>,
+        xf: &Transform,
+        radiance: Vec3,
+    ) -> Option<LightMesh> {
         let mut tris = Vec::new();
         let mut cdf = Vec::new();
         let mut total = 0.0f32;

@@ -79,7 +79,12 @@ fn read(
     };
     let mirror = r.vec3_or(m, "MirrorReflectance", Vec3::ZERO)?;
     let kind = match m.attr("type").map(str::trim).unwrap_or("") {
-        "" if m.child("Transparency").map(|t| r.vec3(t)).transpose()?.is_some_and(|t| t.max_element() > 0.0) => {
+        "" if m
+            .child("Transparency")
+            .map(|t| r.vec3(t))
+            .transpose()?
+            .is_some_and(|t| t.max_element() > 0.0) =>
+        {
             MaterialKind::Dielectric
         }
         "" => MaterialKind::Plain,
