@@ -57,7 +57,7 @@ fn every_effect_renders_identically_on_one_and_two_threads() {
     ));
     let s = Scene::build(&desc).unwrap();
     for filter in [Filter::Box, Filter::Gaussian] {
-        let opts = RenderOptions { spp: Some(9), seed: 3, filter };
+        let opts = RenderOptions { spp: Some(9), seed: 3, filter, ..Default::default() };
         let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
         let two = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
         let a = one.install(|| render_with(&s, 0, &opts, &|_| {}));

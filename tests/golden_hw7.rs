@@ -11,9 +11,9 @@
 //! block still differs by rounding). Blocks that show a light itself (a
 //! reference pixel above 10; the lights are 16 to 32, lit surfaces below 5)
 //! are left out of the z test: a sub-pixel difference in where a light's
-//! edge falls outweighs everything else there. Threshold: mean z² ≤ 2 (pure noise gives
-//! 1) and |z| > 5 in at most 0.5% of blocks; and the image's mean luminance
-//! within 4 of its own standard errors (from the same pair). A bias — a light
+//! edge falls outweighs everything else there. Threshold: mean z² ≤ 2 (pure
+//! noise gives one) and |z| > 5 in at most 0.5% of blocks; and the image's
+//! mean luminance within 4 of its own standard errors (from the same pair). A bias — a light
 //! of the wrong size, a wrong pdf, light counted twice — shows at any count.
 //!
 //! The course's Russian-roulette images are left out: they are brighter than
