@@ -21,6 +21,7 @@ pub mod film;
 pub mod fuzzing;
 pub mod geometry;
 pub mod image;
+pub mod integrator;
 pub mod light;
 pub mod material;
 pub mod math;

@@ -46,6 +46,11 @@ const CASES: &[(&str, &[&str])] = &[
     ("brdf_unknown_id.xml", &["Material[id=1]", "BRDF \"4\"", "does not define"]),
     ("brdf_unknown_type.xml", &["<CookTorrance>", "not a known BRDF", "TorranceSparrow"]),
     ("brdf_exponent_not_a_number.xml", &["<Exponent>", "\"fifty\"", "not a number"]),
+    // Object lights and path tracing (hw7).
+    ("light_mesh_without_radiance.xml", &["LightMesh[id=1]", "missing its <Radiance>"]),
+    ("light_sphere_negative_radiance.xml", &["<Radiance>", "not negative"]),
+    ("renderer_params_unknown_word.xml", &["<RendererParams>", "word 2", "unknown", "NextEventEstimation"]),
+    ("renderer_unknown.xml", &["<Renderer>", "unknown", "PathTracing"]),
     ("material_without_id.xml", &["<Material>", "no id"]),
     ("unknown_transformation.xml", &["\"t9\"", "not defined", "Transformations"]),
     ("unknown_base_mesh.xml", &["baseMeshId \"42\"", "MeshInstance[id=2]"]),

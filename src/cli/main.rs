@@ -69,9 +69,9 @@ enum Command {
         shader_timeout: f64,
         /// Render only part K of N of the images (for a cluster: see `luster
         /// slurm`), into OUTDIR/<ImageName>.part-K-of-N; `luster merge OUTDIR`
-        /// then writes the images. Not with --size, --scale or --crop (a part
+        /// then writes the images. Not with --size, --scale, --crop or --time (a part
         /// file records the scene's own cameras).
-        #[arg(long, value_name = "K/N", conflicts_with_all = ["size", "scale", "crop"])]
+        #[arg(long, value_name = "K/N", conflicts_with_all = ["size", "scale", "crop", "time"])]
         part: Option<luster::cluster::Part>,
         /// With --part: keep this render's finished part files and continue
         /// from its checkpoints (a killed or requeued part loses little work).
@@ -80,6 +80,12 @@ enum Command {
         /// With --resume: least time between two checkpoints.
         #[arg(long, value_name = "SECONDS", default_value_t = 60, requires = "resume")]
         checkpoint: u64,
+        /// Render each camera for about this many seconds: samples are taken
+        /// in passes over the whole image, and the render stops before a pass
+        /// that would end later (at least one sample per pixel; never more
+        /// than the camera's or --spp's count). Prints the samples used.
+        #[arg(long, value_name = "SECONDS", value_parser = parse_timeout)]
+        time: Option<f64>,
         #[command(flatten)]
         model: ModelArgs,
         #[command(flatten)]
@@ -242,11 +248,13 @@ fn main() -> ExitCode {
             part,
             resume,
             checkpoint,
+            time,
             model,
             frame,
         } => {
             let filter = filter.filter();
-            let opts = luster::render::RenderOptions { spp, seed, filter, ..Default::default() };
+            let time_limit = time.map(std::time::Duration::from_secs_f64);
+            let opts = luster::render::RenderOptions { spp, seed, filter, time_limit, ..Default::default() };
             let build = luster::render::BuildOptions {
                 shader_timeout: std::time::Duration::from_secs_f64(shader_timeout),
             };

@@ -117,6 +117,7 @@ mod tests {
             num_samples: 1,
             aperture_size: 0.0,
             focus_distance: 1.0,
+            renderer: Default::default(),
             loc: Default::default(),
         }
     }

@@ -80,8 +80,8 @@ fn render_scene(
     let setup = t0.elapsed().as_secs_f64();
     let mut done = Vec::with_capacity(scene.cameras.len());
     for (i, cam) in scene.cameras.iter().enumerate() {
-        let pixels = u64::from(cam.width) * u64::from(cam.height);
-        let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(pixels) };
+        // Pixel samples, which passes finish evenly: the ETA holds from the first pass.
+        let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(render::work(&scene, i, opts)) };
         bar.set_style(
             ProgressStyle::with_template("{msg} [{bar:40}] {percent:>3}% {elapsed}<{eta}")
                 .unwrap_or_else(|_| ProgressStyle::default_bar())
@@ -100,10 +100,11 @@ fn render_scene(
         if !quiet {
             let names: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
             println!(
-                "{}  {}x{}  {:.2} s render (+{:.2} s load and build)  {:.1} Mrays/s  {} triangles",
+                "{}  {}x{}  {} spp  {:.2} s render (+{:.2} s load and build)  {:.1} Mrays/s  {} triangles",
                 names.join(" + "),
                 img.width,
                 img.height,
+                img.spp,
                 secs,
                 setup,
                 img.stats.total() as f64 / secs.max(1e-9) / 1e6,

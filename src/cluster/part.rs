@@ -12,8 +12,8 @@
 use super::partfile::{tile_rect, PartFile};
 use super::{checkpoint_path, part_path, selected, ClusterError, JobId, Part};
 use crate::film::Film;
+use crate::integrator::RayStats;
 use crate::math::Vec3;
-use crate::render::integrator::RayStats;
 use crate::render::{tile_origins, try_render_with, RenderOptions, Scene, TileSelection};
 use std::path::Path;
 use std::time::{Duration, Instant};

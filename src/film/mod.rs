@@ -73,6 +73,12 @@ impl Tile {
         self.weight[i] += w;
     }
 
+    /// The pixels it covers: `(x0, y0, x1, y1)`, ends excluded.
+    pub fn bounds(&self) -> (u32, u32, u32, u32) {
+        let h = (self.sum.len() as u32).checked_div(self.width).unwrap_or(0);
+        (self.x0, self.y0, self.x0 + self.width, self.y0 + h)
+    }
+
     /// Pixels of the tile.
     pub fn len(&self) -> usize {
         self.sum.len()

@@ -41,6 +41,11 @@ impl Mesh {
         self
     }
 
+    /// Every triangle's corners, object space (an emitting mesh samples them).
+    pub fn corners(&self) -> impl Iterator<Item = [Vec3; 3]> + '_ {
+        self.triangles.iter().map(|t| t.map(|i| self.positions[i as usize]))
+    }
+
     /// Texture coordinates, ∂p/∂u and ∂p/∂v (constant over a triangle: the
     /// inverse of its uv-to-position map), and the position at a hit. Without
     /// texture coordinates, or where they are degenerate, the derivatives are

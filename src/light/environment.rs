@@ -153,6 +153,22 @@ impl Environment {
         self.distribution.pdf(uv) / (j * jacobian_scale(self.mapping))
     }
 
+    /// Density over solid angle with which [`sample`](Self::sample) draws
+    /// `d` at a surface with normal `n` (`None`: in a medium).
+    pub fn sampling_pdf(&self, n: Option<Vec3>, d: Vec3) -> f32 {
+        match (self.sampling, n) {
+            (EnvSampling::Uniform, Some(n)) => {
+                if n.dot(d) > 0.0 {
+                    0.5 / PI
+                } else {
+                    0.0
+                }
+            }
+            (EnvSampling::Cosine, Some(n)) => n.dot(d).max(0.0) / PI,
+            _ => self.pdf(d),
+        }
+    }
+
     /// A direction for direct lighting at a surface with normal `n` (`None`
     /// in a medium, where importance sampling is used whatever the setting),
     /// for the uniform pair `u`: the unit direction and the radiance from it

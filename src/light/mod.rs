@@ -1,5 +1,6 @@
-//! Lights: point, spot, directional, square area and environment, a closed
-//! set matched in place on the hot path.
+//! Lights: point, spot, directional, square area, mesh and sphere emitters
+//! ([`emitter`]) and environment, a closed set matched in place on the hot
+//! path.
 //!
 //! Every light answers one question for direct lighting: from a shading
 //! point, which direction does light arrive from, how far away is its source
@@ -13,7 +14,13 @@
 //! | spot | `s I / d²`, `s` the fall-off below |
 //! | directional | `Radiance` (no attenuation) |
 //! | area | `L · A · |n_l · ω| / d²` for one uniform point of the square (hw3) |
+//! | mesh emitter | `L · A · |n_l · ω| / d²` for one point drawn by area (hw7) |
+//! | sphere emitter | `L / p(ω)` for one direction of the cone it subtends (hw7) |
 //! | environment | `L(ω) / p(ω)` for one sampled direction (hw5 eq. 8) |
+//!
+//! Every sample also carries `p(ω)`, its density over solid angle (0 for the
+//! lights no ray can hit: point, spot, directional), which multiple
+//! importance sampling weighs against the BSDF's density.
 //!
 //! The spot light's fall-off (hw5 eqs. 3–4): with `α` the angle between the
 //! spot's axis and the direction to the point, full intensity while
@@ -26,8 +33,10 @@
 //! ask for the continuous form used here.)
 
 pub mod distribution;
+pub mod emitter;
 pub mod environment;
 
+pub use emitter::{LightMesh, LightSphere};
 pub use environment::Environment;
 
 use crate::math::{orthonormal_basis, Vec3};
@@ -140,6 +149,10 @@ pub enum Light {
     },
     /// A square area light.
     Area(AreaLight),
+    /// An emitting mesh (`LightMesh`).
+    Mesh(Arc<LightMesh>),
+    /// An emitting sphere (`LightSphere`).
+    Sphere(LightSphere),
     /// The environment map.
     Environment(Arc<Environment>),
 }
@@ -157,6 +170,8 @@ pub struct LightSample {
     /// Whether the source is a point in space (point and spot lights): the
     /// shadow ray then reaches a little past it (see the integrator).
     pub point_source: bool,
+    /// Density of `wi` over solid angle; 0 for lights no ray can hit.
+    pub pdf: f32,
 }
 
 impl Light {
@@ -178,7 +193,7 @@ impl Light {
                 let to = l.position - origin;
                 let dist = to.length();
                 let e = l.intensity / (l.position - p).length_squared();
-                Some(LightSample { wi: to / dist, dist, e, point_source: true })
+                Some(LightSample { wi: to / dist, dist, e, point_source: true, pdf: 0.0 })
             }
             Light::Spot(l) => {
                 let to = l.position - origin;
@@ -189,10 +204,12 @@ impl Light {
                 if s <= 0.0 {
                     return None;
                 }
-                Some(LightSample { wi: to / dist, dist, e: l.intensity * (s / d2), point_source: true })
+                let e = l.intensity * (s / d2);
+                Some(LightSample { wi: to / dist, dist, e, point_source: true, pdf: 0.0 })
             }
             Light::Directional { direction, radiance } => {
-                Some(LightSample { wi: -*direction, dist: f32::INFINITY, e: *radiance, point_source: false })
+                let (wi, dist) = (-*direction, f32::INFINITY);
+                Some(LightSample { wi, dist, e: *radiance, point_source: false, pdf: 0.0 })
             }
             Light::Area(l) => {
                 let q = l.point(sampler.next_2d());
@@ -203,12 +220,28 @@ impl Light {
                 if cos_light == 0.0 {
                     return None;
                 }
-                let e = l.radiance * (l.area * cos_light / (q - p).length_squared());
-                Some(LightSample { wi, dist, e, point_source: false })
+                let pdf = (q - p).length_squared() / (l.area * cos_light);
+                Some(LightSample { wi, dist, e: l.radiance / pdf, point_source: false, pdf })
+            }
+            Light::Mesh(l) => {
+                let (q, nq) = l.point(sampler.next_2d());
+                let to = q - origin;
+                let dist = to.length();
+                let wi = to / dist;
+                let pdf = l.pdf(p, q, nq);
+                if pdf <= 0.0 || !pdf.is_finite() {
+                    return None;
+                }
+                Some(LightSample { wi, dist, e: l.radiance / pdf, point_source: false, pdf })
+            }
+            Light::Sphere(l) => {
+                let (wi, dist, pdf) = l.sample(origin, sampler.next_2d())?;
+                Some(LightSample { wi, dist, e: l.radiance / pdf, point_source: false, pdf })
             }
             Light::Environment(env) => {
                 let (wi, e) = env.sample(n, sampler.next_2d())?;
-                Some(LightSample { wi, dist: f32::INFINITY, e, point_source: false })
+                let pdf = env.sampling_pdf(n, wi);
+                Some(LightSample { wi, dist: f32::INFINITY, e, point_source: false, pdf })
             }
         }
     }

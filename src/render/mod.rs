@@ -1,9 +1,18 @@
-//! Rendering: the render scene, cameras, the integrator, and the tiled,
-//! multi-threaded loop that fills a [`Film`] with linear radiance.
+//! Rendering: the render scene, cameras, and the tiled, multi-threaded loop
+//! that fills a [`Film`] with linear radiance from the camera's integrator
+//! ([`crate::integrator`]).
+//!
+//! The samples of a pixel are taken in passes: every tile gets the first
+//! sample, then the next, then two more, four, ... (at most an eighth of the
+//! count at a time), so a long render is refined evenly over the image, its
+//! progress gives a fair estimate of the time left, and a time limit
+//! ([`RenderOptions::time_limit`]) can stop it between two passes with every
+//! pixel at the same sample count. A pixel's samples are summed in the same
+//! order whatever the passes and the threads, so the image's bytes depend
+//! only on the scene, the options and the samples taken.
 
 pub mod camera;
 pub mod dielectric;
-pub mod integrator;
 pub mod sampler;
 pub mod scene;
 pub mod volumes;
@@ -13,12 +22,13 @@ pub use scene::{BuildOptions, Scene};
 pub use crate::film::Filter;
 
 use crate::film::{Film, Tile};
+use crate::integrator::{PathState, RayStats};
 use crate::math::Vec2;
 use crate::shader::ShaderError;
-use integrator::{radiance, PathState, RayStats};
 use rayon::prelude::*;
 use sampler::PixelSampler;
 use std::sync::OnceLock;
+use std::time::{Duration, Instant};
 
 /// Tile edge in pixels: small enough to balance two to sixty-four threads on
 /// an 800×800 image, large enough that per-tile overhead vanishes.
@@ -59,6 +69,9 @@ pub struct RenderedImage {
     pub film: Film,
     /// Rays traced.
     pub stats: RayStats,
+    /// Samples per pixel taken (fewer than asked when a time limit stopped
+    /// the render).
+    pub spp: u32,
 }
 
 impl std::ops::Deref for RenderedImage {
@@ -71,6 +84,9 @@ impl std::ops::Deref for RenderedImage {
 /// Settings of a render beyond the scene's own.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RenderOptions {
+    /// Stop after the pass during which this much time has gone by, or before
+    /// a pass that would end after it (at least one sample per pixel is taken).
+    pub time_limit: Option<Duration>,
     /// Samples per pixel instead of the camera's `NumSamples`.
     pub spp: Option<u32>,
     /// Changes every random choice (and so the noise) without changing the
@@ -82,9 +98,16 @@ pub struct RenderOptions {
     pub tiles: Option<TileSelection>,
 }
 
+/// Units of work in rendering camera `cam` with `opts`: pixels times samples.
+/// `on_tile` callbacks add up to this (for progress bars).
+pub fn work(scene: &Scene, cam: usize, opts: &RenderOptions) -> u64 {
+    let c = &scene.cameras[cam];
+    u64::from(c.width) * u64::from(c.height) * u64::from(opts.spp.unwrap_or(c.num_samples).max(1))
+}
+
 /// Renders camera `cam` of `scene` with default options on the current rayon
-/// pool. `on_tile` is called with the number of pixels of every finished tile
-/// (for progress bars).
+/// pool. `on_tile` is called with the pixel samples of every finished tile
+/// pass (see [`work`]; for progress bars).
 pub fn render(scene: &Scene, cam: usize, on_tile: &(dyn Fn(u64) + Sync)) -> RenderedImage {
     render_with(scene, cam, &RenderOptions::default(), on_tile)
 }
@@ -136,40 +159,60 @@ fn render_tiles(
     on_tile: &(dyn Fn(u64) + Sync),
     failed: &OnceLock<Box<ShaderError>>,
 ) -> RenderedImage {
+    let start = Instant::now();
     let camera = &scene.cameras[cam];
+    let integrator = scene.integrators.get(cam).copied().unwrap_or(crate::integrator::Integrator::Whitted);
     let spp = opts.spp.unwrap_or(camera.num_samples).max(1);
     let (w, h) = (camera.width, camera.height);
     let spread = camera.pixel_spread();
     let view = camera.view();
-    let mut tiles = tile_origins(w, h);
+    let mut origins = tile_origins(w, h);
     if let Some(sel) = opts.tiles {
-        tiles =
-            tiles.into_iter().enumerate().filter(|&(i, _)| sel.contains(i as u32)).map(|(_, t)| t).collect();
+        origins = origins
+            .into_iter()
+            .enumerate()
+            .filter(|&(i, _)| sel.contains(i as u32))
+            .map(|(_, t)| t)
+            .collect();
     }
-    let done: Vec<(Tile, RayStats)> = tiles
-        .par_iter()
-        .map(|&(x0, y0)| {
+    let mut tiles: Vec<(Tile, RayStats)> = origins
+        .into_iter()
+        .map(|(x0, y0)| {
             let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
-            let mut stats = RayStats::default();
-            let mut tile = Tile::new(x0, y0, x1, y1, opts.filter);
+            (Tile::new(x0, y0, x1, y1, opts.filter), RayStats::default())
+        })
+        .collect();
+    let mut taken = 0;
+    while taken < spp && failed.get().is_none() {
+        let n = pass_size(taken, spp);
+        if let (Some(limit), true) = (opts.time_limit, taken > 0) {
+            // Stop if this pass would end after the limit, at the pace so far.
+            let per_sample = start.elapsed().as_secs_f64() / f64::from(taken);
+            if start.elapsed().as_secs_f64() + per_sample * f64::from(n) > limit.as_secs_f64() {
+                break;
+            }
+        }
+        let samples = taken..taken + n;
+        tiles.par_iter_mut().for_each(|(tile, stats)| {
+            let (x0, y0, x1, y1) = tile.bounds();
             'rows: for y in y0..y1 {
                 if failed.get().is_some() {
                     break;
                 }
                 for x in x0..x1 {
-                    for s in 0..spp {
+                    for s in samples.clone() {
                         let mut sampler = PixelSampler::new(opts.seed, x, y, s, spp);
                         let (jx, jy) = if spp == 1 { (0.5, 0.5) } else { sampler.next_2d() };
                         let lens = sampler.next_2d();
                         let time = sampler.next_1d();
                         let ray = camera.lens_ray(x as f32 + jx, y as f32 + jy, lens);
                         let screen = Vec2::new((x as f32 + jx) / w as f32, (y as f32 + jy) / h as f32);
-                        let mut st = PathState::new(stats, time, sampler).for_pixel(screen, spread);
+                        let mut st = PathState::new(*stats, time, sampler).for_pixel(screen, spread);
                         (st.pixel, st.view) = ([x, y], view);
                         st.stats.primary += 1;
-                        let l = radiance(scene, &ray, 0, 1.0, &mut st);
+                        let l = integrator.radiance(scene, &ray, &mut st);
                         tile.add_sample(x, y, jx, jy, l);
-                        stats = st.stats;
+                        *stats = st.stats;
                         if let Some(e) = st.error {
                             let _ = failed.set(e);
                             break 'rows;
@@ -177,15 +220,21 @@ fn render_tiles(
                     }
                 }
             }
-            on_tile(tile.len() as u64);
-            (tile, stats)
-        })
-        .collect();
+            on_tile(tile.len() as u64 * u64::from(n));
+        });
+        taken += n;
+    }
     let mut film = Film::new(w, h);
     let mut stats = RayStats::default();
-    for (tile, s) in &done {
+    for (tile, s) in &tiles {
         film.merge(tile);
         stats.add(s);
     }
-    RenderedImage { film, stats }
+    RenderedImage { film, stats, spp: taken }
+}
+
+/// Samples per pixel of the pass after `taken` of `spp`: 1, 1, 2, 4, ...,
+/// at most an eighth of `spp`, never past it.
+fn pass_size(taken: u32, spp: u32) -> u32 {
+    taken.max(1).min(spp.div_ceil(8)).min(spp - taken)
 }

@@ -37,8 +37,8 @@
 //! Shadow rays through a homogeneous medium use that closed form; through a
 //! scripted one they take midpoint steps twice as long as the medium's.
 
-use super::integrator::PathState;
 use super::scene::{Hit, HitGeom, Scene};
+use crate::integrator::PathState;
 use crate::math::{Ray, Vec3};
 use crate::volume::{steps, Kind, Volume};
 use std::f32::consts::PI;

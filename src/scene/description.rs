@@ -37,6 +37,8 @@ pub struct Description {
     pub spot_lights: Vec<SpotLightDesc>,
     /// The environment light (`SphericalDirectionalLight`, hw5), if any.
     pub environment_light: Option<EnvironmentLightDesc>,
+    /// Objects that emit light (`LightMesh`, `LightSphere`, hw7).
+    pub emitters: Vec<EmitterDesc>,
     /// Materials, referenced by index from objects.
     pub materials: Vec<MaterialDesc>,
     /// Shared vertex positions (the course's 1-based `VertexData`).
@@ -103,6 +105,45 @@ pub struct CameraDesc {
     pub aperture_size: f32,
     /// Distance along the gaze of the plane in focus.
     pub focus_distance: f32,
+    /// How this camera's image is rendered (`Renderer`, `RendererParams`).
+    pub renderer: RendererDesc,
+    /// Where.
+    pub loc: Loc,
+}
+
+/// The integrator a camera asks for.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RendererDesc {
+    /// The course's recursive ray tracer with direct lighting (no `<Renderer>`).
+    #[default]
+    Whitted,
+    /// `<Renderer>PathTracing</Renderer>` with the course's `<RendererParams>`.
+    PathTracing(PathParamsDesc),
+}
+
+/// The course's path-tracing switches, or luster's own MIS path tracer.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PathParamsDesc {
+    /// `NextEventEstimation`: sample the lights at every bounce.
+    pub next_event: bool,
+    /// `ImportanceSampling`: cosine-weighted bounces instead of uniform ones.
+    pub importance: bool,
+    /// `RussianRoulette`: end paths by their throughput instead of the depth.
+    pub russian_roulette: bool,
+    /// luster's `MIS` word: light and BSDF samples combined by the power
+    /// heuristic, bounces drawn from the BSDF, the environment light hit and
+    /// sampled (see docs/path-tracing.md). The course's words are then unused.
+    pub mis: bool,
+}
+
+/// An object that emits light: its index in [`Description::objects`] and
+/// its radiance (`Radiance` of `LightMesh`/`LightSphere`).
+#[derive(Clone, Debug)]
+pub struct EmitterDesc {
+    /// Index into [`Description::objects`].
+    pub object: usize,
+    /// RGB radiance leaving every point of its surface.
+    pub radiance: Vec3,
     /// Where.
     pub loc: Loc,
 }

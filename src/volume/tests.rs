@@ -21,6 +21,7 @@ fn desc(volumes: Vec<VolumeDesc>) -> Description {
         directional_lights: Vec::new(),
         spot_lights: Vec::new(),
         environment_light: None,
+        emitters: Vec::new(),
         materials: Vec::new(),
         vertices: Vec::new(),
         tex_coords: Vec::new(),

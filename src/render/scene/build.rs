@@ -5,7 +5,8 @@ use super::{Geom, Prim, Scene};
 use crate::accel::Bvh;
 use crate::geometry::mesh::{vertex_normals, welded_vertex_normals};
 use crate::geometry::{Ellipsoid, Mesh, Plane, Sphere};
-use crate::light::{AreaLight, Environment, Light, PointLight, SpotLight};
+use crate::integrator::Integrator;
+use crate::light::{AreaLight, Environment, Light, LightMesh, LightSphere, PointLight, SpotLight};
 use crate::material::Material;
 use crate::math::{Aabb, Vec2};
 use crate::render::camera::Camera;
@@ -64,7 +65,29 @@ impl Scene {
 
         let mut textures = build_textures(desc, opts)?;
         let environment = build_environment(desc, &textures)?;
-        let lights = build_lights(desc, environment.as_ref());
+        let mut lights = build_lights(desc);
+        let first_emitter = lights.len();
+        let mut light_of_object = HashMap::new();
+        for e in &desc.emitters {
+            let o = &desc.objects[e.object];
+            let light = match &o.shape {
+                Shape::Sphere { center, radius } => {
+                    Light::Sphere(LightSphere::new(*center, *radius, &o.transform, e.radiance))
+                }
+                Shape::Mesh { .. } => {
+                    let m = &meshes[mesh_of_object[&e.object] as usize];
+                    match LightMesh::new(m.corners(), &o.transform, e.radiance) {
+                        Some(l) => Light::Mesh(Arc::new(l)),
+                        None => continue,
+                    }
+                }
+                _ => return Err(SceneError::at(&desc.file, &e.loc, "internal error: not an emitter shape")),
+            };
+            light_of_object.insert(e.object, lights.len() as u32);
+            lights.push(light);
+        }
+        let emitters = lights.len() - first_emitter;
+        lights.extend(environment.as_ref().map(|e| Light::Environment(Arc::clone(e))));
         let images = shader_images(desc, &textures.images);
         let volumes = Volumes::build(desc, &mut textures, Some(images), opts.shader_timeout)?;
         let mut prims = Vec::new();
@@ -101,7 +124,8 @@ impl Scene {
                     continue;
                 }
             }
-            prims.push(Prim { geom, material, motion: o.motion, xf, textures: tex, object: i as u32 });
+            let light = light_of_object.get(&i).copied().unwrap_or(super::NO_LIGHT);
+            prims.push(Prim { geom, material, motion: o.motion, xf, textures: tex, object: i as u32, light });
         }
         let bounds: Vec<Aabb> = prims.iter().map(|p| prim_bounds(p, &meshes, &ellipsoids)).collect();
         // Finite input can still overflow f32 once transformed (3e38 under a
@@ -139,6 +163,7 @@ impl Scene {
             volumes,
             materials: desc.materials.iter().map(Material::from_desc).collect(),
             lights,
+            emitters,
             environment,
             ambient: desc.ambient_light,
             background: desc.background,
@@ -146,6 +171,7 @@ impl Scene {
             intersection_epsilon: desc.intersection_test_epsilon,
             max_depth: desc.max_recursion_depth,
             cameras: desc.cameras.iter().map(Camera::from_desc).collect(),
+            integrators: desc.cameras.iter().map(|c| Integrator::from_desc(&c.renderer)).collect(),
             warnings,
         })
     }
@@ -164,10 +190,11 @@ fn build_environment(
     Ok(Some(Arc::new(env)))
 }
 
-/// Every light in the order the integrator visits them: point lights,
-/// directional and spot lights (which draw no samples), area lights, then the
-/// environment, so scenes without the hw5 lights sample exactly as before.
-fn build_lights(desc: &Description, environment: Option<&Arc<Environment>>) -> Vec<Light> {
+/// The lights in the order the integrator visits them: point lights,
+/// directional and spot lights (which draw no samples), area lights; the
+/// caller adds the emitting objects, then the environment, so scenes without
+/// the hw5 and hw7 lights sample exactly as before.
+fn build_lights(desc: &Description) -> Vec<Light> {
     let mut lights: Vec<Light> = desc
         .point_lights
         .iter()
@@ -180,7 +207,6 @@ fn build_lights(desc: &Description, environment: Option<&Arc<Environment>>) -> V
     );
     lights.extend(desc.spot_lights.iter().map(|s| Light::Spot(SpotLight::from_desc(s))));
     lights.extend(desc.area_lights.iter().map(|a| Light::Area(AreaLight::from_desc(a))));
-    lights.extend(environment.map(|e| Light::Environment(Arc::clone(e))));
     lights
 }
 

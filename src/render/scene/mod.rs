@@ -46,7 +46,12 @@ struct Prim {
     textures: TexList,
     /// Index of the object in the description (for [`Scene::object_label`]).
     object: u32,
+    /// Index into [`Scene::lights`] when the object emits (`NO_LIGHT` if not).
+    light: u32,
 }
+
+/// [`Prim::light`] of an object that does not emit.
+const NO_LIGHT: u32 = u32::MAX;
 
 impl Prim {
     /// The ray at `time` in the primitive's object space (same `t` as in
@@ -139,6 +144,8 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// The environment map, which rays that escape see.
     pub environment: Option<Arc<Environment>>,
+    /// How many of [`lights`](Self::lights) are emitting objects.
+    pub emitters: usize,
     /// Ambient light.
     pub ambient: Vec3,
     /// Colour of rays that miss.
@@ -151,6 +158,8 @@ pub struct Scene {
     pub max_depth: u32,
     /// Cameras.
     pub cameras: Vec<Camera>,
+    /// Each camera's integrator, by camera index.
+    pub integrators: Vec<crate::integrator::Integrator>,
     /// Notes from building (e.g. degenerate triangles a PLY file had).
     pub warnings: Vec<Warning>,
 }
@@ -183,6 +192,27 @@ impl Scene {
         };
         let instance = object.unwrap_or(0);
         (self.geometry_objects.get(instance as usize).copied().unwrap_or(instance), instance)
+    }
+
+    /// The light (an index into [`Scene::lights`]) a hit lies on, when it is
+    /// an emitter's surface, and the radiance it sends back along `-d`.
+    #[inline]
+    pub fn emitted(&self, hit: &Hit, d: Vec3) -> Option<(usize, Vec3)> {
+        if self.emitters == 0 {
+            return None;
+        }
+        let prim = match hit.geom {
+            HitGeom::Triangle { prim, .. } | HitGeom::Sphere { prim } | HitGeom::Ellipsoid { prim } => prim,
+            HitGeom::Plane(_) | HitGeom::Volume(_) => return None,
+        };
+        let li = self.prims.get(prim as usize)?.light;
+        let l = match self.lights.get(li as usize)? {
+            Light::Mesh(m) => m.radiance,
+            // A sphere shines outwards only.
+            Light::Sphere(s) if d.dot(hit.ng) < 0.0 => s.radiance,
+            _ => return None,
+        };
+        Some((li as usize, l))
     }
 
     /// Total triangles over all meshes (instances not counted again).

@@ -14,6 +14,7 @@
 //! | `ApertureSize` | edge of the square lens (default 0: a pinhole) |
 //! | `FocusDistance` | distance along the gaze that is in focus (needed with an aperture) |
 //! | `Transformations` | named transforms (as for objects) moving the camera: `Position` and `GazePoint` as points, `Gaze` and `Up` as directions (see [`transform_all`]) |
+//! | `Renderer`, `RendererParams` | `PathTracing` with any of `NextEventEstimation`, `ImportanceSampling`, `RussianRoulette` (hw7), or luster's `MIS`; see [`renderer`] |
 //!
 //! No two cameras (nor an `.exr` and its derived `.png`) may write the same
 //! file: that is an error before anything is rendered.
@@ -24,7 +25,7 @@
 use super::Warnings;
 use crate::film::outputs::{file_key, plan_outputs};
 use crate::math::Transform;
-use crate::scene::description::{CameraDesc, Projection};
+use crate::scene::description::{CameraDesc, PathParamsDesc, Projection, RendererDesc};
 use crate::scene::element::{Element, Reader};
 use crate::scene::error::SceneError;
 use std::path::{Component, Path};
@@ -97,6 +98,8 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
         "FocusDistance",
         "Tonemap",
         "Transformations",
+        "Renderer",
+        "RendererParams",
     ];
     w.unknown_children(c, known);
 
@@ -208,6 +211,7 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
         num_samples,
         aperture_size,
         focus_distance,
+        renderer: renderer(r, c)?,
         loc: c.loc.clone(),
     })
 }
@@ -244,6 +248,47 @@ pub fn transform_all(
         }
     }
     Ok(())
+}
+
+/// A camera's integrator: `<Renderer>PathTracing</Renderer>` with the words of
+/// `<RendererParams>` (none, or an empty element: the course's uniform
+/// variant; `MIS`: luster's multiple importance sampling), else the course's
+/// recursive ray tracer. An unknown renderer or word is an error.
+pub fn renderer(r: &Reader, c: &Element) -> Result<RendererDesc, SceneError> {
+    let Some(re) = c.child("Renderer") else {
+        if let Some(p) = c.child("RendererParams") {
+            return Err(r.err(p, "<RendererParams> needs a <Renderer> (PathTracing) beside it"));
+        }
+        return Ok(RendererDesc::Whitted);
+    };
+    match re.text.trim() {
+        "PathTracing" => {}
+        "RayTracing" | "Whitted" => return Ok(RendererDesc::Whitted),
+        _ => return Err(r.err(re, "<Renderer> is unknown (expected PathTracing, RayTracing or Whitted)")),
+    }
+    let mut p = PathParamsDesc::default();
+    let words = c.child("RendererParams").map_or("", |e| e.text.as_str());
+    for (i, word) in words.split_whitespace().enumerate() {
+        let flag = match word {
+            "NextEventEstimation" => &mut p.next_event,
+            "ImportanceSampling" => &mut p.importance,
+            "RussianRoulette" => &mut p.russian_roulette,
+            "MIS" => &mut p.mis,
+            _ => {
+                let el = c.child("RendererParams").unwrap_or(c);
+                return Err(r.err(
+                    el,
+                    format!(
+                        "<RendererParams> word {} is unknown (expected NextEventEstimation, \
+                         ImportanceSampling, RussianRoulette or MIS)",
+                        i + 1
+                    ),
+                ));
+            }
+        };
+        *flag = true;
+    }
+    Ok(RendererDesc::PathTracing(p))
 }
 
 /// Scene files come from strangers: the image name must stay inside the output

@@ -10,6 +10,7 @@
 //! | `AbsorptionCoefficient` | dielectric Beer's-law RGB coefficient | 0 |
 //! | `AbsorptionIndex` | a conductor's imaginary part | 0 |
 //! | `Roughness` | glossy spread of mirror, conductor and dielectric rays | 0 |
+//! | `Transparency` | the older course files' mark of a transparent material: without a `type`, a non-zero value makes it a dielectric (its `RefractionIndex`, Fresnel weights) | none |
 //! | `degamma` attribute (`_degamma`) | the four reflectance colours are raised to the power 2.2 | false |
 //!
 //! `degamma="true"` (hw5 `cube_point_hdr`: "read these values by applying
@@ -69,6 +70,7 @@ fn read(
             "AbsorptionCoefficient",
             "AbsorptionIndex",
             "Roughness",
+            "Transparency",
         ],
     );
     let id = m.attr("id").map(str::trim).filter(|s| !s.is_empty());
@@ -77,6 +79,14 @@ fn read(
     };
     let mirror = r.vec3_or(m, "MirrorReflectance", Vec3::ZERO)?;
     let kind = match m.attr("type").map(str::trim).unwrap_or("") {
+        "" if m
+            .child("Transparency")
+            .map(|t| r.vec3(t))
+            .transpose()?
+            .is_some_and(|t| t.max_element() > 0.0) =>
+        {
+            MaterialKind::Dielectric
+        }
         "" => MaterialKind::Plain,
         "mirror" => MaterialKind::Mirror,
         "dielectric" => MaterialKind::Dielectric,

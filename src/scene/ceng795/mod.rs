@@ -157,7 +157,7 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
     };
     let texture_ids: HashMap<&str, usize> =
         texture_maps.iter().enumerate().rev().map(|(i, m)| (m.id.as_str(), i)).collect();
-    let (objects, obj_additions) = match root.child("Objects") {
+    let ((objects, emitters), obj_additions) = match root.child("Objects") {
         Some(o) => {
             let ctx = objects::Context {
                 r,
@@ -176,7 +176,7 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
             let objects = objects::read_all(&ctx, o, &mut w)?;
             (objects, ctx.obj.into_inner().add)
         }
-        None => (Vec::new(), Default::default()),
+        None => ((Vec::new(), Vec::new()), Default::default()),
     };
     let volumes = match root.child("Volumes") {
         Some(v) => {
@@ -209,6 +209,7 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
         directional_lights: lights.directionals,
         spot_lights: lights.spots,
         environment_light: lights.environment,
+        emitters,
         materials,
         vertices,
         tex_coords,

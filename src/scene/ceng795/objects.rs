@@ -8,6 +8,8 @@
 //! | `Ellipsoid` | `Material`, `Transformations`, `Center` (a vertex index), `Radii` (three positive numbers), `Rotation` (optional: angle in degrees, counter-clockwise, and axis x y z) |
 //! | `Plane` | `Material`, `Transformations`, `Point` (a vertex index), `Normal` |
 //! | `MeshInstance` | `baseMeshId`, `resetTransform`, `Material`, `Transformations` |
+//! | `LightMesh` | as `Mesh`, plus `Radiance` (RGB, not negative): an emitter (hw7) |
+//! | `LightSphere` | as `Sphere`, plus `Radiance`: an emitter (hw7) |
 //!
 //! Every object may list texture maps in `Textures` (hw4). Texture
 //! coordinates come from `TexCoordData`, numbered like `VertexData`: vertex
@@ -34,7 +36,7 @@ use super::textures::object_textures;
 use super::transforms::compose;
 use super::Warnings;
 use crate::math::{Quat, Transform, Vec2, Vec3};
-use crate::scene::description::{MeshSource, ObjectDesc, Shape};
+use crate::scene::description::{EmitterDesc, MeshSource, ObjectDesc, Shape};
 use crate::scene::element::{Element, Reader};
 use crate::scene::error::SceneError;
 use std::cell::RefCell;
@@ -80,11 +82,19 @@ struct PendingInstance {
     own: Transform,
 }
 
-/// Reads every object, resolving instances.
-pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Vec<ObjectDesc>, SceneError> {
-    w.unknown_children(objs, &["Mesh", "Triangle", "Sphere", "Ellipsoid", "Plane", "MeshInstance"]);
+/// Reads every object, resolving instances, and the emitters among them.
+pub fn read_all(
+    ctx: &Context,
+    objs: &Element,
+    w: &mut Warnings,
+) -> Result<(Vec<ObjectDesc>, Vec<EmitterDesc>), SceneError> {
+    w.unknown_children(
+        objs,
+        &["Mesh", "Triangle", "Sphere", "Ellipsoid", "Plane", "MeshInstance", "LightMesh", "LightSphere"],
+    );
     let r = &ctx.r;
     let mut out: Vec<ObjectDesc> = Vec::new();
+    let mut emitters = Vec::new();
     let mut pending = Vec::new();
     let mut mesh_ids: HashMap<String, usize> = HashMap::new();
     for el in &objs.children {
@@ -95,7 +105,7 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Vec<O
             continue;
         }
         let shape = match el.name.as_str() {
-            "Mesh" => mesh(ctx, el, w)?,
+            "Mesh" | "LightMesh" => mesh(ctx, el, w)?,
             "Triangle" => {
                 w.unknown_children(el, &["Material", "Transformations", "Indices", "MotionBlur", "Textures"]);
                 let ix = r.uints(r.required(el, "Indices")?)?;
@@ -113,11 +123,9 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Vec<O
                     uvs,
                 }
             }
-            "Sphere" => {
-                w.unknown_children(
-                    el,
-                    &["Material", "Transformations", "Center", "Radius", "MotionBlur", "Textures"],
-                );
+            "Sphere" | "LightSphere" => {
+                let known = ["Material", "Transformations", "Center", "Radius", "MotionBlur", "Textures"];
+                w.unknown_children(el, &emitter_children(el, &known));
                 let c = r.required(el, "Center")?;
                 let center = vertex(ctx, c, r.uint(c)?)?;
                 let re = r.required(el, "Radius")?;
@@ -174,6 +182,9 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Vec<O
         if el.name == "Mesh" {
             register(&mut mesh_ids, &id, out.len(), el, w);
         }
+        if el.name.starts_with("Light") {
+            emitters.push(EmitterDesc { object: out.len(), radiance: radiance(r, el)?, loc: el.loc.clone() });
+        }
         out.push(ObjectDesc {
             id,
             shape,
@@ -185,7 +196,26 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Vec<O
         });
     }
     resolve_instances(ctx, &mut out, &pending, &mesh_ids, objs)?;
-    Ok(out)
+    Ok((out, emitters))
+}
+
+/// The children an object may have: `known`, plus `Radiance` for an emitter.
+fn emitter_children<'a>(el: &Element, known: &[&'a str]) -> Vec<&'a str> {
+    let mut k = known.to_vec();
+    if el.name.starts_with("Light") {
+        k.push("Radiance");
+    }
+    k
+}
+
+/// An emitter's `Radiance`: required, three finite numbers, none negative.
+fn radiance(r: &Reader, el: &Element) -> Result<Vec3, SceneError> {
+    let re = r.required(el, "Radiance")?;
+    let v = r.vec3(re)?;
+    if v.min_element() < 0.0 || !v.is_finite() {
+        return Err(r.err(re, "<Radiance> must be finite and not negative (negative light does not exist)"));
+    }
+    Ok(v)
 }
 
 fn register(ids: &mut HashMap<String, usize>, id: &str, index: usize, el: &Element, w: &mut Warnings) {
@@ -198,7 +228,8 @@ fn register(ids: &mut HashMap<String, usize>, id: &str, index: usize, el: &Eleme
 
 fn mesh(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, SceneError> {
     let r = &ctx.r;
-    w.unknown_children(el, &["Material", "Transformations", "Faces", "MotionBlur", "Textures"]);
+    let known = ["Material", "Transformations", "Faces", "MotionBlur", "Textures"];
+    w.unknown_children(el, &emitter_children(el, &known));
     let smooth = match el.attr("shadingMode").map(str::trim) {
         None | Some("") | Some("flat") => false,
         Some("smooth") => true,

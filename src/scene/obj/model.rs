@@ -117,6 +117,7 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         num_samples: view.samples,
         aperture_size: 0.0,
         focus_distance: 1.0,
+        renderer: Default::default(),
         loc: loc.clone(),
     };
     let light = |az: f32, el: f32, irradiance: f32| {
@@ -184,6 +185,7 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         directional_lights: Vec::new(),
         spot_lights: Vec::new(),
         environment_light: None,
+        emitters: Vec::new(),
         materials: add.materials,
         vertices: Vec::new(),
         tex_coords: Vec::new(),

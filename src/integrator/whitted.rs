@@ -28,123 +28,20 @@
 //!
 //! Two guards keep a hostile scene (glass inside glass, a large
 //! `MaxRecursionDepth`) from spawning `2^depth` rays per pixel: a branch whose
-//! accumulated weight falls below [`MIN_WEIGHT`] is not traced (its
+//! accumulated weight falls below [`MIN_WEIGHT`](super::MIN_WEIGHT) is not traced (its
 //! contribution cannot reach a visible fraction of an 8-bit level for any
-//! plausible light), and a camera ray may spawn at most [`SECONDARY_BUDGET`]
+//! plausible light), and a camera ray may spawn at most [`SECONDARY_BUDGET`](super::SECONDARY_BUDGET)
 //! reflection and refraction rays. Neither changes any course image.
 
-/// Smallest path weight (largest RGB component of the product of the mirror,
-/// Fresnel and transmission factors so far) that is still traced.
-pub const MIN_WEIGHT: f32 = 1e-5;
-
-/// Most reflection and refraction rays one camera ray may spawn.
-pub const SECONDARY_BUDGET: u32 = 4096;
-
-/// Per-camera-ray state: the counts for the summary, what is left of the
-/// budget, the shutter time and the sampler for the rest of the path.
-#[derive(Clone, Debug)]
-pub struct PathState {
-    /// Rays traced so far.
-    pub stats: RayStats,
-    budget: u32,
-    /// Shutter time of this camera sample, in [0, 1).
-    pub time: f32,
-    /// Random dimensions for light and glossy samples.
-    pub sampler: PixelSampler,
-    /// Where the camera sample lies on the image, 0–1 across and down (a
-    /// background texture is looked up there).
-    pub screen: Vec2,
-    /// Angle of the ray cone around each ray: the pixel's angular size.
-    pub spread: f32,
-    /// Distance the path has covered before the current ray.
-    travelled: f32,
-    /// The pixel being rendered and the camera's frame (for shaders).
-    pub pixel: [u32; 2],
-    /// See `pixel`.
-    pub view: crate::texture::View,
-    /// The first shader failure on this path, naming the object. The path
-    /// then contributes black and the render loop stops (see `render_tiles`).
-    pub error: Option<Box<ShaderError>>,
-}
-
-impl PathState {
-    /// A fresh state for a new camera ray, keeping the running counts.
-    pub fn new(stats: RayStats, time: f32, sampler: PixelSampler) -> Self {
-        PathState {
-            stats,
-            budget: SECONDARY_BUDGET,
-            time,
-            sampler,
-            screen: Vec2::ZERO,
-            spread: 0.0,
-            travelled: 0.0,
-            pixel: [0; 2],
-            view: crate::texture::View::default(),
-            error: None,
-        }
-    }
-
-    /// The state for a camera sample at image position `screen` with ray
-    /// cone spread `spread`.
-    pub fn for_pixel(self, screen: Vec2, spread: f32) -> Self {
-        PathState { screen, spread, ..self }
-    }
-
-    /// Records a shader failure (the first one counts); the path then
-    /// contributes black and the render stops.
-    pub fn fail(&mut self, e: ShaderError) {
-        if self.error.is_none() {
-            self.error = Some(Box::new(e));
-        }
-    }
-
-    /// Whether a secondary ray of `weight` may be traced; counts it if so.
-    fn spawn(&mut self, weight: f32) -> bool {
-        if weight < MIN_WEIGHT || self.budget == 0 {
-            return false;
-        }
-        self.budget -= 1;
-        self.stats.secondary += 1;
-        true
-    }
-}
-
+use super::{surface_at, PathState, Surface};
 use crate::bsdf::fresnel;
 use crate::bsdf::Frame;
 use crate::material::Material;
 use crate::material::Specular;
-use crate::math::{orthonormal_basis, Ray, Vec2, Vec3};
+use crate::math::{orthonormal_basis, Ray, Vec3};
 use crate::render::dielectric;
-use crate::render::sampler::PixelSampler;
 use crate::render::scene::{Hit, Scene};
 use crate::render::volumes;
-use crate::shader::ShaderError;
-use crate::texture::{Applied, ShadeCtx};
-
-/// Ray counts, for the Mrays/s summary.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct RayStats {
-    /// Camera rays.
-    pub primary: u64,
-    /// Reflection and refraction rays.
-    pub secondary: u64,
-    /// Shadow rays.
-    pub shadow: u64,
-}
-
-impl RayStats {
-    /// All rays.
-    pub fn total(&self) -> u64 {
-        self.primary + self.secondary + self.shadow
-    }
-
-    /// Adds another count.
-    pub fn add(&mut self, o: &RayStats) {
-        self.primary += o.primary;
-        self.secondary += o.secondary;
-        self.shadow += o.shadow;
-    }
-}
 
 /// Radiance arriving along `ray`, which is at recursion `depth` (0 for camera rays).
 /// `weight` is the path's accumulated weight so far (1 for camera rays).
@@ -173,38 +70,19 @@ fn background(scene: &Scene, ray: &Ray, st: &PathState) -> Vec3 {
 }
 
 fn shade(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, weight: f32, st: &mut PathState) -> Vec3 {
-    let mut material = scene.materials[hit.material as usize];
-    let mut ns = hit.ns;
-    if !hit.textures.is_empty() {
-        // The ray cone's width here, widened by the slant of the surface.
-        let cos = ray.d.dot(hit.ns).abs().max(0.05);
-        let footprint = st.spread * st.travelled / cos;
-        let mut frame = scene.tex_frame(hit, ray, st.time, footprint);
-        let (object, instance) = scene.object_ids(hit);
-        let (incident, ng, pixel, view) = (ray.d.normalize(), hit.ng, st.pixel, st.view);
-        frame.ctx = ShadeCtx { incident, ng, object, instance, depth, pixel, view, ..ShadeCtx::default() };
-        frame.ctx.set_footprint(st.spread * st.travelled);
-        match scene.textures.apply(hit.textures, &frame, &mut material, &mut ns) {
-            Ok(Applied::Lit) => {}
-            Ok(Applied::Unlit(c)) => return c,
-            Err(e) => {
-                if st.error.is_none() {
-                    st.error = Some(Box::new((*e).with_object(scene.object_label(hit))));
-                }
-                return Vec3::ZERO;
-            }
-        }
-        if ns.dot(hit.ng) < 0.0 {
-            ns = -ns;
-        }
-    }
+    let (material, ns) = match surface_at(scene, ray, hit, depth, st) {
+        Surface::Lit(m, ns) => (m, ns),
+        Surface::Unlit(c) => return c,
+        Surface::Failed => return Vec3::ZERO,
+    };
     let m = &material;
     let entering = ray.d.dot(hit.ng) < 0.0;
     // Normals facing the side the ray came from.
     let (n, ng) = if entering { (ns, hit.ng) } else { (-ns, -hit.ng) };
     let eps = scene.shadow_epsilon;
     let inside_dielectric = !entering && matches!(m.kind, Specular::Dielectric { .. });
-    let mut color = Vec3::ZERO;
+    // An emitter's surface shows its radiance (hw7 object lights).
+    let mut color = scene.emitted(hit, ray.d).map_or(Vec3::ZERO, |(_, l)| l);
 
     if !inside_dielectric {
         color += direct(scene, m, hit, ns, ray, st);
@@ -263,7 +141,14 @@ fn shade(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, weight: f32, st: &mut 
 
 /// Ambient plus the light that reaches the hit directly from every light,
 /// with shadow rays (see [`crate::light`] for what each light contributes).
-fn direct(scene: &Scene, m: &Material, hit: &Hit, ns: Vec3, ray: &Ray, st: &mut PathState) -> Vec3 {
+pub(crate) fn direct(
+    scene: &Scene,
+    m: &Material,
+    hit: &Hit,
+    ns: Vec3,
+    ray: &Ray,
+    st: &mut PathState,
+) -> Vec3 {
     let mut color = m.ambient * scene.ambient;
     // The winding normals, not ones flipped towards the eye: see the module doc.
     let (n, ng) = (ns, hit.ng);
@@ -295,7 +180,7 @@ fn direct(scene: &Scene, m: &Material, hit: &Hit, ns: Vec3, ray: &Ray, st: &mut 
 /// arriving from `l` (`cos = n · l`, positive): `f(l, -d) cos` for a material
 /// with a BRDF, the course's Blinn-Phong otherwise.
 #[inline]
-fn reflectance(m: &Material, n: Vec3, l: Vec3, d: Vec3, cos: f32) -> Vec3 {
+pub(crate) fn reflectance(m: &Material, n: Vec3, l: Vec3, d: Vec3, cos: f32) -> Vec3 {
     match &m.brdf {
         None => blinn_phong(m, n, l, d, cos),
         Some(brdf) => {
@@ -316,7 +201,7 @@ fn blinn_phong(m: &Material, n: Vec3, l: Vec3, d: Vec3, cos: f32) -> Vec3 {
 /// `dir` moved by the course's glossy model: `dir + r (ξ₁ - ½) u + r (ξ₂ - ½) v`
 /// in a frame `(u, v)` around it, renormalized; `dir` itself when `r` is 0.
 #[inline]
-fn glossy(dir: Vec3, roughness: f32, st: &mut PathState) -> Vec3 {
+pub(crate) fn glossy(dir: Vec3, roughness: f32, st: &mut PathState) -> Vec3 {
     if roughness <= 0.0 {
         return dir;
     }

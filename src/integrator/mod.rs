@@ -1,0 +1,99 @@
+//! Integrators: what radiance a camera ray brings back. Each camera names one
+//! in the scene (`<Renderer>`, `<RendererParams>`, see
+//! [`crate::scene::ceng795::camera::renderer`]):
+//!
+//! | integrator | scene | module |
+//! |---|---|---|
+//! | recursive (Whitted) ray tracing with direct lighting | no `<Renderer>` | [`whitted`] |
+//! | Monte Carlo path tracing, the course's variants | `<Renderer>PathTracing</Renderer>`, `<RendererParams>` words | [`path`] |
+//! | path tracing with multiple importance sampling | `<RendererParams>MIS</RendererParams>` | [`path`] |
+//!
+//! Both are pure functions of (scene, ray, per-sample state) and hand their
+//! radiance to the render loop, which puts it on the film.
+
+pub mod path;
+mod state;
+pub mod whitted;
+
+pub use path::PathParams;
+pub use state::{PathState, RayStats, MIN_WEIGHT, SECONDARY_BUDGET};
+
+use crate::material::Material;
+use crate::math::{Ray, Vec3};
+use crate::render::scene::{Hit, Scene};
+use crate::scene::description::RendererDesc;
+use crate::texture::{Applied, ShadeCtx};
+
+/// The integrator of one camera: a closed set, matched per camera sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Integrator {
+    /// The course's recursive ray tracer.
+    Whitted,
+    /// A path tracer.
+    Path(PathParams),
+}
+
+impl Integrator {
+    /// The integrator a camera's description asks for.
+    pub fn from_desc(d: &RendererDesc) -> Integrator {
+        match d {
+            RendererDesc::Whitted => Integrator::Whitted,
+            RendererDesc::PathTracing(p) => Integrator::Path(PathParams {
+                next_event: p.next_event,
+                importance: p.importance,
+                russian_roulette: p.russian_roulette,
+                mis: p.mis,
+            }),
+        }
+    }
+
+    /// Radiance arriving along the camera ray `ray`.
+    #[inline]
+    pub fn radiance(&self, scene: &Scene, ray: &Ray, st: &mut PathState) -> Vec3 {
+        match self {
+            Integrator::Whitted => whitted::radiance(scene, ray, 0, 1.0, st),
+            Integrator::Path(p) => path::radiance(scene, ray, p, st),
+        }
+    }
+}
+
+/// What a surface is at a hit once its texture maps (and shaders) have
+/// acted: its material and shading normal, or the colour an unlit map gives.
+pub(crate) enum Surface {
+    /// The material and unit shading normal (on the side of `ng`).
+    Lit(Material, Vec3),
+    /// A colour to show as it is.
+    Unlit(Vec3),
+    /// A shader failed; the failure is recorded in the path state.
+    Failed,
+}
+
+/// Applies the hit object's texture maps to its material (see [`Surface`]).
+pub(crate) fn surface_at(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, st: &mut PathState) -> Surface {
+    let mut material = scene.materials[hit.material as usize];
+    let mut ns = hit.ns;
+    if !hit.textures.is_empty() {
+        // The ray cone's width here, widened by the slant of the surface.
+        let cos = ray.d.dot(hit.ns).abs().max(0.05);
+        let footprint = st.spread * st.travelled / cos;
+        let mut frame = scene.tex_frame(hit, ray, st.time, footprint);
+        let (object, instance) = scene.object_ids(hit);
+        let (incident, ng, pixel, view) = (ray.d.normalize(), hit.ng, st.pixel, st.view);
+        frame.ctx = ShadeCtx { incident, ng, object, instance, depth, pixel, view, ..ShadeCtx::default() };
+        frame.ctx.set_footprint(st.spread * st.travelled);
+        match scene.textures.apply(hit.textures, &frame, &mut material, &mut ns) {
+            Ok(Applied::Lit) => {}
+            Ok(Applied::Unlit(c)) => return Surface::Unlit(c),
+            Err(e) => {
+                if st.error.is_none() {
+                    st.error = Some(Box::new((*e).with_object(scene.object_label(hit))));
+                }
+                return Surface::Failed;
+            }
+        }
+        if ns.dot(hit.ng) < 0.0 {
+            ns = -ns;
+        }
+    }
+    Surface::Lit(material, ns)
+}

@@ -1,0 +1,359 @@
+//! Monte Carlo path tracing (hw7): every surface sends one more ray in a
+//! random direction, so light arrives after any number of bounces.
+//!
+//! At a hit the estimate is
+//!
+//! `L = Le + Σ_lights f · cos · L_l / p_l  +  f · cos · L(ω) / p(ω)`
+//!
+//! with one light sample per light (next-event estimation) and one bounce
+//! `ω`. The course's `<RendererParams>` words choose the variant:
+//!
+//! | word | effect |
+//! |---|---|
+//! | (none) | bounces uniform over the hemisphere, `p = 1/2π`; light only where a bounce hits an emitter |
+//! | `ImportanceSampling` | cosine-weighted bounces, `p = cos/π` |
+//! | `NextEventEstimation` | every light sampled at every hit; an emitter a bounce then hits adds nothing (it was counted already) |
+//! | `RussianRoulette` | no depth limit: a path goes on with probability `q = min(1, max(throughput))` and its estimate is divided by `q` |
+//! | `MIS` (luster) | bounces drawn from the BSDF; one light, chosen uniformly, sampled per hit (its estimate times the number of lights); light and bounce samples both count, weighed by the power heuristic `p_a² / (p_a² + p_b²)` with the light's density times the chance of choosing it; the environment light is sampled and hit alike |
+//!
+//! Without `RussianRoulette` a path ends after `MaxRecursionDepth` bounces,
+//! as the course's reflections do. Mirrors, conductors and dielectrics are
+//! followed as in the recursive ray tracer (a dielectric splits into its
+//! reflected and refracted rays, Beer's law inside); light seen through such
+//! a perfectly specular bounce always counts in full, since no light sample
+//! can reach through it. Point, spot and directional lights can only be
+//! sampled (nothing hits them), so only next-event estimation or MIS sees
+//! them, as in the course's images; the course's square area lights are
+//! likewise sampled only. The ambient term is left out: paths bring the
+//! light that ambient light stood in for.
+
+use super::whitted::{glossy, reflect, reflectance};
+use super::{surface_at, PathState, Surface};
+use crate::bsdf::fresnel;
+use crate::bsdf::sampling::{power_cosine, power_cosine_pdf};
+use crate::bsdf::Frame;
+use crate::light::Light;
+use crate::material::{Material, Specular};
+use crate::math::{Ray, Vec3};
+use crate::render::scene::{Hit, Scene};
+use crate::render::volumes;
+
+/// Bounces after which even Russian roulette stops a path (the throughput of
+/// a path that long is far below anything visible).
+pub const MAX_BOUNCES: u32 = 64;
+
+/// The path tracer's switches (the course's `<RendererParams>` words).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PathParams {
+    /// Sample every light at every hit.
+    pub next_event: bool,
+    /// Cosine-weighted bounces instead of uniform ones.
+    pub importance: bool,
+    /// End paths by their throughput instead of the depth.
+    pub russian_roulette: bool,
+    /// Multiple importance sampling of light and BSDF samples.
+    pub mis: bool,
+}
+
+/// How the ray being traced left its last surface, which decides how much an
+/// emitter it hits counts.
+#[derive(Clone, Copy, Debug)]
+enum Came {
+    /// From the camera or a perfectly specular bounce: in full.
+    Direct,
+    /// From a random bounce whose density was `pdf` (solid angle) at `from`.
+    Bounce { pdf: f32 },
+}
+
+/// Radiance arriving along the camera ray `ray`.
+pub fn radiance(scene: &Scene, ray: &Ray, p: &PathParams, st: &mut PathState) -> Vec3 {
+    li(scene, ray, 0, Vec3::ONE, Came::Direct, p, st)
+}
+
+/// Radiance along `ray`, which is bounce `depth` of a path of throughput
+/// `beta` so far.
+fn li(
+    scene: &Scene,
+    ray: &Ray,
+    depth: u32,
+    beta: Vec3,
+    came: Came,
+    p: &PathParams,
+    st: &mut PathState,
+) -> Vec3 {
+    let hit = volumes::trace(scene, ray, depth == 0, st);
+    let (t, color) = match hit {
+        Some(hit) => {
+            let before = st.travelled;
+            st.travelled += hit.t;
+            let c = shade(scene, ray, &hit, depth, beta, came, p, st);
+            st.travelled = before;
+            (hit.t, c)
+        }
+        None => (f32::INFINITY, escaped(scene, ray, came, p, st)),
+    };
+    volumes::through_media(scene, ray, t, color, st)
+}
+
+/// What a ray that leaves the scene brings: the environment (weighed against
+/// its light samples) or the background.
+fn escaped(scene: &Scene, ray: &Ray, came: Came, p: &PathParams, st: &PathState) -> Vec3 {
+    let Some(env) = &scene.environment else {
+        return scene.textures.background(st.screen).unwrap_or(scene.background);
+    };
+    let d = ray.d.normalize();
+    let w = match came {
+        Came::Direct => 1.0,
+        Came::Bounce { pdf } if p.mis => power_heuristic(pdf, env.pdf(d) / scene.lights.len() as f32),
+        Came::Bounce { .. } if p.next_event => 0.0,
+        Came::Bounce { .. } => 1.0,
+    };
+    env.eval(d) * w
+}
+
+#[allow(clippy::too_many_arguments)]
+fn shade(
+    scene: &Scene,
+    ray: &Ray,
+    hit: &Hit,
+    depth: u32,
+    beta: Vec3,
+    came: Came,
+    p: &PathParams,
+    st: &mut PathState,
+) -> Vec3 {
+    let (m, ns) = match surface_at(scene, ray, hit, depth, st) {
+        Surface::Lit(m, ns) => (m, ns),
+        Surface::Unlit(c) => return c,
+        Surface::Failed => return Vec3::ZERO,
+    };
+    let entering = ray.d.dot(hit.ng) < 0.0;
+    let (n, ng) = if entering { (ns, hit.ng) } else { (-ns, -hit.ng) };
+    let eps = scene.shadow_epsilon;
+    let mut color = Vec3::ZERO;
+
+    if let Some((li_index, le)) = scene.emitted(hit, ray.d) {
+        let w = match came {
+            Came::Direct => 1.0,
+            Came::Bounce { pdf } if p.mis => {
+                let pick = 1.0 / scene.lights.len() as f32;
+                power_heuristic(pdf, pick * light_pdf(&scene.lights[li_index], ray.o, hit, ray.d))
+            }
+            Came::Bounce { .. } if p.next_event => 0.0,
+            Came::Bounce { .. } => 1.0,
+        };
+        color += le * w;
+    }
+
+    let inside_dielectric = !entering && matches!(m.kind, Specular::Dielectric { .. });
+    let reflects = m.diffuse.max_element() > 0.0 || m.specular.max_element() > 0.0;
+    let origin = hit.p + ng * eps;
+    if reflects && !inside_dielectric {
+        if p.next_event || p.mis {
+            color += next_event(scene, &m, hit, n, ray, origin, p, st);
+        }
+        let more = depth < MAX_BOUNCES && (p.russian_roulette || depth < scene.max_depth);
+        if more {
+            color += bounce(scene, &m, n, ray, origin, depth, beta, p, st);
+        }
+    }
+    if depth < scene.max_depth || (p.russian_roulette && depth < MAX_BOUNCES) {
+        color += specular(scene, &m, hit, n, ng, ray, entering, depth, beta, p, st);
+    }
+    if let (true, Specular::Dielectric { absorption, .. }) = (inside_dielectric, m.kind) {
+        color *= (-absorption * hit.t).exp();
+    }
+    color
+}
+
+/// One sample of every light, shadowed; with MIS each weighed against the
+/// chance that the BSDF would have drawn its direction.
+#[allow(clippy::too_many_arguments)]
+fn next_event(
+    scene: &Scene,
+    m: &Material,
+    hit: &Hit,
+    n: Vec3,
+    ray: &Ray,
+    origin: Vec3,
+    p: &PathParams,
+    st: &mut PathState,
+) -> Vec3 {
+    let eps = scene.shadow_epsilon;
+    let mut color = Vec3::ZERO;
+    // MIS takes one light per hit, chosen uniformly: a shadow ray per hit
+    // whatever the number of lights. The course's variant samples them all.
+    let (lights, scale) = if p.mis && scene.lights.len() > 1 {
+        let k = scene.lights.len();
+        let i = ((st.sampler.next_1d() * k as f32) as usize).min(k - 1);
+        (&scene.lights[i..=i], k as f32)
+    } else {
+        (&scene.lights[..], 1.0)
+    };
+    for light in lights {
+        let Some(ls) = light.sample(origin, hit.p, Some(n), &mut st.sampler) else { continue };
+        let cos = n.dot(ls.wi);
+        if cos <= 0.0 || ls.e == Vec3::ZERO {
+            continue;
+        }
+        let t_max = if ls.point_source { ls.dist + eps } else { ls.dist - eps };
+        let tr = volumes::shadow(scene, &Ray::new(origin, ls.wi), t_max, st);
+        if tr == Vec3::ZERO {
+            continue;
+        }
+        let w = if p.mis && hittable(light) {
+            power_heuristic(ls.pdf / scale, bounce_pdf(m, n, ray.d, ls.wi, p)) * scale
+        } else {
+            scale
+        };
+        color += reflectance(m, n, ls.wi, ray.d, cos) * (tr * ls.e) * w;
+    }
+    color
+}
+
+/// Whether a bounce can hit the light (then MIS weighs its two samples).
+#[inline]
+fn hittable(light: &Light) -> bool {
+    matches!(light, Light::Mesh(_) | Light::Sphere(_) | Light::Environment(_))
+}
+
+/// The light's density for the direction `d` of a ray from `from` that hit
+/// it at `hit`.
+fn light_pdf(light: &Light, from: Vec3, hit: &Hit, d: Vec3) -> f32 {
+    match light {
+        Light::Mesh(l) => l.pdf(from, hit.p, hit.ng),
+        Light::Sphere(l) => l.pdf(from, d.normalize()),
+        _ => 0.0,
+    }
+}
+
+/// The power heuristic with exponent 2 for a sample of density `a` against
+/// the other technique's `b`.
+#[inline]
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 <= 0.0 || !a2.is_finite() {
+        return 1.0;
+    }
+    a2 / (a2 + b2)
+}
+
+/// Density over solid angle with which [`bounce`] draws `wi` at a surface of
+/// facing normal `n` seen along `d`.
+fn bounce_pdf(m: &Material, n: Vec3, d: Vec3, wi: Vec3, p: &PathParams) -> f32 {
+    let cos = n.dot(wi);
+    if cos <= 0.0 {
+        return 0.0;
+    }
+    match (&m.brdf, p.mis) {
+        (Some(b), true) => {
+            let f = Frame::new(n);
+            b.pdf(m.diffuse, m.specular, f.to_local(-d), f.to_local(wi))
+        }
+        (None, true) => power_cosine_pdf(1.0, cos),
+        _ if p.importance => power_cosine_pdf(1.0, cos),
+        _ => power_cosine_pdf(0.0, cos),
+    }
+}
+
+/// The random bounce: a direction drawn as the variant says, the light it
+/// brings times `f cos / p`, and Russian roulette when asked for.
+#[allow(clippy::too_many_arguments)]
+fn bounce(
+    scene: &Scene,
+    m: &Material,
+    n: Vec3,
+    ray: &Ray,
+    origin: Vec3,
+    depth: u32,
+    beta: Vec3,
+    p: &PathParams,
+    st: &mut PathState,
+) -> Vec3 {
+    let frame = Frame::new(n);
+    let choice = st.sampler.next_1d();
+    let u = st.sampler.next_2d();
+    let (wi, pdf) = match (&m.brdf, p.mis) {
+        (Some(b), true) => {
+            let Some(s) = b.sample(m.diffuse, m.specular, frame.to_local(-ray.d), choice, u) else {
+                return Vec3::ZERO;
+            };
+            (frame.to_world(s.wi), s.pdf)
+        }
+        _ => {
+            let e = if p.importance || p.mis { 1.0 } else { 0.0 };
+            let local = power_cosine(e, u);
+            (frame.to_world(local), power_cosine_pdf(e, local.z))
+        }
+    };
+    let cos = n.dot(wi);
+    if cos <= 0.0 || pdf <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let weight = reflectance(m, n, wi, ray.d, cos) / pdf;
+    let next = beta * weight;
+    let mut q = 1.0;
+    if p.russian_roulette {
+        q = next.max_element().min(1.0);
+        if st.sampler.next_1d() >= q {
+            return Vec3::ZERO;
+        }
+    }
+    if !st.spawn(next.max_element()) {
+        return Vec3::ZERO;
+    }
+    let came = Came::Bounce { pdf };
+    weight * li(scene, &Ray::new(origin, wi), depth + 1, next, came, p, st) / q
+}
+
+/// Mirror, conductor and dielectric rays, as the recursive ray tracer sends
+/// them (with its glossy roughness), each weighted by its reflectance.
+#[allow(clippy::too_many_arguments)]
+fn specular(
+    scene: &Scene,
+    m: &Material,
+    hit: &Hit,
+    n: Vec3,
+    ng: Vec3,
+    ray: &Ray,
+    entering: bool,
+    depth: u32,
+    beta: Vec3,
+    p: &PathParams,
+    st: &mut PathState,
+) -> Vec3 {
+    let eps = scene.shadow_epsilon;
+    let cos_i = -ray.d.dot(n);
+    let r = m.roughness;
+    let trace = |st: &mut PathState, o: Vec3, d: Vec3, k: Vec3| -> Vec3 {
+        let next = beta * k;
+        if !st.spawn(next.max_element()) {
+            return Vec3::ZERO;
+        }
+        k * li(scene, &Ray::new(o, d), depth + 1, next, Came::Direct, p, st)
+    };
+    match m.kind {
+        Specular::None => Vec3::ZERO,
+        Specular::Mirror => {
+            let d = glossy(reflect(ray.d, n), r, st);
+            trace(st, hit.p + ng * eps, d, m.mirror)
+        }
+        Specular::Conductor { n: eta, k } => {
+            let f = fresnel::conductor(cos_i, eta, k);
+            let d = glossy(reflect(ray.d, n), r, st);
+            trace(st, hit.p + ng * eps, d, m.mirror * f)
+        }
+        Specular::Dielectric { ior, .. } => {
+            let (n1, n2) = if entering { (1.0, ior) } else { (ior, 1.0) };
+            let (f, cos_t) = fresnel::dielectric(cos_i, n1, n2);
+            let d = glossy(reflect(ray.d, n), r, st);
+            let mut c = trace(st, hit.p + ng * eps, d, Vec3::splat(f));
+            if let Some(cos_t) = cos_t {
+                let eta = n1 / n2;
+                let d = glossy((ray.d * eta + n * (eta * cos_i - cos_t)).normalize(), r, st);
+                c += trace(st, hit.p - ng * eps, d, Vec3::splat(1.0 - f));
+            }
+            c
+        }
+    }
+}

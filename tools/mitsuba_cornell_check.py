@@ -1,0 +1,211 @@
+#!/usr/bin/env python3
+"""Cross-check luster's path tracer against Mitsuba 3 (variant scalar_rgb).
+
+Converts the course's hw7 `cornellbox_jaroslav_path_diffuse.xml` to Mitsuba:
+the five walls (OBJ files written here), the two spheres, the box-shaped mesh
+light (Radiance 31.831) and the point light (Intensity 3.979 W/sr). Every
+material of that scene is a normalized ModifiedPhong with no specular part, so
+Lambertian with albedo kd in both. luster renders one camera of its own copy
+of the scene with `<RendererParams>MIS</RendererParams>`; Mitsuba uses `path`.
+
+Conventions:
+  * Depth. luster's MaxRecursionDepth 3 allows three bounces after the camera
+    ray and samples the lights at each of the four hits: paths of up to five
+    segments, Mitsuba's max_depth 5. Russian roulette is off in both
+    (Mitsuba rr_depth 100).
+  * Emission. luster's mesh lights shine from both faces; Mitsuba's area
+    emitters from the front one, so every light triangle is wound to face out
+    of the light box (its inside is never seen: its open side is flush with
+    the ceiling).
+  * Camera: lookAt with the course's Gaze as target - position, FovY 45 on
+    the vertical axis; box pixel filter in both.
+
+Prints, for the accuracy check (--spp, default 1024): mean HDR-FLIP (NVIDIA's
+flip-evaluator) and the relative difference of the mean luminance; for the
+speed check (--time-spp, default 100, 512x512, the same depth): wall time of
+each renderer in this run, their ratio, and luster's Mrays/s as it reports it.
+
+Setup: python3 -m venv /tmp/mi && /tmp/mi/bin/pip install mitsuba numpy flip-evaluator
+Run:   cargo build --release && /tmp/mi/bin/python tools/mitsuba_cornell_check.py
+Targets (issue 13): mean FLIP <= 0.03, mean luminance within 1%; time ratio
+luster/Mitsuba <= 0.5.
+"""
+
+import argparse
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+import xml.etree.ElementTree as ET
+
+import numpy as np
+
+try:
+    import mitsuba as mi
+except ImportError:
+    sys.exit("mitsuba is not installed: pip install mitsuba (see the module doc)")
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SCENE = os.path.join(HERE, "..", "..", "shared", "scenes", "ceng795", "hw7", "xml",
+                     "cornellbox_jaroslav_path_diffuse.xml")
+W = np.array([0.2126, 0.7152, 0.0722])
+
+
+def floats(text):
+    return [float(x) for x in text.split()]
+
+
+def vec(el, name):
+    return floats(el.find(name).text)
+
+
+def read_scene(path):
+    root = ET.parse(path).getroot()
+    verts = np.array(floats(root.find("VertexData").text)).reshape(-1, 3)
+    mats = {m.get("id"): vec(m, "DiffuseReflectance") for m in root.find("Materials")}
+    cam = root.find("Cameras").find("Camera")
+    objs = root.find("Objects")
+    meshes, lights, spheres = [], [], []
+    for el in objs:
+        if el.tag in ("Mesh", "LightMesh"):
+            faces = el.find("Faces")
+            off = int(faces.get("vertexOffset", "0"))
+            idx = (np.array([int(x) for x in faces.text.split()]) + off - 1).reshape(-1, 3)
+            kd = mats[el.find("Material").text.strip()]
+            if el.tag == "LightMesh":
+                lights.append((idx, vec(el, "Radiance")))
+            else:
+                meshes.append((idx, kd))
+        elif el.tag == "Sphere":
+            c = verts[int(el.find("Center").text) - 1]
+            spheres.append((c, float(el.find("Radius").text), mats[el.find("Material").text.strip()]))
+    pl = root.find("Lights").find("PointLight")
+    point = (vec(pl, "Position"), vec(pl, "Intensity"))
+    return root, verts, cam, meshes, lights, spheres, point
+
+
+def write_obj(path, verts, idx, outward_from=None):
+    tris = []
+    for t in idx:
+        a, b, c = verts[t]
+        if outward_from is not None:
+            n = np.cross(b - a, c - a)
+            if np.dot(n, (a + b + c) / 3 - outward_from) < 0:
+                b, c = c, b
+        tris.append((a, b, c))
+    with open(path, "w") as f:
+        for tri in tris:
+            for p in tri:
+                f.write("v %.7g %.7g %.7g\n" % tuple(p))
+        for i in range(len(tris)):
+            f.write("f %d %d %d\n" % (3 * i + 1, 3 * i + 2, 3 * i + 3))
+
+
+def mitsuba_dict(work, verts, cam, meshes, lights, spheres, point, spp, res):
+    pos = np.array(vec(cam, "Position"))
+    gaze = np.array(vec(cam, "Gaze"))
+    up = vec(cam, "Up")
+    scene = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": 5, "rr_depth": 100},
+        "sensor": {
+            "type": "perspective",
+            "fov": float(cam.find("FovY").text),
+            "fov_axis": "y",
+            "to_world": mi.ScalarTransform4f.look_at(origin=pos.tolist(), target=(pos + gaze).tolist(), up=up),
+            "sampler": {"type": "independent", "sample_count": spp},
+            "film": {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": "box"},
+                     "pixel_format": "rgb"},
+        },
+        "point": {"type": "point", "position": point[0], "intensity": {"type": "rgb", "value": point[1]}},
+    }
+    for i, (idx, kd) in enumerate(meshes):
+        p = os.path.join(work, f"wall{i}.obj")
+        write_obj(p, verts, idx)
+        scene[f"wall{i}"] = {"type": "obj", "filename": p, "face_normals": True,
+                             "bsdf": {"type": "twosided", "bsdf": {"type": "diffuse",
+                                                                   "reflectance": {"type": "rgb", "value": kd}}}}
+    for i, (idx, radiance) in enumerate(lights):
+        p = os.path.join(work, f"light{i}.obj")
+        write_obj(p, verts, idx, outward_from=verts[np.unique(idx)].mean(axis=0))
+        scene[f"light{i}"] = {"type": "obj", "filename": p, "face_normals": True,
+                              "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0, 0, 0]}},
+                              "emitter": {"type": "area", "radiance": {"type": "rgb", "value": radiance}}}
+    for i, (c, r, kd) in enumerate(spheres):
+        scene[f"sphere{i}"] = {"type": "sphere", "center": c.tolist(), "radius": r,
+                               "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": kd}}}
+    return scene
+
+
+def luster_scene(src, dst, spp, res):
+    """The course file with its first camera only, made luster's MIS path tracer."""
+    text = open(src).read()
+    cams = re.findall(r"<Camera .*?</Camera>", text, flags=re.S)
+    cam = cams[0]
+    cam = re.sub(r"<RendererParams>.*?</RendererParams>", "<RendererParams>MIS</RendererParams>", cam)
+    cam = re.sub(r"<NumSamples>\d+</NumSamples>", f"<NumSamples>{spp}</NumSamples>", cam)
+    cam = re.sub(r"<ImageResolution>.*?</ImageResolution>", f"<ImageResolution>{res} {res}</ImageResolution>", cam)
+    cam = re.sub(r"<ImageName>.*?</ImageName>", "<ImageName>luster.exr</ImageName>", cam)
+    body = re.sub(r"<Cameras>.*</Cameras>", "<Cameras>" + cam + "</Cameras>", text, flags=re.S)
+    # The glass and mirror materials of the file are unused; their
+    # <Transparency> only draws a warning.
+    open(dst, "w").write(body)
+
+
+def run_luster(luster, scene, work, threads):
+    cmd = [luster, "render", "-o", work, scene]
+    if threads:
+        cmd += ["-t", str(threads)]
+    t = time.time()
+    out = subprocess.run(cmd, check=True, capture_output=True, text=True)
+    wall = time.time() - t
+    m = re.search(r"([\d.]+) Mrays/s", out.stdout)
+    img = np.array(mi.Bitmap(os.path.join(work, "luster.exr")))[..., :3].astype(np.float64)
+    return img, wall, float(m.group(1)) if m else float("nan")
+
+
+def run_mitsuba(d):
+    t = time.time()
+    scene = mi.load_dict(d)
+    img = np.array(mi.render(scene), dtype=np.float64)[..., :3]
+    return img, time.time() - t
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--luster", default=os.path.join(HERE, "..", "target", "release", "luster"))
+    ap.add_argument("--scene", default=SCENE)
+    ap.add_argument("--spp", type=int, default=1024, help="samples per pixel of the accuracy check")
+    ap.add_argument("--time-spp", type=int, default=100, help="samples per pixel of the speed check (0: skip)")
+    ap.add_argument("--res", type=int, default=512)
+    ap.add_argument("--threads", type=int, default=0, help="luster threads (0: all cores, as Mitsuba)")
+    ap.add_argument("--keep", help="folder to keep both renders in")
+    a = ap.parse_args()
+    mi.set_variant("scalar_rgb")
+    import flip_evaluator as flip
+
+    _, verts, cam, meshes, lights, spheres, point = read_scene(a.scene)
+    work = a.keep or tempfile.mkdtemp(prefix="luster-mi-")
+    os.makedirs(work, exist_ok=True)
+    for label, spp in (("accuracy", a.spp), ("speed", a.time_spp)):
+        if spp <= 0:
+            continue
+        ls = os.path.join(work, "luster.xml")
+        luster_scene(a.scene, ls, spp, a.res)
+        ours, t_ours, mrays = run_luster(a.luster, ls, work, a.threads)
+        theirs, t_theirs = run_mitsuba(mitsuba_dict(work, verts, cam, meshes, lights, spheres, point, spp, a.res))
+        if a.keep:
+            mi.Bitmap(ours.astype(np.float32)).write(os.path.join(work, f"luster_{label}.exr"))
+            mi.Bitmap(theirs.astype(np.float32)).write(os.path.join(work, f"mitsuba_{label}.exr"))
+        lo, lt = (ours @ W).mean(), (theirs @ W).mean()
+        _, fl, _ = flip.evaluate(theirs.astype(np.float32), ours.astype(np.float32), "HDR")
+        print(f"{label}: {a.res}x{a.res}, {spp} spp, depth 5 (MaxRecursionDepth 3)")
+        print(f"  mean HDR-FLIP {fl:.4f}   mean luminance luster {lo:.5f} mitsuba {lt:.5f} ({100 * (lo / lt - 1):+.2f}%)")
+        print(f"  wall time luster {t_ours:.2f} s, mitsuba {t_theirs:.2f} s, ratio {t_ours / t_theirs:.3f}; "
+              f"luster {mrays:.1f} Mrays/s")
+
+
+if __name__ == "__main__":
+    main()
