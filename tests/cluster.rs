@@ -114,7 +114,11 @@ fn parts_merge_to_the_bytes_of_a_single_render() {
     }
     // The Slurm scripts of the last split: one array task per part.
     let mut c = luster();
-    c.arg("slurm").arg("-o").arg(d.join("slurm")).args(["--tasks", "3", "--spp", "2"]).args(&both);
+    c.arg("slurm")
+        .arg("-o")
+        .arg(d.join("slurm"))
+        .args(["--tasks", "3", "--spp", "2", "--shader-timeout", "1.5"])
+        .args(&both);
     ok(c);
     let array = std::fs::read_to_string(d.join("slurm/luster.sbatch")).unwrap();
     for want in [
@@ -122,6 +126,7 @@ fn parts_merge_to_the_bytes_of_a_single_render() {
         "#SBATCH --requeue",
         "--part \"$SLURM_ARRAY_TASK_ID/3\" --resume",
         "'--spp' '2'",
+        "'--shader-timeout' '1.5'",
     ] {
         assert!(array.contains(want), "{want} missing from\n{array}");
     }

@@ -54,6 +54,9 @@ struct JobArgs {
     /// Reconstruction filter.
     #[arg(long, value_enum, default_value_t = super::FilterArg::Box)]
     filter: super::FilterArg,
+    /// Time limit of one shader call, in seconds (passed on to every task).
+    #[arg(long, value_name = "SECONDS", value_parser = super::parse_timeout)]
+    shader_timeout: Option<f64>,
     /// Least time between two checkpoints of a task, in seconds.
     #[arg(long, value_name = "SECONDS", default_value_t = 60)]
     checkpoint: u64,
@@ -113,6 +116,9 @@ fn write(a: &JobArgs) -> anyhow::Result<()> {
     }
     if matches!(a.filter, super::FilterArg::Gaussian) {
         render_args.extend(["--filter".to_string(), "gaussian".to_string()]);
+    }
+    if let Some(t) = a.shader_timeout {
+        render_args.extend(["--shader-timeout".to_string(), t.to_string()]);
     }
     render_args.extend(["--checkpoint".to_string(), a.checkpoint.to_string()]);
     let job = SlurmJob {
