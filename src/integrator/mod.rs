@@ -18,6 +18,7 @@ pub mod whitted;
 pub use path::PathParams;
 pub use state::{PathState, RayStats, MIN_WEIGHT, SECONDARY_BUDGET};
 
+use crate::light::{Light, LightSample};
 use crate::material::Material;
 use crate::math::{Ray, Vec3};
 use crate::render::scene::{Hit, Scene};
@@ -96,4 +97,32 @@ pub(crate) fn surface_at(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, st: &m
         }
     }
     Surface::Lit(material, ns)
+}
+
+/// What `light` sends to the surface point `p` with normal `n`, shadow rays
+/// leaving from `origin`: the sample, `n·wi`, and the transmittance along the
+/// shadow ray. `None` when the light is behind the surface, black or blocked.
+pub(crate) fn light_reaching(
+    scene: &Scene,
+    light: &Light,
+    origin: Vec3,
+    p: Vec3,
+    n: Vec3,
+    st: &mut PathState,
+) -> Option<(LightSample, f32, Vec3)> {
+    let ls = light.sample(origin, p, Some(n), &mut st.sampler)?;
+    let cos = n.dot(ls.wi);
+    if cos <= 0.0 || ls.e == Vec3::ZERO {
+        return None;
+    }
+    // A point source's shadow ray reaches a little past it, so a light lying
+    // exactly on a surface (hw2 mirror_room puts one in the ceiling plane) is
+    // blocked by it consistently, as in the references, not by per-pixel
+    // rounding. An area light's stops short of its own plane: it is an
+    // imaginary square, not geometry, and a surface it lies on must not
+    // shadow it.
+    let eps = scene.shadow_epsilon;
+    let t_max = if ls.point_source { ls.dist + eps } else { ls.dist - eps };
+    let tr = crate::render::volumes::shadow(scene, &Ray::new(origin, ls.wi), t_max, st);
+    (tr != Vec3::ZERO).then_some((ls, cos, tr))
 }

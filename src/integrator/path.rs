@@ -28,7 +28,7 @@
 //! light that ambient light stood in for.
 
 use super::whitted::{glossy, reflect, reflectance};
-use super::{surface_at, PathState, Surface};
+use super::{light_reaching, surface_at, PathState, Surface};
 use crate::bsdf::fresnel;
 use crate::bsdf::sampling::{power_cosine, power_cosine_pdf};
 use crate::bsdf::Frame;
@@ -179,7 +179,6 @@ fn next_event(
     p: &PathParams,
     st: &mut PathState,
 ) -> Vec3 {
-    let eps = scene.shadow_epsilon;
     let mut color = Vec3::ZERO;
     // MIS takes one light per hit, chosen uniformly: a shadow ray per hit
     // whatever the number of lights. The course's variant samples them all.
@@ -191,16 +190,7 @@ fn next_event(
         (&scene.lights[..], 1.0)
     };
     for light in lights {
-        let Some(ls) = light.sample(origin, hit.p, Some(n), &mut st.sampler) else { continue };
-        let cos = n.dot(ls.wi);
-        if cos <= 0.0 || ls.e == Vec3::ZERO {
-            continue;
-        }
-        let t_max = if ls.point_source { ls.dist + eps } else { ls.dist - eps };
-        let tr = volumes::shadow(scene, &Ray::new(origin, ls.wi), t_max, st);
-        if tr == Vec3::ZERO {
-            continue;
-        }
+        let Some((ls, cos, tr)) = light_reaching(scene, light, origin, hit.p, n, st) else { continue };
         let w = if p.mis && hittable(light) {
             power_heuristic(ls.pdf / scale, bounce_pdf(m, n, ray.d, ls.wi, p)) * scale
         } else {

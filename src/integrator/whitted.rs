@@ -33,7 +33,7 @@
 //! plausible light), and a camera ray may spawn at most [`SECONDARY_BUDGET`](super::SECONDARY_BUDGET)
 //! reflection and refraction rays. Neither changes any course image.
 
-use super::{surface_at, PathState, Surface};
+use super::{light_reaching, surface_at, PathState, Surface};
 use crate::bsdf::fresnel;
 use crate::bsdf::Frame;
 use crate::material::Material;
@@ -155,23 +155,9 @@ pub(crate) fn direct(
     let eps = scene.shadow_epsilon;
     let origin = hit.p + ng * eps;
     for light in &scene.lights {
-        let Some(ls) = light.sample(origin, hit.p, Some(n), &mut st.sampler) else { continue };
-        let cos = n.dot(ls.wi);
-        if cos <= 0.0 || ls.e == Vec3::ZERO {
-            continue;
+        if let Some((ls, cos, tr)) = light_reaching(scene, light, origin, hit.p, n, st) {
+            color += reflectance(m, n, ls.wi, ray.d, cos) * (tr * ls.e);
         }
-        // A point source's shadow ray reaches a little past it, so a light
-        // lying exactly on a surface (hw2 mirror_room puts one in the ceiling
-        // plane) is blocked by it consistently, as in the references, not by
-        // per-pixel rounding. An area light's stops short of its own plane:
-        // it is an imaginary square, not geometry, and a surface it lies on
-        // must not shadow it.
-        let t_max = if ls.point_source { ls.dist + eps } else { ls.dist - eps };
-        let tr = volumes::shadow(scene, &Ray::new(origin, ls.wi), t_max, st);
-        if tr == Vec3::ZERO {
-            continue;
-        }
-        color += reflectance(m, n, ls.wi, ray.d, cos) * (tr * ls.e);
     }
     color
 }
