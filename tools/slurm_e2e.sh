@@ -43,8 +43,15 @@ if ! command -v slurmctld >/dev/null || ! command -v slurmd >/dev/null || ! comm
     || ! command -v munged >/dev/null; then
     say "installing slurm-wlm and munge"
     export DEBIAN_FRONTEND=noninteractive
-    apt-get update -qq >/dev/null
-    apt-get install -y -qq --no-install-recommends slurm-wlm munge >/dev/null
+    # A registry hiccup on a fresh CI machine should not fail the run: retry.
+    for attempt in 1 2 3; do
+        if apt-get update -qq >/dev/null \
+            && apt-get install -y -qq --no-install-recommends slurm-wlm munge >/dev/null; then
+            break
+        fi
+        [ "$attempt" = 3 ] && { echo "slurm_e2e: could not install slurm-wlm and munge" >&2; exit 1; }
+        sleep 10
+    done
 fi
 
 scenes=${SCENES:-$repo/../shared/scenes}
