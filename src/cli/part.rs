@@ -6,7 +6,6 @@ use luster::cluster::part::{render_part, Outcome, PartJob};
 use luster::cluster::{share, JobId, Part};
 use luster::render::{tile_origins, BuildOptions, RenderOptions, Scene};
 use luster::scene::obj::ModelView;
-use luster::scene::Description;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -21,34 +20,19 @@ pub struct Split {
     pub checkpoint: Duration,
 }
 
-fn load(path: &Path, view: &ModelView) -> anyhow::Result<Description> {
-    Ok(if luster::scene::is_obj(path) {
-        luster::scene::obj::model_scene(path, view)?
-    } else {
-        luster::scene::load(path)?
-    })
-}
-
 /// The `ImageName`s of a scene's cameras, in order, from its element tree
 /// alone: numbering the images must not cost every part a load of every
 /// scene (the statue orbit is 360 scenes around a 2 MB mesh). A scene that
 /// fails to load fails in the part that renders it.
 fn image_names(path: &Path, view: &ModelView) -> anyhow::Result<Vec<String>> {
     if luster::scene::is_obj(path) {
-        return Ok(load(path, view)?.cameras.into_iter().map(|c| c.image_name).collect());
+        return Ok(luster::scene::load_viewed(path, view)?
+            .cameras
+            .into_iter()
+            .map(|c| c.image_name)
+            .collect());
     }
-    let text = luster::scene::file::read_text(path, 1 << 30)
-        .map_err(|why| anyhow::anyhow!("{}: cannot read the scene: {why}", path.display()))?;
-    let is_json = match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
-        Some("json") => true,
-        Some("xml") => false,
-        _ => text.trim_start().starts_with('{'),
-    };
-    let root = if is_json {
-        luster::scene::json::parse(path, &text)?
-    } else {
-        luster::scene::xml::parse(path, &text)?
-    };
+    let root = luster::scene::element_tree(path)?;
     let cameras =
         root.child("Cameras").map(|c| c.children_named("Camera").collect::<Vec<_>>()).unwrap_or_default();
     Ok(cameras
@@ -126,7 +110,7 @@ fn run_in_pool(
             continue;
         }
         let t0 = Instant::now();
-        let desc = load(s, view)?;
+        let desc = luster::scene::load_viewed(s, view)?;
         for w in &desc.warnings {
             eprintln!("warning: {}: {w}", s.display());
         }

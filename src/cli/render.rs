@@ -56,8 +56,7 @@ fn render_scene(
 ) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let obj = luster::scene::is_obj(path);
-    let mut desc =
-        if obj { luster::scene::obj::model_scene(path, view)? } else { luster::scene::load(path)? };
+    let mut desc = luster::scene::load_viewed(path, view)?;
     // A model's --size already made its camera; --scale and --crop apply to both.
     super::reframe::apply(&mut desc, if obj { None } else { frame.0 }, &frame.1)
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;

@@ -24,9 +24,20 @@ const MAX_SCENE_BYTES: u64 = 1 << 30;
 /// model, rendered in the scene [`obj::model_scene`] makes around it with the
 /// default [`obj::ModelView`].
 pub fn load(path: &Path) -> Result<Description, SceneError> {
+    load_viewed(path, &obj::ModelView::default())
+}
+
+/// [`load`], with an OBJ model seen through `view`.
+pub fn load_viewed(path: &Path, view: &obj::ModelView) -> Result<Description, SceneError> {
     if is_obj(path) {
-        return obj::model_scene(path, &obj::ModelView::default());
+        return obj::model_scene(path, view);
     }
+    ceng795::read(path, &element_tree(path)?)
+}
+
+/// A scene file's element tree (XML or JSON, chosen as [`load`] does),
+/// before any of it is read as the course's format.
+pub fn element_tree(path: &Path) -> Result<element::Element, SceneError> {
     let text = file::read_text(path, MAX_SCENE_BYTES).map_err(|why| {
         if why == "it is a folder" {
             SceneError::file(path, "is a folder, not a scene file")
@@ -43,8 +54,7 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         Some("xml") => false,
         _ => text.trim_start().starts_with('{'),
     };
-    let root = if is_json { json::parse(path, &text)? } else { xml::parse(path, &text)? };
-    ceng795::read(path, &root)
+    Ok(if is_json { json::parse(path, &text)? } else { xml::parse(path, &text)? })
 }
 
 /// Whether a path names an OBJ model (by its extension, in any case).
