@@ -1,5 +1,6 @@
 //! Tests of the PLY loader: encodings, layouts, course files and every error.
 
+use super::header::UV_NAMES;
 use super::*;
 use std::path::PathBuf;
 use std::time::Instant;
