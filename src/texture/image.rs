@@ -126,7 +126,13 @@ impl Image {
     pub fn load(path: &Path) -> Result<Image, String> {
         let (file, _) = crate::scene::file::open_regular(path, MAX_IMAGE_BYTES)
             .map_err(|why| format!("cannot open {}: {why}", path.display()))?;
-        let mut reader = ::image::ImageReader::new(std::io::BufReader::new(file));
+        let mut file = std::io::BufReader::new(file);
+        let start = std::io::BufRead::fill_buf(&mut file)
+            .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+        if super::exr_header::is_exr(start) {
+            super::exr_header::check(path)?;
+        }
+        let mut reader = ::image::ImageReader::new(file);
         if let Ok(format) = ::image::ImageFormat::from_path(path) {
             reader.set_format(format);
         }

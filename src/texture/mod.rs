@@ -27,6 +27,7 @@
 //! [`Textures::apply`] for the renderer to report.
 
 pub mod bump;
+pub mod exr_header;
 pub mod image;
 pub mod procedural;
 pub mod shader;
