@@ -60,7 +60,7 @@ impl Driver {
                 s.generation = generation;
             });
             let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                pool.install(|| self.generation(&mut known, since))
+                pool.install(|| self.generation(&mut known, since, generation))
             }));
             let error = match outcome {
                 Ok(r) => r.err(),
@@ -110,7 +110,7 @@ impl Driver {
     }
 
     /// Loads, builds and renders once; the error, as `luster render` words it.
-    fn generation(&mut self, known: &mut BTreeSet<PathBuf>, since: Instant) -> Result<(), String> {
+    fn generation(&mut self, known: &mut BTreeSet<PathBuf>, since: Instant, generation: u64) -> Result<(), String> {
         let loaded = self.load();
         // Keep watching what the last good load read, so fixing any of it counts.
         match &loaded {
@@ -128,7 +128,7 @@ impl Driver {
             }
         }
         let (desc, mut scene) = loaded.map_err(|(_, e)| e)?;
-        self.render(&desc, &mut scene, since)
+        self.render(&desc, &mut scene, since, generation)
     }
 
     /// The scene's description and render scene, or the error (with the
@@ -161,12 +161,18 @@ impl Driver {
     }
 
     /// The preview, then the refining passes, each published as a frame.
-    fn render(&mut self, desc: &Description, scene: &mut Scene, since: Instant) -> Result<(), String> {
+    fn render(
+        &mut self,
+        desc: &Description,
+        scene: &mut Scene,
+        since: Instant,
+        generation: u64,
+    ) -> Result<(), String> {
         let cam = self.opts.camera;
         let full = scene.cameras[cam].clone();
         let target = self.opts.render.spp.unwrap_or(full.num_samples).max(1);
         let kind = first_ldr(&full.image_name, &full.tonemaps).map_or(OutputKind::Course, |o| o.kind);
-        let mut labels = Labels { kind, target, preview: true, since, display_width: full.width, pass: 0 };
+        let mut labels = Labels { kind, target, preview: true, since, display_width: full.width, pass: 0, generation };
         let path = self.opts.scene.clone();
         let fail = |e: Box<crate::shader::ShaderError>| format!("{}: {e}", path.display());
         if full.width * full.height > PREVIEW_ABOVE {
@@ -199,12 +205,13 @@ impl Driver {
             let Some(png) = encode(film, &labels.kind) else { return };
             let ms = labels.since.elapsed().as_millis() as u64;
             let (width, height) = (film.width, film.height);
-            let Labels { target, preview, display_width, pass, .. } = *labels;
+            let Labels { target, preview, display_width, pass, generation, .. } = *labels;
             hub.update(|s| {
                 let number = s.frame.as_ref().map_or(1, |f| f.number + 1);
                 let png = Arc::new(png);
                 let target_spp = target;
-                s.frame = Some(Frame { number, png, width, height, spp, target_spp, pass, preview, ms, display_width });
+                let f = Frame { number, generation, png, width, height, spp, target_spp, pass, preview, ms, display_width };
+                s.frame = Some(f);
                 s.error = None;
             });
         };
@@ -227,6 +234,8 @@ struct Labels {
     display_width: u32,
     /// Passes published so far.
     pass: u32,
+    /// The change rendered.
+    generation: u64,
 }
 
 /// The film as the PNG `luster render` would write for the camera

@@ -59,7 +59,7 @@ pub fn watched_name(path: &Path) -> PathBuf {
 struct Interest {
     files: BTreeSet<PathBuf>,
     /// After a failed load the file list may be short of the file that is
-    /// missing: then any change in a watched folder counts.
+    /// missing: then a file appearing in a watched folder counts too.
     loose: bool,
 }
 
@@ -86,9 +86,13 @@ impl FileWatch {
             if !counts {
                 return;
             }
+            let appeared = matches!(
+                ev.kind,
+                EventKind::Create(_) | EventKind::Modify(notify::event::ModifyKind::Name(_))
+            );
             let hit = {
                 let i = seen.lock().unwrap_or_else(|p| p.into_inner());
-                i.loose || ev.paths.iter().any(|p| i.files.contains(p))
+                (i.loose && appeared) || ev.paths.iter().any(|p| i.files.contains(p))
             };
             if hit {
                 on_change();
@@ -98,7 +102,7 @@ impl FileWatch {
     }
 
     /// Watches `files` (in [`watched_name`] spelling) from now on; `loose`:
-    /// any change in their folders counts. A folder that cannot be watched
+    /// a file created in their folders counts too. A folder that cannot be watched
     /// (deleted, unreadable) is skipped, and tried again on the next call.
     pub fn set_files(&mut self, files: &BTreeSet<PathBuf>, loose: bool) {
         let dirs: BTreeSet<PathBuf> = files.iter().filter_map(|f| f.parent().map(Path::to_path_buf)).collect();

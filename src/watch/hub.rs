@@ -12,6 +12,8 @@ use std::time::{Duration, Instant};
 pub struct Frame {
     /// Frame number, from 1; every published image gets the next.
     pub number: u64,
+    /// The change it renders (see [`State::generation`]).
+    pub generation: u64,
     /// The PNG file's bytes.
     pub png: Arc<Vec<u8>>,
     /// Width in pixels.
