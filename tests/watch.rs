@@ -47,6 +47,14 @@ fn scene(shader: &str) -> String {
     )
 }
 
+/// Saves as editors do, writing a new file and renaming it over the old one:
+/// the watch never reads a half-written file.
+fn save(path: &std::path::Path, text: &str) {
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, text).expect("a test file");
+    std::fs::rename(&tmp, path).expect("a renamed test file");
+}
+
 fn shader(r: f32, g: f32, b: f32) -> String {
     format!("function color(s)\n  return vec3({r}, {g}, {b})\nend\n")
 }
@@ -168,12 +176,12 @@ fn shader_edits_rerender_errors_overlay_and_recover() {
     let (n1, red, _) = frame(&w.addr);
     assert!(dominant(red, 0), "a red sphere: {red:?}");
 
-    std::fs::write(dir.path().join("c.lua"), shader(0.0, 1.0, 0.0)).unwrap();
+    save(&dir.path().join("c.lua"), &shader(0.0, 1.0, 0.0));
     until(&rx, "a newer frame", |s| finished(s) && s["frame"].as_u64() > Some(n1));
     let (n2, green, good) = frame(&w.addr);
     assert!(n2 > n1 && dominant(green, 1), "green after the save: {green:?}");
 
-    std::fs::write(dir.path().join("c.lua"), "function color(s)\n  return vec3(0, 0, 1\nend\n").unwrap();
+    save(&dir.path().join("c.lua"), "function color(s)\n  return vec3(0, 0, 1\nend\n");
     let bad = until(&rx, "an error", |s| s["error"].is_string());
     let msg = bad["error"].as_str().unwrap();
     assert!(msg.contains("c.lua:3") && msg.contains("s.xml"), "the error names file:line: {msg}");
@@ -181,7 +189,7 @@ fn shader_edits_rerender_errors_overlay_and_recover() {
     let (n3, _, kept) = frame(&w.addr);
     assert_eq!((n3, &kept), (n2, &good), "the last good image is still served");
 
-    std::fs::write(dir.path().join("c.lua"), shader(0.0, 0.0, 1.0)).unwrap();
+    save(&dir.path().join("c.lua"), &shader(0.0, 0.0, 1.0));
     let fixed = until(&rx, "a recovered frame", |s| finished(s) && s["frame"].as_u64() > Some(n2));
     assert_eq!(fixed["error"], serde_json::Value::Null, "the error is gone");
     let (_, blue, _) = frame(&w.addr);
@@ -199,8 +207,69 @@ fn a_scene_that_fails_at_start_serves_the_error_then_recovers() {
     assert_eq!(get(&w.addr, "/").0, 200, "the page is served anyway");
     assert_eq!(get(&w.addr, "/frame.png").0, 404, "no frame yet");
 
-    std::fs::write(dir.path().join("c.lua"), shader(1.0, 1.0, 0.0)).unwrap();
-    std::fs::write(dir.path().join("s.xml"), scene("c.lua")).unwrap();
+    save(&dir.path().join("c.lua"), &shader(1.0, 1.0, 0.0));
+    save(&dir.path().join("s.xml"), &scene("c.lua"));
     let s = until(&rx, "a frame after the fix", finished);
     assert_eq!(s["error"], serde_json::Value::Null);
+}
+
+#[test]
+fn the_watched_files_are_the_ones_the_scene_reads() {
+    let xml = r#"<Scene>
+    <Cameras><Camera id="1" type="lookAt"><Position>0 0 4</Position><GazePoint>0 0 0</GazePoint><Up>0 1 0</Up>
+        <FovY>45</FovY><NearDistance>1</NearDistance><ImageResolution>8 8</ImageResolution><ImageName>o.png</ImageName>
+    </Camera></Cameras>
+    <Materials><Material id="1"><DiffuseReflectance>1 1 1</DiffuseReflectance></Material></Materials>
+    <Textures>
+        <Images><Image id="1">img/stripes.png</Image></Images>
+        <TextureMap id="1" type="image"><ImageId>1</ImageId><DecalMode>replace_kd</DecalMode></TextureMap>
+        <TextureMap id="2" type="shader"><Shader>sh/c.lua</Shader><DecalMode>replace_ks</DecalMode></TextureMap>
+    </Textures>
+    <Objects><Mesh id="1"><Material>1</Material><Textures>1 2</Textures><Faces plyFile="m.ply"/></Mesh></Objects>
+</Scene>"#;
+    let dir = folder(&[("s.xml", xml), ("m.ply", ""), ("c.lua", "")]);
+    for sub in ["img", "sh"] {
+        std::fs::create_dir(dir.path().join(sub)).unwrap();
+    }
+    std::fs::write(dir.path().join("img/stripes.png"), "").unwrap();
+    std::fs::write(dir.path().join("sh/c.lua"), shader(1.0, 1.0, 1.0)).unwrap();
+    let desc = luster::scene::load(&dir.path().join("s.xml")).expect("the scene loads");
+    let files = luster::watch::files::scene_files(&desc);
+    let root = dir.path().canonicalize().unwrap();
+    let want: std::collections::BTreeSet<_> =
+        ["s.xml", "m.ply", "img/stripes.png", "sh/c.lua"].iter().map(|f| root.join(f)).collect();
+    assert_eq!(files, want, "the scene, its PLY, its image and its shader; not the unused c.lua");
+}
+
+#[test]
+fn passes_are_shown_as_they_end_and_a_cancel_stops_the_render() {
+    use luster::render::{render_progressive, try_render_with, Progress, RenderOptions, Scene};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let dir = folder(&[("s.xml", &scene("c.lua")), ("c.lua", &shader(0.2, 0.6, 0.9))]);
+    let desc = luster::scene::load(&dir.path().join("s.xml")).expect("the scene loads");
+    let scene = Scene::build(&desc).expect("the scene builds");
+    let opts = RenderOptions { spp: Some(16), ..Default::default() };
+
+    let cancel = AtomicBool::new(false);
+    let mut seen = Vec::new();
+    let mut last = None;
+    let mut on_pass = |film: &luster::film::Film, spp: u32| {
+        seen.push(spp);
+        last = Some(film.clone());
+    };
+    let img = render_progressive(&scene, 0, &opts, Progress { cancel: &cancel, on_pass: &mut on_pass })
+        .expect("no shader fails");
+    assert_eq!(seen, [1, 2, 4, 6, 8, 10, 12, 14, 16], "passes of 1, 1, 2, 2, ... samples");
+    let whole = try_render_with(&scene, 0, &opts, &|_| {}).expect("no shader fails");
+    assert_eq!(img.film, whole.film, "the progressive render is the plain render");
+    assert_eq!(last.as_ref(), Some(&whole.film), "the last pass shown is the finished image");
+
+    let mut passes = 0;
+    let mut stop_after_one = |_: &luster::film::Film, _: u32| {
+        passes += 1;
+        cancel.store(true, Ordering::SeqCst);
+    };
+    let img = render_progressive(&scene, 0, &opts, Progress { cancel: &cancel, on_pass: &mut stop_after_one })
+        .expect("no shader fails");
+    assert_eq!((passes, img.spp), (1, 1), "a cancel stops the render before the next pass");
 }

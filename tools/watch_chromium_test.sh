@@ -228,6 +228,14 @@ def settle(tab, what, ok):
     fail(f"the page never showed {what}; last page state {d}, server state {s}")
 
 
+def save(text):
+    """Writes look.lua as editors do: a new file renamed over the old one."""
+    path = os.path.join(tmp, "look.lua")
+    with open(path + ".new", "w") as f:
+        f.write(text)
+    os.replace(path + ".new", path)
+
+
 def rgb(d):
     return [int(v) for v in d["center"].split(",")]
 
@@ -246,9 +254,8 @@ print(f"watch_chromium: frame {d['frame']}, {s['spp']} spp, centre pixel {red}")
 if not (red[0] > red[1] + 60 and red[0] > red[2] + 60):
     fail(f"the sphere's centre is not the red stripe: {red}")
 
-with open(os.path.join(tmp, "look.lua"), "w") as f:
-    f.write("function color(s)\n  local t = math.floor(s.P.y * 8) % 2\n"
-            "  return t == 0 and vec3(0.1, 0.3, 0.9) or vec3(0.9, 0.9, 0.9)\nend\n")
+save("function color(s)\n  local t = math.floor(s.P.y * 8) % 2\n"
+     "  return t == 0 and vec3(0.1, 0.3, 0.9) or vec3(0.9, 0.9, 0.9)\nend\n")
 first = int(d["frame"])
 s, d = settle(tab, "a new frame after the save",
               lambda s, d: s["frame"] > first and d["frame"] == str(s["frame"]) and d["center"])
@@ -257,8 +264,7 @@ print(f"watch_chromium: after the save: frame {d['frame']}, {s['spp']} spp, cent
 if not (blue[2] > blue[0] + 60 and blue[2] > blue[1] + 30):
     fail(f"the page's image did not change to the blue stripe: {blue}")
 
-with open(os.path.join(tmp, "look.lua"), "w") as f:
-    f.write("function color(s)\n  local t = math.floor(s.P.y * 8) % 2\n  return vec3(0.1, 0.3, 0.9\nend\n")
+save("function color(s)\n  local t = math.floor(s.P.y * 8) % 2\n  return vec3(0.1, 0.3, 0.9\nend\n")
 kept = d["frame"]
 s, d = settle(tab, "the syntax error", lambda s, d: "look.lua:4" in d["error"])
 print(f"watch_chromium: error shown: {d['error']}")

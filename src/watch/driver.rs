@@ -24,10 +24,26 @@ use std::time::{Duration, Instant};
 
 /// How long the files must be quiet before a reload: longer than an
 /// editor's write-rename dance, short enough to start within 100 ms.
-pub const QUIET: Duration = Duration::from_millis(30);
+pub const QUIET: Duration = Duration::from_millis(20);
 
 /// Images with more pixels than this get a preview first.
 const PREVIEW_ABOVE: u32 = 160 * 160;
+
+/// Density grids of the preview have at most this many cells per edge.
+const PREVIEW_GRID: u32 = 32;
+
+/// `desc` with its volumes' density grids capped at [`PREVIEW_GRID`], if any is finer.
+fn coarse_grids(desc: &Description) -> Option<Description> {
+    let fine = |g: Option<u32>| g.is_some_and(|g| g > PREVIEW_GRID);
+    if !desc.volumes.iter().any(|v| fine(v.grid)) {
+        return None;
+    }
+    let mut coarse = desc.clone();
+    for v in &mut coarse.volumes {
+        v.grid = v.grid.map(|g| g.min(PREVIEW_GRID));
+    }
+    Some(coarse)
+}
 
 /// The preview's size: a quarter of each side, at least one pixel.
 fn preview_size(w: u32, h: u32) -> (u32, u32) {
@@ -111,85 +127,114 @@ impl Driver {
 
     /// Loads, builds and renders once; the error, as `luster render` words it.
     fn generation(&mut self, known: &mut BTreeSet<PathBuf>, since: Instant, generation: u64) -> Result<(), String> {
-        let loaded = self.load();
-        // Keep watching what the last good load read, so fixing any of it counts.
-        match &loaded {
-            Ok((d, _)) => {
-                *known = scene_files(d);
-                self.files.set_files(known, false);
+        let desc = self.load();
+        // Until a load succeeds, keep watching what the last good one read,
+        // so fixing any of it counts.
+        let mut loose = known.clone();
+        loose.insert(super::files::watched_name(&self.opts.scene));
+        let desc = match desc {
+            Ok(d) => d,
+            Err(e) => {
+                self.files.set_files(&loose, true);
+                return Err(e);
             }
-            Err((d, _)) => {
-                let mut files = known.clone();
-                files.insert(super::files::watched_name(&self.opts.scene));
-                if let Some(d) = d {
-                    files.extend(scene_files(d));
+        };
+        loose.extend(scene_files(&desc));
+        let full = desc.cameras.get(self.opts.camera).cloned();
+        let mut labels = Labels {
+            kind: OutputKind::Course,
+            target: 1,
+            preview: true,
+            since,
+            display_width: full.as_ref().map_or(1, |c| c.resolution.0),
+            pass: 0,
+            generation,
+        };
+        // A density grid costs one shader call per cell: the preview gets a coarse one.
+        let coarse = coarse_grids(&desc);
+        let mut built = None;
+        if full.is_some_and(|c| c.resolution.0 * c.resolution.1 > PREVIEW_ABOVE) {
+            let mut scene = match self.build(coarse.as_ref().unwrap_or(&desc)) {
+                Ok(s) => s,
+                Err(e) => {
+                    self.files.set_files(&loose, true);
+                    return Err(e);
                 }
-                self.files.set_files(&files, true);
+            };
+            self.preview(&desc, &mut scene, &mut labels)?;
+            if coarse.is_none() {
+                built = Some(scene);
+            }
+            if self.cancel.load(Ordering::SeqCst) {
+                return Ok(());
             }
         }
-        let (desc, mut scene) = loaded.map_err(|(_, e)| e)?;
-        self.render(&desc, &mut scene, since, generation)
+        let mut scene = match built.map_or_else(|| self.build(&desc), Ok) {
+            Ok(s) => s,
+            Err(e) => {
+                self.files.set_files(&loose, true);
+                return Err(e);
+            }
+        };
+        *known = scene_files(&desc);
+        self.files.set_files(known, false);
+        labels.preview = false;
+        self.refine(&mut scene, &mut labels)
     }
 
-    /// The scene's description and render scene, or the error (with the
-    /// description when only the build failed).
-    #[allow(clippy::type_complexity)] // one-off: the two halves of a load
-    fn load(&self) -> Result<(Description, Scene), (Option<Description>, String)> {
+    /// The scene's description after `--size`, `--scale` and `--crop`.
+    fn load(&self) -> Result<Description, String> {
         let path = &self.opts.scene;
         let mut desc = crate::scene::load_viewed(path, &self.opts.view)
-            .map_err(|e| (None, format!("{:#}", anyhow::Error::from(e))))?;
-        if let Err(e) = (self.opts.reframe)(&mut desc) {
-            return Err((Some(desc), format!("{}: {e}", path.display())));
-        }
+            .map_err(|e| format!("{:#}", anyhow::Error::from(e)))?;
+        (self.opts.reframe)(&mut desc).map_err(|e| format!("{}: {e}", path.display()))?;
         for w in &desc.warnings {
             eprintln!("warning: {}: {w}", path.display());
         }
-        let scene = match Scene::build_with(&desc, &self.opts.build) {
-            Ok(s) => s,
-            Err(e) => return Err((Some(desc), format!("{:#}", anyhow::Error::from(e)))),
-        };
-        let n = scene.cameras.len();
-        if self.opts.camera >= n {
-            let msg = format!(
-                "{}: there is no camera {} (the scene has {n}; cameras are numbered from 0)",
-                path.display(),
-                self.opts.camera
-            );
-            return Err((Some(desc), msg));
-        }
-        Ok((desc, scene))
+        Ok(desc)
     }
 
-    /// The preview, then the refining passes, each published as a frame.
-    fn render(
-        &mut self,
-        desc: &Description,
-        scene: &mut Scene,
-        since: Instant,
-        generation: u64,
-    ) -> Result<(), String> {
+    /// The render scene of `desc`, which has the session's camera.
+    fn build(&self, desc: &Description) -> Result<Scene, String> {
+        let path = &self.opts.scene;
+        let scene = Scene::build_with(desc, &self.opts.build).map_err(|e| format!("{:#}", anyhow::Error::from(e)))?;
+        let n = scene.cameras.len();
+        if self.opts.camera >= n {
+            let cam = self.opts.camera;
+            return Err(format!(
+                "{}: there is no camera {cam} (the scene has {n}; cameras are numbered from 0)",
+                path.display()
+            ));
+        }
+        Ok(scene)
+    }
+
+    fn fail(&self, e: Box<crate::shader::ShaderError>) -> String {
+        format!("{}: {e}", self.opts.scene.display())
+    }
+
+    /// The 1-spp preview at a quarter of each side, published as a frame.
+    fn preview(&self, desc: &Description, scene: &mut Scene, labels: &mut Labels) -> Result<(), String> {
         let cam = self.opts.camera;
         let full = scene.cameras[cam].clone();
-        let target = self.opts.render.spp.unwrap_or(full.num_samples).max(1);
-        let kind = first_ldr(&full.image_name, &full.tonemaps).map_or(OutputKind::Course, |o| o.kind);
-        let mut labels = Labels { kind, target, preview: true, since, display_width: full.width, pass: 0, generation };
-        let path = self.opts.scene.clone();
-        let fail = |e: Box<crate::shader::ShaderError>| format!("{}: {e}", path.display());
-        if full.width * full.height > PREVIEW_ABOVE {
-            let mut small = desc.cameras[cam].clone();
-            small.resolution = preview_size(full.width, full.height);
-            scene.cameras[cam] = Camera::from_desc(&small);
-            let opts = RenderOptions { spp: Some(1), ..self.opts.render };
-            let r = self.progressive(scene, &opts, &mut labels);
-            scene.cameras[cam] = full;
-            r.map_err(fail)?;
-        }
-        if self.cancel.load(Ordering::SeqCst) {
-            return Ok(());
-        }
-        labels.preview = false;
-        let opts = RenderOptions { spp: Some(target), ..self.opts.render };
-        self.progressive(scene, &opts, &mut labels).map_err(fail)
+        labels.target = self.opts.render.spp.unwrap_or(full.num_samples).max(1);
+        labels.kind = first_ldr(&full.image_name, &full.tonemaps).map_or(OutputKind::Course, |o| o.kind);
+        let mut small = desc.cameras[cam].clone();
+        small.resolution = preview_size(full.width, full.height);
+        scene.cameras[cam] = Camera::from_desc(&small);
+        let opts = RenderOptions { spp: Some(1), ..self.opts.render };
+        let r = self.progressive(scene, &opts, labels);
+        scene.cameras[cam] = full;
+        r.map_err(|e| self.fail(e))
+    }
+
+    /// The full-resolution passes up to the target sample count.
+    fn refine(&self, scene: &mut Scene, labels: &mut Labels) -> Result<(), String> {
+        let full = &scene.cameras[self.opts.camera];
+        labels.target = self.opts.render.spp.unwrap_or(full.num_samples).max(1);
+        labels.kind = first_ldr(&full.image_name, &full.tonemaps).map_or(OutputKind::Course, |o| o.kind);
+        let opts = RenderOptions { spp: Some(labels.target), ..self.opts.render };
+        self.progressive(scene, &opts, labels).map_err(|e| self.fail(e))
     }
 
     /// One progressive render of the session's camera, every pass published.

@@ -27,7 +27,14 @@ const KEEPALIVE: Duration = Duration::from_secs(10);
 
 /// Binds 127.0.0.1:`port` (0: any free port).
 pub fn bind(port: u16) -> Result<Server, String> {
-    Server::http(("127.0.0.1", port)).map_err(|e| format!("cannot listen on 127.0.0.1:{port}: {e}"))
+    Server::http(("127.0.0.1", port)).map_err(|e| {
+        let why = match e.downcast_ref::<std::io::Error>() {
+            Some(io) if io.kind() == std::io::ErrorKind::AddrInUse => "the port is in use (try --port 0)".to_string(),
+            Some(io) => crate::scene::io_reason(io),
+            None => e.to_string(),
+        };
+        format!("cannot serve the page on 127.0.0.1:{port}: {why}")
+    })
 }
 
 /// Answers requests until the hub closes.
