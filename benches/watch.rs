@@ -57,7 +57,8 @@ fn first_frame(session: &Session, generation: u64) -> Instant {
     let hub = session.hub();
     let mut seq = 0;
     loop {
-        let s = hub.wait_newer(seq, Duration::from_secs(120)).expect("the session answers within two minutes");
+        let s =
+            hub.wait_newer(seq, Duration::from_secs(120)).expect("the session answers within two minutes");
         assert!(s.error.is_none() || s.generation < generation, "the scene failed: {:?}", s.error);
         if s.frame.as_ref().is_some_and(|f| f.generation == generation) {
             return Instant::now();
@@ -81,7 +82,10 @@ fn main() {
         .collect();
     scenes.sort();
     println!("save-to-first-pixels, median of {saves} saves (preview: 1 spp, a quarter of each side)");
-    println!("{:<18} {:>9} {:>10} {:>10} {:>10} {:>7}", "scene", "preview", "watch ms", "max ms", "direct ms", "ratio");
+    println!(
+        "{:<18} {:>9} {:>10} {:>10} {:>10} {:>7}",
+        "scene", "preview", "watch ms", "max ms", "direct ms", "ratio"
+    );
     let mut all = Vec::new();
     for path in &scenes {
         let text = std::fs::read_to_string(path).expect("the scene text");

@@ -126,7 +126,11 @@ fn events(addr: &str) -> Receiver<serde_json::Value> {
 }
 
 /// The first state for which `ok` holds.
-fn until(rx: &Receiver<serde_json::Value>, what: &str, ok: impl Fn(&serde_json::Value) -> bool) -> serde_json::Value {
+fn until(
+    rx: &Receiver<serde_json::Value>,
+    what: &str,
+    ok: impl Fn(&serde_json::Value) -> bool,
+) -> serde_json::Value {
     let end = Instant::now() + WAIT;
     loop {
         let left = end.saturating_duration_since(Instant::now());
@@ -269,7 +273,8 @@ fn passes_are_shown_as_they_end_and_a_cancel_stops_the_render() {
         passes += 1;
         cancel.store(true, Ordering::SeqCst);
     };
-    let img = render_progressive(&scene, 0, &opts, Progress { cancel: &cancel, on_pass: &mut stop_after_one })
-        .expect("no shader fails");
+    let img =
+        render_progressive(&scene, 0, &opts, Progress { cancel: &cancel, on_pass: &mut stop_after_one })
+            .expect("no shader fails");
     assert_eq!((passes, img.spp), (1, 1), "a cancel stops the render before the next pass");
 }

@@ -80,7 +80,9 @@ impl Driver {
             }));
             let error = match outcome {
                 Ok(r) => r.err(),
-                Err(_) => Some(format!("{}: luster failed unexpectedly (a bug); save again to retry", self.name())),
+                Err(_) => {
+                    Some(format!("{}: luster failed unexpectedly (a bug); save again to retry", self.name()))
+                }
             };
             if let Some(e) = &error {
                 eprintln!("error: {e}");
@@ -126,7 +128,12 @@ impl Driver {
     }
 
     /// Loads, builds and renders once; the error, as `luster render` words it.
-    fn generation(&mut self, known: &mut BTreeSet<PathBuf>, since: Instant, generation: u64) -> Result<(), String> {
+    fn generation(
+        &mut self,
+        known: &mut BTreeSet<PathBuf>,
+        since: Instant,
+        generation: u64,
+    ) -> Result<(), String> {
         let desc = self.load();
         // Until a load succeeds, keep watching what the last good one read,
         // so fixing any of it counts.
@@ -197,7 +204,8 @@ impl Driver {
     /// The render scene of `desc`, which has the session's camera.
     fn build(&self, desc: &Description) -> Result<Scene, String> {
         let path = &self.opts.scene;
-        let scene = Scene::build_with(desc, &self.opts.build).map_err(|e| format!("{:#}", anyhow::Error::from(e)))?;
+        let scene =
+            Scene::build_with(desc, &self.opts.build).map_err(|e| format!("{:#}", anyhow::Error::from(e)))?;
         let n = scene.cameras.len();
         if self.opts.camera >= n {
             let cam = self.opts.camera;
@@ -255,7 +263,19 @@ impl Driver {
                 let number = s.frame.as_ref().map_or(1, |f| f.number + 1);
                 let png = Arc::new(png);
                 let target_spp = target;
-                let f = Frame { number, generation, png, width, height, spp, target_spp, pass, preview, ms, display_width };
+                let f = Frame {
+                    number,
+                    generation,
+                    png,
+                    width,
+                    height,
+                    spp,
+                    target_spp,
+                    pass,
+                    preview,
+                    ms,
+                    display_width,
+                };
                 s.frame = Some(f);
                 s.error = None;
             });

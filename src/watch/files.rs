@@ -105,7 +105,8 @@ impl FileWatch {
     /// a file created in their folders counts too. A folder that cannot be watched
     /// (deleted, unreadable) is skipped, and tried again on the next call.
     pub fn set_files(&mut self, files: &BTreeSet<PathBuf>, loose: bool) {
-        let dirs: BTreeSet<PathBuf> = files.iter().filter_map(|f| f.parent().map(Path::to_path_buf)).collect();
+        let dirs: BTreeSet<PathBuf> =
+            files.iter().filter_map(|f| f.parent().map(Path::to_path_buf)).collect();
         for gone in self.dirs.difference(&dirs) {
             let _ = self.watcher.unwatch(gone);
         }

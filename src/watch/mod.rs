@@ -67,10 +67,8 @@ impl Session {
     /// scene that fails to load still starts one, showing the error.
     pub fn start(opts: Options, port: u16) -> Result<Session, String> {
         let server = Arc::new(server::bind(port)?);
-        let addr = server
-            .server_addr()
-            .to_ip()
-            .ok_or_else(|| "the page server has no IP address".to_string())?;
+        let addr =
+            server.server_addr().to_ip().ok_or_else(|| "the page server has no IP address".to_string())?;
         let hub = Hub::new(opts.scene.display().to_string());
         let cancel = Arc::new(AtomicBool::new(false));
         let (tx, changes) = std::sync::mpsc::channel::<Instant>();
@@ -85,9 +83,13 @@ impl Session {
             .thread_name(|i| format!("watch-render-{i}"))
             .build()
             .map_err(|e| format!("cannot start worker threads: {e}"))?;
-        let driver = driver::Driver { opts, hub: Arc::clone(&hub), cancel: Arc::clone(&cancel), changes, files };
+        let driver =
+            driver::Driver { opts, hub: Arc::clone(&hub), cancel: Arc::clone(&cancel), changes, files };
         let spawn = |name: &str, f: Box<dyn FnOnce() + Send>| {
-            std::thread::Builder::new().name(name.into()).spawn(f).map_err(|e| format!("cannot start a thread: {e}"))
+            std::thread::Builder::new()
+                .name(name.into())
+                .spawn(f)
+                .map_err(|e| format!("cannot start a thread: {e}"))
         };
         let render = spawn("watch-driver", Box::new(move || driver.run(&pool)))?;
         let (s, h) = (Arc::clone(&server), Arc::clone(&hub));

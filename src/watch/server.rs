@@ -29,7 +29,9 @@ const KEEPALIVE: Duration = Duration::from_secs(10);
 pub fn bind(port: u16) -> Result<Server, String> {
     Server::http(("127.0.0.1", port)).map_err(|e| {
         let why = match e.downcast_ref::<std::io::Error>() {
-            Some(io) if io.kind() == std::io::ErrorKind::AddrInUse => "the port is in use (try --port 0)".to_string(),
+            Some(io) if io.kind() == std::io::ErrorKind::AddrInUse => {
+                "the port is in use (try --port 0)".to_string()
+            }
             Some(io) => crate::scene::io_reason(io),
             None => e.to_string(),
         };
