@@ -147,6 +147,8 @@ impl Driver {
             }
         };
         loose.extend(scene_files(&desc));
+        // Watched before the build, which may take seconds: a save during it counts.
+        self.files.set_files(&loose, true);
         let full = desc.cameras.get(self.opts.camera).cloned();
         let mut labels = Labels {
             kind: OutputKind::Course,
