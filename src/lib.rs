@@ -32,3 +32,4 @@ pub mod scene;
 pub mod shader;
 pub mod texture;
 pub mod volume;
+pub mod watch;

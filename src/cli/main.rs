@@ -18,6 +18,7 @@ mod render;
 mod slurm;
 mod suite;
 mod tonemap;
+mod watch;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -86,6 +87,41 @@ enum Command {
         /// than the camera's or --spp's count). Prints the samples used.
         #[arg(long, value_name = "SECONDS", value_parser = parse_timeout)]
         time: Option<f64>,
+        #[command(flatten)]
+        model: ModelArgs,
+        #[command(flatten)]
+        frame: reframe::FrameArgs,
+    },
+    /// Preview a scene live in the browser, re-rendering whenever its files are saved.
+    ///
+    /// Serves a page on http://127.0.0.1:PORT/ that shows one camera's image
+    /// as it refines (a 1-spp pass at a quarter of the resolution, then
+    /// passes up to the camera's NumSamples or --spp), the pass and spp, and
+    /// any error over the last good image. Saving the scene, a shader, a
+    /// texture image or a PLY mesh it reads cancels the render and starts
+    /// again. Runs until Ctrl-C; exit code 2 when the page cannot be served.
+    Watch {
+        /// The scene file (.xml or .json) or OBJ model (.obj).
+        scene: PathBuf,
+        /// Port of the page on 127.0.0.1 (0: any free port; the address is printed).
+        #[arg(long, default_value_t = 8795)]
+        port: u16,
+        /// Which camera, numbered from 0 in the scene's order.
+        #[arg(long, default_value_t = 0)]
+        camera: usize,
+        /// Worker threads (default: all cores; at most 1024).
+        #[arg(short, long, value_parser = threads_parser())]
+        threads: Option<usize>,
+        /// Samples per pixel to refine to, overriding the camera's NumSamples.
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_048_576))]
+        spp: Option<u32>,
+        /// Seed of every random choice.
+        #[arg(long, default_value_t = 0)]
+        seed: u32,
+        /// Time limit of one shader call, in seconds.
+        #[arg(long, value_name = "SECONDS", value_parser = parse_timeout,
+              default_value_t = luster::shader::DEFAULT_TIMEOUT.as_secs_f64())]
+        shader_timeout: f64,
         #[command(flatten)]
         model: ModelArgs,
         #[command(flatten)]
@@ -269,6 +305,20 @@ fn main() -> ExitCode {
                     render::run(&scenes, &outdir, threads, quiet, &opts, &build, &model.view(), &frame)
                 }
             }
+        }
+        Command::Watch { scene, port, camera, threads, spp, seed, shader_timeout, model, frame } => {
+            watch::run(watch::Args {
+                scene,
+                port,
+                camera,
+                threads,
+                render: luster::render::RenderOptions { spp, seed, ..Default::default() },
+                build: luster::render::BuildOptions {
+                    shader_timeout: std::time::Duration::from_secs_f64(shader_timeout),
+                },
+                view: model.view(),
+                frame: (model.size, frame),
+            })
         }
         Command::Merge { outdir } => merge::run(&outdir),
         Command::Slurm(cli) => slurm::run(cli),

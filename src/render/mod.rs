@@ -27,6 +27,7 @@ use crate::math::Vec2;
 use crate::shader::ShaderError;
 use rayon::prelude::*;
 use sampler::PixelSampler;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
@@ -122,7 +123,7 @@ pub fn render_with(
     opts: &RenderOptions,
     on_tile: &(dyn Fn(u64) + Sync),
 ) -> RenderedImage {
-    render_tiles(scene, cam, opts, on_tile, &OnceLock::new())
+    render_tiles(scene, cam, opts, on_tile, &OnceLock::new(), None)
 }
 
 /// Renders camera `cam` of `scene` on the current rayon pool, or reports the
@@ -142,7 +143,33 @@ pub fn try_render_with(
     on_tile: &(dyn Fn(u64) + Sync),
 ) -> Result<RenderedImage, Box<ShaderError>> {
     let failed = OnceLock::new();
-    let img = render_tiles(scene, cam, opts, on_tile, &failed);
+    let img = render_tiles(scene, cam, opts, on_tile, &failed, None);
+    match failed.into_inner() {
+        Some(e) => Err(e),
+        None => Ok(img),
+    }
+}
+
+/// A caller following a render pass by pass (`luster watch`).
+pub struct Progress<'a> {
+    /// Stops the render, within a row of a tile, once set (by any thread);
+    /// the image returned then holds a partial pass and is to be dropped.
+    pub cancel: &'a AtomicBool,
+    /// Called on the calling thread after every finished pass with the
+    /// image so far and the samples per pixel in it.
+    pub on_pass: &'a mut dyn FnMut(&Film, u32),
+}
+
+/// [`try_render_with`], showing every finished pass to `progress` and
+/// stopping early when it is cancelled.
+pub fn render_progressive(
+    scene: &Scene,
+    cam: usize,
+    opts: &RenderOptions,
+    progress: Progress<'_>,
+) -> Result<RenderedImage, Box<ShaderError>> {
+    let failed = OnceLock::new();
+    let img = render_tiles(scene, cam, opts, &|_| {}, &failed, Some(progress));
     match failed.into_inner() {
         Some(e) => Err(e),
         None => Ok(img),
@@ -158,7 +185,10 @@ fn render_tiles(
     opts: &RenderOptions,
     on_tile: &(dyn Fn(u64) + Sync),
     failed: &OnceLock<Box<ShaderError>>,
+    mut progress: Option<Progress<'_>>,
 ) -> RenderedImage {
+    let cancel = progress.as_ref().map(|p| p.cancel);
+    let stop = || failed.get().is_some() || cancel.is_some_and(|c| c.load(Ordering::Relaxed));
     let start = Instant::now();
     let camera = &scene.cameras[cam];
     let integrator = scene.integrators.get(cam).copied().unwrap_or(crate::integrator::Integrator::Whitted);
@@ -183,7 +213,7 @@ fn render_tiles(
         })
         .collect();
     let mut taken = 0;
-    while taken < spp && failed.get().is_none() {
+    while taken < spp && !stop() {
         let n = pass_size(taken, spp);
         if let (Some(limit), true) = (opts.time_limit, taken > 0) {
             // Stop if this pass would end after the limit, at the pace so far.
@@ -196,7 +226,7 @@ fn render_tiles(
         tiles.par_iter_mut().for_each(|(tile, stats)| {
             let (x0, y0, x1, y1) = tile.bounds();
             'rows: for y in y0..y1 {
-                if failed.get().is_some() {
+                if stop() {
                     break;
                 }
                 for x in x0..x1 {
@@ -223,14 +253,24 @@ fn render_tiles(
             on_tile(tile.len() as u64 * u64::from(n));
         });
         taken += n;
+        if let (Some(p), false) = (progress.as_mut(), stop()) {
+            (p.on_pass)(&merged(w, h, &tiles), taken);
+        }
     }
-    let mut film = Film::new(w, h);
     let mut stats = RayStats::default();
-    for (tile, s) in &tiles {
-        film.merge(tile);
+    for (_, s) in &tiles {
         stats.add(s);
     }
-    RenderedImage { film, stats, spp: taken }
+    RenderedImage { film: merged(w, h, &tiles), stats, spp: taken }
+}
+
+/// The `w`×`h` film of `tiles`.
+fn merged(w: u32, h: u32, tiles: &[(Tile, RayStats)]) -> Film {
+    let mut film = Film::new(w, h);
+    for (tile, _) in tiles {
+        film.merge(tile);
+    }
+    film
 }
 
 /// Samples per pixel of the pass after `taken` of `spp`: 1, 1, 2, 4, ...,

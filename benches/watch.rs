@@ -1,0 +1,130 @@
+//! `luster watch`'s save-to-first-pixels latency on the gallery scenes
+//! (`examples/scenes/*.xml`): the time from writing the scene file to the
+//! first frame of the new render (the 1-spp preview at a quarter of the
+//! resolution) being ready to serve, the median of several saves; the goal
+//! is under 300 ms. Each save lands while the previous render is still
+//! refining, so cancelling it is part of the figure.
+//!
+//! Beside it, as the reference measured in the same run: loading, building
+//! and rendering the same preview directly (no watch, no PNG), whose ratio
+//! shows what the watch machinery adds. Run: `cargo bench --bench watch`
+//! (`-- --saves N` for more saves, `-- --only NAME` for one scene).
+
+use luster::render::{camera::Camera, render_with, RenderOptions, Scene};
+use luster::watch::{Options, Session};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn arg(name: &str) -> Option<String> {
+    let args: Vec<String> = std::env::args().collect();
+    args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).cloned()
+}
+
+/// Copies `from` into `to` recursively (the gallery's relative paths keep working).
+fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).expect("a copy folder");
+    for e in std::fs::read_dir(from).expect("the examples folder").flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            copy_tree(&p, &to.join(e.file_name()));
+        } else {
+            std::fs::copy(&p, to.join(e.file_name())).expect("a copied file");
+        }
+    }
+}
+
+/// Seconds to load, build and render the preview of camera 0 directly.
+fn direct_preview(path: &Path) -> f64 {
+    let t = Instant::now();
+    let desc = luster::scene::load(path).expect("the gallery scene loads");
+    let mut scene = Scene::build(&desc).expect("the gallery scene builds");
+    let mut small = desc.cameras[0].clone();
+    let (w, h) = small.resolution;
+    small.resolution = (w.div_ceil(4), h.div_ceil(4));
+    scene.cameras[0] = Camera::from_desc(&small);
+    let img = render_with(&scene, 0, &RenderOptions { spp: Some(1), ..Default::default() }, &|_| {});
+    std::hint::black_box(img.spp);
+    t.elapsed().as_secs_f64()
+}
+
+/// Waits for the first frame of `generation`; returns when it was seen.
+fn first_frame(session: &Session, generation: u64) -> Instant {
+    let hub = session.hub();
+    let mut seq = 0;
+    loop {
+        let s =
+            hub.wait_newer(seq, Duration::from_secs(120)).expect("the session answers within two minutes");
+        assert!(s.error.is_none() || s.generation < generation, "the scene failed: {:?}", s.error);
+        if s.frame.as_ref().is_some_and(|f| f.generation == generation) {
+            return Instant::now();
+        }
+        seq = s.seq;
+    }
+}
+
+fn main() {
+    let saves: usize = arg("--saves").and_then(|s| s.parse().ok()).unwrap_or(5).max(1);
+    let only = arg("--only");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let tmp = tempfile::tempdir().expect("a temporary folder");
+    copy_tree(&root, tmp.path());
+    let mut scenes: Vec<PathBuf> = std::fs::read_dir(tmp.path().join("scenes"))
+        .expect("the gallery scenes")
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "xml"))
+        .filter(|p| only.as_ref().is_none_or(|o| p.to_string_lossy().contains(o.as_str())))
+        .collect();
+    scenes.sort();
+    println!("save-to-first-pixels, median of {saves} saves (preview: 1 spp, a quarter of each side)");
+    println!(
+        "{:<18} {:>9} {:>10} {:>10} {:>10} {:>7}",
+        "scene", "preview", "watch ms", "max ms", "direct ms", "ratio"
+    );
+    let mut all = Vec::new();
+    for path in &scenes {
+        let text = std::fs::read_to_string(path).expect("the scene text");
+        let desc = luster::scene::load(path).expect("the gallery scene loads");
+        let (w, h) = desc.cameras[0].resolution;
+        let opts = Options {
+            scene: path.clone(),
+            camera: 0,
+            render: RenderOptions::default(),
+            build: Default::default(),
+            view: Default::default(),
+            reframe: Box::new(|_| Ok(())),
+            threads: None,
+        };
+        let session = Session::start(opts, 0).expect("a watch session starts");
+        first_frame(&session, 0);
+        let mut lat = Vec::new();
+        for i in 1..=saves as u64 {
+            // Let the previous render refine a while: the save must cancel it.
+            std::thread::sleep(Duration::from_millis(300));
+            let t0 = Instant::now();
+            std::fs::write(path, format!("{text}\n<!-- save {i} -->\n")).expect("the scene is saved");
+            let t1 = first_frame(&session, i);
+            lat.push((t1 - t0).as_secs_f64() * 1e3);
+        }
+        session.stop();
+        let mut direct: Vec<f64> = (0..saves).map(|_| direct_preview(path) * 1e3).collect();
+        let (m, d) = (median(&mut lat.clone()), median(&mut direct));
+        let max = lat.iter().copied().fold(0.0, f64::max);
+        let name = path.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
+        println!(
+            "{name:<18} {:>9} {m:>10.1} {max:>10.1} {d:>10.1} {:>7.2}",
+            format!("{}x{}", w.div_ceil(4), h.div_ceil(4)),
+            m / d
+        );
+        all.push(m);
+    }
+    if !all.is_empty() {
+        let worst = all.iter().copied().fold(0.0, f64::max);
+        println!("worst median: {worst:.1} ms (goal: under 300 ms)");
+    }
+}

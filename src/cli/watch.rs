@@ -1,0 +1,48 @@
+//! `luster watch`: serve a live preview of a scene (see `luster::watch`)
+//! until Ctrl-C.
+
+use luster::render::{BuildOptions, RenderOptions};
+use luster::scene::obj::ModelView;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// The command's options.
+pub struct Args {
+    pub scene: PathBuf,
+    pub port: u16,
+    pub camera: usize,
+    pub threads: Option<usize>,
+    pub render: RenderOptions,
+    pub build: BuildOptions,
+    pub view: ModelView,
+    pub frame: (Option<(u32, u32)>, super::reframe::FrameArgs),
+}
+
+pub fn run(args: Args) -> ExitCode {
+    let obj = luster::scene::is_obj(&args.scene);
+    let (size, frame) = args.frame;
+    // A model's --size already made its camera; --scale and --crop apply to both.
+    let size = if obj { None } else { size };
+    let reframe: luster::watch::Reframe =
+        Box::new(move |desc| super::reframe::apply(desc, size, &frame).map_err(|e| e.to_string()));
+    let opts = luster::watch::Options {
+        scene: args.scene,
+        camera: args.camera,
+        render: args.render,
+        build: args.build,
+        view: args.view,
+        reframe,
+        threads: args.threads,
+    };
+    match luster::watch::Session::start(opts, args.port) {
+        Ok(session) => {
+            say!("luster watch: {} (Ctrl-C to stop)", session.url());
+            session.wait();
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}

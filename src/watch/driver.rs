@@ -1,0 +1,319 @@
+//! The render loop of a watch session: load and build the scene, render a
+//! quick preview and then refining passes, publish each as a frame, and
+//! start over when a file of the scene changes, cancelling the render in
+//! flight.
+//!
+//! A burst of file events (an editor's write-then-rename, a flood of saves)
+//! is one change: the render stops at the first event, and the reload waits
+//! until the files have been quiet for [`QUIET`].
+
+use super::files::{scene_files, FileWatch};
+use super::hub::{Frame, Hub};
+use super::Options;
+use crate::film::outputs::{first_ldr, rgb8, OutputKind};
+use crate::film::Film;
+use crate::render::camera::Camera;
+use crate::render::{render_progressive, Progress, RenderOptions, Scene};
+use crate::scene::Description;
+use std::collections::BTreeSet;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{Receiver, RecvTimeoutError};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// How long the files must be quiet before a reload: longer than an
+/// editor's write-rename dance, short enough to start within 100 ms.
+pub const QUIET: Duration = Duration::from_millis(20);
+
+/// Images with more pixels than this get a preview first.
+const PREVIEW_ABOVE: u32 = 160 * 160;
+
+/// Density grids of the preview have at most this many cells per edge.
+const PREVIEW_GRID: u32 = 32;
+
+/// `desc` with its volumes' density grids capped at [`PREVIEW_GRID`], if any is finer.
+fn coarse_grids(desc: &Description) -> Option<Description> {
+    let fine = |g: Option<u32>| g.is_some_and(|g| g > PREVIEW_GRID);
+    if !desc.volumes.iter().any(|v| fine(v.grid)) {
+        return None;
+    }
+    let mut coarse = desc.clone();
+    for v in &mut coarse.volumes {
+        v.grid = v.grid.map(|g| g.min(PREVIEW_GRID));
+    }
+    Some(coarse)
+}
+
+/// The preview's size: a quarter of each side, at least one pixel.
+fn preview_size(w: u32, h: u32) -> (u32, u32) {
+    (w.div_ceil(4).max(1), h.div_ceil(4).max(1))
+}
+
+/// The driver's side of a session.
+pub struct Driver {
+    /// What to render.
+    pub opts: Options,
+    /// Where frames and errors go.
+    pub hub: Arc<Hub>,
+    /// Set by the file watcher at a change; stops the render.
+    pub cancel: Arc<AtomicBool>,
+    /// One message per file event (the time it was seen).
+    pub changes: Receiver<Instant>,
+    /// The watch over the scene's files (reset at every load).
+    pub files: FileWatch,
+}
+
+impl Driver {
+    /// Runs until the hub closes.
+    pub fn run(mut self, pool: &rayon::ThreadPool) {
+        let mut known: BTreeSet<PathBuf> = BTreeSet::new();
+        let mut since = Instant::now();
+        let mut generation = 0;
+        while !self.hub.is_closed() {
+            self.hub.update(|s| {
+                s.busy = true;
+                s.generation = generation;
+            });
+            let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                pool.install(|| self.generation(&mut known, since, generation))
+            }));
+            let error = match outcome {
+                Ok(r) => r.err(),
+                Err(_) => {
+                    Some(format!("{}: luster failed unexpectedly (a bug); save again to retry", self.name()))
+                }
+            };
+            if let Some(e) = &error {
+                eprintln!("error: {e}");
+            }
+            self.hub.update(|s| {
+                s.busy = false;
+                if error.is_some() {
+                    s.error = error;
+                }
+            });
+            match self.next_change() {
+                Some(t) => since = t,
+                None => return,
+            }
+            generation += 1;
+        }
+    }
+
+    fn name(&self) -> String {
+        self.opts.scene.display().to_string()
+    }
+
+    /// Waits for a change and for the files to be quiet after it; returns
+    /// when the first event of the burst was seen, `None` when the session ends.
+    fn next_change(&self) -> Option<Instant> {
+        let first = loop {
+            match self.changes.recv_timeout(Duration::from_millis(250)) {
+                Ok(t) => break t,
+                Err(RecvTimeoutError::Timeout) if !self.hub.is_closed() => {}
+                Err(_) => return None,
+            }
+        };
+        loop {
+            // Cleared before the quiet wait: an event from now on cancels the coming render.
+            self.cancel.store(false, Ordering::SeqCst);
+            match self.changes.recv_timeout(QUIET) {
+                Ok(_) => {}
+                Err(RecvTimeoutError::Timeout) => break,
+                Err(RecvTimeoutError::Disconnected) => return None,
+            }
+        }
+        (!self.hub.is_closed()).then_some(first)
+    }
+
+    /// Loads, builds and renders once; the error, as `luster render` words it.
+    fn generation(
+        &mut self,
+        known: &mut BTreeSet<PathBuf>,
+        since: Instant,
+        generation: u64,
+    ) -> Result<(), String> {
+        let desc = self.load();
+        // Until a load succeeds, keep watching what the last good one read,
+        // so fixing any of it counts.
+        let mut loose = known.clone();
+        loose.insert(super::files::watched_name(&self.opts.scene));
+        let desc = match desc {
+            Ok(d) => d,
+            Err(e) => {
+                self.files.set_files(&loose, true);
+                return Err(e);
+            }
+        };
+        loose.extend(scene_files(&desc));
+        // Watched before the build, which may take seconds: a save during it counts.
+        self.files.set_files(&loose, true);
+        let full = desc.cameras.get(self.opts.camera).cloned();
+        let mut labels = Labels {
+            kind: OutputKind::Course,
+            target: 1,
+            preview: true,
+            since,
+            display_width: full.as_ref().map_or(1, |c| c.resolution.0),
+            pass: 0,
+            generation,
+        };
+        // A density grid costs one shader call per cell: the preview gets a coarse one.
+        let coarse = coarse_grids(&desc);
+        let mut built = None;
+        if full.is_some_and(|c| c.resolution.0 * c.resolution.1 > PREVIEW_ABOVE) {
+            let mut scene = match self.build(coarse.as_ref().unwrap_or(&desc)) {
+                Ok(s) => s,
+                Err(e) => {
+                    self.files.set_files(&loose, true);
+                    return Err(e);
+                }
+            };
+            self.preview(&desc, &mut scene, &mut labels)?;
+            if coarse.is_none() {
+                built = Some(scene);
+            }
+            if self.cancel.load(Ordering::SeqCst) {
+                return Ok(());
+            }
+        }
+        let mut scene = match built.map_or_else(|| self.build(&desc), Ok) {
+            Ok(s) => s,
+            Err(e) => {
+                self.files.set_files(&loose, true);
+                return Err(e);
+            }
+        };
+        *known = scene_files(&desc);
+        self.files.set_files(known, false);
+        labels.preview = false;
+        self.refine(&mut scene, &mut labels)
+    }
+
+    /// The scene's description after `--size`, `--scale` and `--crop`.
+    fn load(&self) -> Result<Description, String> {
+        let path = &self.opts.scene;
+        let mut desc = crate::scene::load_viewed(path, &self.opts.view)
+            .map_err(|e| format!("{:#}", anyhow::Error::from(e)))?;
+        (self.opts.reframe)(&mut desc).map_err(|e| format!("{}: {e}", path.display()))?;
+        for w in &desc.warnings {
+            eprintln!("warning: {}: {w}", path.display());
+        }
+        Ok(desc)
+    }
+
+    /// The render scene of `desc`, which has the session's camera.
+    fn build(&self, desc: &Description) -> Result<Scene, String> {
+        let path = &self.opts.scene;
+        let scene =
+            Scene::build_with(desc, &self.opts.build).map_err(|e| format!("{:#}", anyhow::Error::from(e)))?;
+        let n = scene.cameras.len();
+        if self.opts.camera >= n {
+            let cam = self.opts.camera;
+            return Err(format!(
+                "{}: there is no camera {cam} (the scene has {n}; cameras are numbered from 0)",
+                path.display()
+            ));
+        }
+        Ok(scene)
+    }
+
+    fn fail(&self, e: Box<crate::shader::ShaderError>) -> String {
+        format!("{}: {e}", self.opts.scene.display())
+    }
+
+    /// The 1-spp preview at a quarter of each side, published as a frame.
+    fn preview(&self, desc: &Description, scene: &mut Scene, labels: &mut Labels) -> Result<(), String> {
+        let cam = self.opts.camera;
+        let full = scene.cameras[cam].clone();
+        labels.target = self.opts.render.spp.unwrap_or(full.num_samples).max(1);
+        labels.kind = first_ldr(&full.image_name, &full.tonemaps).map_or(OutputKind::Course, |o| o.kind);
+        let mut small = desc.cameras[cam].clone();
+        small.resolution = preview_size(full.width, full.height);
+        scene.cameras[cam] = Camera::from_desc(&small);
+        let opts = RenderOptions { spp: Some(1), ..self.opts.render };
+        let r = self.progressive(scene, &opts, labels);
+        scene.cameras[cam] = full;
+        r.map_err(|e| self.fail(e))
+    }
+
+    /// The full-resolution passes up to the target sample count.
+    fn refine(&self, scene: &mut Scene, labels: &mut Labels) -> Result<(), String> {
+        let full = &scene.cameras[self.opts.camera];
+        labels.target = self.opts.render.spp.unwrap_or(full.num_samples).max(1);
+        labels.kind = first_ldr(&full.image_name, &full.tonemaps).map_or(OutputKind::Course, |o| o.kind);
+        let opts = RenderOptions { spp: Some(labels.target), ..self.opts.render };
+        self.progressive(scene, &opts, labels).map_err(|e| self.fail(e))
+    }
+
+    /// One progressive render of the session's camera, every pass published.
+    fn progressive(
+        &self,
+        scene: &Scene,
+        opts: &RenderOptions,
+        labels: &mut Labels,
+    ) -> Result<(), Box<crate::shader::ShaderError>> {
+        let hub = &self.hub;
+        let mut on_pass = |film: &Film, spp: u32| {
+            labels.pass += 1;
+            let Some(png) = encode(film, &labels.kind) else { return };
+            let ms = labels.since.elapsed().as_millis() as u64;
+            let (width, height) = (film.width, film.height);
+            let Labels { target, preview, display_width, pass, generation, .. } = *labels;
+            hub.update(|s| {
+                let number = s.frame.as_ref().map_or(1, |f| f.number + 1);
+                let png = Arc::new(png);
+                let target_spp = target;
+                let f = Frame {
+                    number,
+                    generation,
+                    png,
+                    width,
+                    height,
+                    spp,
+                    target_spp,
+                    pass,
+                    preview,
+                    ms,
+                    display_width,
+                };
+                s.frame = Some(f);
+                s.error = None;
+            });
+        };
+        let progress = Progress { cancel: &self.cancel, on_pass: &mut on_pass };
+        render_progressive(scene, self.opts.camera, opts, progress).map(|_| ())
+    }
+}
+
+/// How the frames of one render are labelled.
+struct Labels {
+    /// The display transform.
+    kind: OutputKind,
+    /// Samples per pixel aimed at.
+    target: u32,
+    /// Whether the frames are the preview's.
+    preview: bool,
+    /// The change the render answers.
+    since: Instant,
+    /// The full image's width.
+    display_width: u32,
+    /// Passes published so far.
+    pass: u32,
+    /// The change rendered.
+    generation: u64,
+}
+
+/// The film as the PNG `luster render` would write for the camera
+/// (display transformed by `kind`), compressed for speed.
+fn encode(film: &Film, kind: &OutputKind) -> Option<Vec<u8>> {
+    use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+    use image::ImageEncoder;
+    let rgb = rgb8(film, kind).unwrap_or_else(|| film.to_rgb8());
+    let mut png = Vec::new();
+    PngEncoder::new_with_quality(&mut png, CompressionType::Fast, FilterType::Adaptive)
+        .write_image(&rgb, film.width, film.height, image::ExtendedColorType::Rgb8)
+        .ok()?;
+    Some(png)
+}

@@ -1,0 +1,280 @@
+//! `luster watch` end to end: the binary serves the page, streams its state
+//! over Server-Sent Events and the newest frame as a PNG; saving the shader
+//! re-renders, a syntax error is reported with the script's file:line while
+//! the last good image stays, and fixing it recovers. A scene that does not
+//! load at start still serves the page with the error.
+
+mod common;
+use common::folder;
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc::{channel, Receiver};
+use std::time::{Duration, Instant};
+
+/// Longest wait for any one state: generous for a loaded 2-core CI machine.
+const WAIT: Duration = Duration::from_secs(30);
+
+fn scene(shader: &str) -> String {
+    format!(
+        r#"<Scene>
+    <BackgroundColor>0 0 0</BackgroundColor>
+    <Cameras>
+        <Camera id="1" type="lookAt">
+            <Position>0 0 4</Position><GazePoint>0 0 0</GazePoint><Up>0 1 0</Up>
+            <FovY>45</FovY><NearDistance>1</NearDistance>
+            <ImageResolution>48 48</ImageResolution><ImageName>out.png</ImageName>
+        </Camera>
+    </Cameras>
+    <Lights>
+        <AmbientLight>60 60 60</AmbientLight>
+        <PointLight id="1"><Position>0 2 6</Position><Intensity>20000 20000 20000</Intensity></PointLight>
+    </Lights>
+    <Materials>
+        <Material id="1">
+            <AmbientReflectance>1 1 1</AmbientReflectance><DiffuseReflectance>1 1 1</DiffuseReflectance>
+            <SpecularReflectance>0 0 0</SpecularReflectance><PhongExponent>1</PhongExponent>
+        </Material>
+    </Materials>
+    <Textures>
+        <TextureMap id="1" type="shader"><Shader>{shader}</Shader><DecalMode>replace_kd</DecalMode></TextureMap>
+    </Textures>
+    <VertexData>0 0 0</VertexData>
+    <Objects>
+        <Sphere id="1"><Material>1</Material><Textures>1</Textures><Center>1</Center><Radius>1</Radius></Sphere>
+    </Objects>
+</Scene>"#
+    )
+}
+
+/// Saves as editors do, writing a new file and renaming it over the old one:
+/// the watch never reads a half-written file.
+fn save(path: &std::path::Path, text: &str) {
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, text).expect("a test file");
+    std::fs::rename(&tmp, path).expect("a renamed test file");
+}
+
+fn shader(r: f32, g: f32, b: f32) -> String {
+    format!("function color(s)\n  return vec3({r}, {g}, {b})\nend\n")
+}
+
+/// The running `luster watch`, killed when dropped.
+struct Watch {
+    child: Child,
+    addr: String,
+}
+
+impl Drop for Watch {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn start(dir: &std::path::Path, scene: &str) -> Watch {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_luster"))
+        .args(["watch", scene, "--port", "0", "--threads", "2"])
+        .current_dir(dir)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("luster watch starts");
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().expect("stdout is piped")).read_line(&mut line).expect("a first line");
+    let addr = line
+        .split("http://")
+        .nth(1)
+        .and_then(|r| r.split('/').next())
+        .unwrap_or_else(|| panic!("the first line names the page: {line:?}"))
+        .to_string();
+    assert!(addr.starts_with("127.0.0.1:"), "bound to localhost only: {addr}");
+    Watch { child, addr }
+}
+
+/// GET `path`: (status, headers, body).
+fn get(addr: &str, path: &str) -> (u16, String, Vec<u8>) {
+    let mut s = TcpStream::connect(addr).expect("the page server answers");
+    s.set_read_timeout(Some(WAIT)).unwrap();
+    write!(s, "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").unwrap();
+    let mut all = Vec::new();
+    s.read_to_end(&mut all).expect("a whole answer");
+    let split = all.windows(4).position(|w| w == b"\r\n\r\n").expect("headers end");
+    let head = String::from_utf8_lossy(&all[..split]).to_string();
+    let status = head.split(' ').nth(1).and_then(|c| c.parse().ok()).expect("a status code");
+    (status, head, all[split + 4..].to_vec())
+}
+
+/// The states of the `/events` stream, parsed, as they arrive.
+fn events(addr: &str) -> Receiver<serde_json::Value> {
+    let mut s = TcpStream::connect(addr).expect("the page server answers");
+    write!(s, "GET /events HTTP/1.1\r\nHost: {addr}\r\nAccept: text/event-stream\r\n\r\n").unwrap();
+    let (tx, rx) = channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(s).lines() {
+            let Ok(line) = line else { return };
+            if let Some(data) = line.strip_prefix("data: ") {
+                let state = serde_json::from_str(data).expect("every event is JSON");
+                if tx.send(state).is_err() {
+                    return;
+                }
+            }
+        }
+    });
+    rx
+}
+
+/// The first state for which `ok` holds.
+fn until(
+    rx: &Receiver<serde_json::Value>,
+    what: &str,
+    ok: impl Fn(&serde_json::Value) -> bool,
+) -> serde_json::Value {
+    let end = Instant::now() + WAIT;
+    loop {
+        let left = end.saturating_duration_since(Instant::now());
+        match rx.recv_timeout(left) {
+            Ok(s) if ok(&s) => return s,
+            Ok(_) => {}
+            Err(_) => panic!("no state with {what} within {WAIT:?}"),
+        }
+    }
+}
+
+/// The newest frame: its number and its centre pixel.
+fn frame(addr: &str) -> (u64, [u8; 3], Vec<u8>) {
+    let (status, head, body) = get(addr, "/frame.png");
+    assert_eq!(status, 200, "{head}");
+    let number = head
+        .lines()
+        .find_map(|l| l.strip_prefix("X-Luster-Frame: "))
+        .and_then(|n| n.trim().parse().ok())
+        .expect("the frame number header");
+    let img = image::load_from_memory(&body).expect("the frame is a PNG").to_rgb8();
+    let p = img.get_pixel(img.width() / 2, img.height() / 2).0;
+    (number, p, body)
+}
+
+/// Whether channel `c` of `p` exceeds the other two by a wide margin.
+fn dominant(p: [u8; 3], c: usize) -> bool {
+    (0..3).all(|o| o == c || p[c] > p[o].saturating_add(100))
+}
+
+fn finished(s: &serde_json::Value) -> bool {
+    s["busy"] == false && s["frame"].is_u64()
+}
+
+#[test]
+fn shader_edits_rerender_errors_overlay_and_recover() {
+    let dir = folder(&[("s.xml", &scene("c.lua")), ("c.lua", &shader(1.0, 0.0, 0.0))]);
+    let w = start(dir.path(), "s.xml");
+    let (status, _, page) = get(&w.addr, "/");
+    let page = String::from_utf8_lossy(&page);
+    assert_eq!(status, 200);
+    assert!(page.contains("EventSource(\"/events\")") && !page.contains("://"), "a self-contained page");
+
+    let rx = events(&w.addr);
+    let first = until(&rx, "a first frame", finished);
+    assert_eq!(first["error"], serde_json::Value::Null);
+    let (n1, red, _) = frame(&w.addr);
+    assert!(dominant(red, 0), "a red sphere: {red:?}");
+
+    save(&dir.path().join("c.lua"), &shader(0.0, 1.0, 0.0));
+    until(&rx, "a newer frame", |s| finished(s) && s["frame"].as_u64() > Some(n1));
+    let (n2, green, good) = frame(&w.addr);
+    assert!(n2 > n1 && dominant(green, 1), "green after the save: {green:?}");
+
+    save(&dir.path().join("c.lua"), "function color(s)\n  return vec3(0, 0, 1\nend\n");
+    let bad = until(&rx, "an error", |s| s["error"].is_string());
+    let msg = bad["error"].as_str().unwrap();
+    assert!(msg.contains("c.lua:3") && msg.contains("s.xml"), "the error names file:line: {msg}");
+    assert_eq!(bad["frame"].as_u64(), Some(n2), "the last good frame stays");
+    let (n3, _, kept) = frame(&w.addr);
+    assert_eq!((n3, &kept), (n2, &good), "the last good image is still served");
+
+    save(&dir.path().join("c.lua"), &shader(0.0, 0.0, 1.0));
+    let fixed = until(&rx, "a recovered frame", |s| finished(s) && s["frame"].as_u64() > Some(n2));
+    assert_eq!(fixed["error"], serde_json::Value::Null, "the error is gone");
+    let (_, blue, _) = frame(&w.addr);
+    assert!(dominant(blue, 2), "blue after the fix: {blue:?}");
+}
+
+#[test]
+fn a_scene_that_fails_at_start_serves_the_error_then_recovers() {
+    let dir = folder(&[("s.xml", "<Scene><Cameras>")]);
+    let w = start(dir.path(), "s.xml");
+    let rx = events(&w.addr);
+    let s = until(&rx, "the load error", |s| s["error"].is_string() && s["busy"] == false);
+    assert!(s["error"].as_str().unwrap().contains("s.xml"), "{s}");
+    assert_eq!(s["frame"], serde_json::Value::Null);
+    assert_eq!(get(&w.addr, "/").0, 200, "the page is served anyway");
+    assert_eq!(get(&w.addr, "/frame.png").0, 404, "no frame yet");
+
+    save(&dir.path().join("c.lua"), &shader(1.0, 1.0, 0.0));
+    save(&dir.path().join("s.xml"), &scene("c.lua"));
+    let s = until(&rx, "a frame after the fix", finished);
+    assert_eq!(s["error"], serde_json::Value::Null);
+}
+
+#[test]
+fn the_watched_files_are_the_ones_the_scene_reads() {
+    let xml = r#"<Scene>
+    <Cameras><Camera id="1" type="lookAt"><Position>0 0 4</Position><GazePoint>0 0 0</GazePoint><Up>0 1 0</Up>
+        <FovY>45</FovY><NearDistance>1</NearDistance><ImageResolution>8 8</ImageResolution><ImageName>o.png</ImageName>
+    </Camera></Cameras>
+    <Materials><Material id="1"><DiffuseReflectance>1 1 1</DiffuseReflectance></Material></Materials>
+    <Textures>
+        <Images><Image id="1">img/stripes.png</Image></Images>
+        <TextureMap id="1" type="image"><ImageId>1</ImageId><DecalMode>replace_kd</DecalMode></TextureMap>
+        <TextureMap id="2" type="shader"><Shader>sh/c.lua</Shader><DecalMode>replace_ks</DecalMode></TextureMap>
+    </Textures>
+    <Objects><Mesh id="1"><Material>1</Material><Textures>1 2</Textures><Faces plyFile="m.ply"/></Mesh></Objects>
+</Scene>"#;
+    let dir = folder(&[("s.xml", xml), ("m.ply", ""), ("c.lua", "")]);
+    for sub in ["img", "sh"] {
+        std::fs::create_dir(dir.path().join(sub)).unwrap();
+    }
+    std::fs::write(dir.path().join("img/stripes.png"), "").unwrap();
+    std::fs::write(dir.path().join("sh/c.lua"), shader(1.0, 1.0, 1.0)).unwrap();
+    let desc = luster::scene::load(&dir.path().join("s.xml")).expect("the scene loads");
+    let files = luster::watch::files::scene_files(&desc);
+    let root = dir.path().canonicalize().unwrap();
+    let want: std::collections::BTreeSet<_> =
+        ["s.xml", "m.ply", "img/stripes.png", "sh/c.lua"].iter().map(|f| root.join(f)).collect();
+    assert_eq!(files, want, "the scene, its PLY, its image and its shader; not the unused c.lua");
+}
+
+#[test]
+fn passes_are_shown_as_they_end_and_a_cancel_stops_the_render() {
+    use luster::render::{render_progressive, try_render_with, Progress, RenderOptions, Scene};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let dir = folder(&[("s.xml", &scene("c.lua")), ("c.lua", &shader(0.2, 0.6, 0.9))]);
+    let desc = luster::scene::load(&dir.path().join("s.xml")).expect("the scene loads");
+    let scene = Scene::build(&desc).expect("the scene builds");
+    let opts = RenderOptions { spp: Some(16), ..Default::default() };
+
+    let cancel = AtomicBool::new(false);
+    let mut seen = Vec::new();
+    let mut last = None;
+    let mut on_pass = |film: &luster::film::Film, spp: u32| {
+        seen.push(spp);
+        last = Some(film.clone());
+    };
+    let img = render_progressive(&scene, 0, &opts, Progress { cancel: &cancel, on_pass: &mut on_pass })
+        .expect("no shader fails");
+    assert_eq!(seen, [1, 2, 4, 6, 8, 10, 12, 14, 16], "passes of 1, 1, 2, 2, ... samples");
+    let whole = try_render_with(&scene, 0, &opts, &|_| {}).expect("no shader fails");
+    assert_eq!(img.film, whole.film, "the progressive render is the plain render");
+    assert_eq!(last.as_ref(), Some(&whole.film), "the last pass shown is the finished image");
+
+    let mut passes = 0;
+    let mut stop_after_one = |_: &luster::film::Film, _: u32| {
+        passes += 1;
+        cancel.store(true, Ordering::SeqCst);
+    };
+    let img =
+        render_progressive(&scene, 0, &opts, Progress { cancel: &cancel, on_pass: &mut stop_after_one })
+            .expect("no shader fails");
+    assert_eq!((passes, img.spp), (1, 1), "a cancel stops the render before the next pass");
+}
