@@ -20,6 +20,11 @@ pub struct PixelSampler {
     index: u32,
     count: u32,
     dim: u32,
+    /// `index % count`, and the CMJ grid's columns `m = ⌊√count⌋` and rows
+    /// `⌈count/m⌉`: the same for every dimension, so worked out once.
+    slot: u32,
+    cols: u32,
+    rows: u32,
 }
 
 impl PixelSampler {
@@ -27,7 +32,17 @@ impl PixelSampler {
     #[inline]
     pub fn new(seed: u32, x: u32, y: u32, index: u32, count: u32) -> Self {
         let pixel_hash = hash3(seed, x, y);
-        PixelSampler { pixel_hash, index, count: count.max(1), dim: 0 }
+        let count = count.max(1);
+        let cols = ((count as f32).sqrt() as u32).max(1);
+        PixelSampler {
+            pixel_hash,
+            index,
+            count,
+            dim: 0,
+            slot: index % count,
+            cols,
+            rows: count.div_ceil(cols),
+        }
     }
 
     /// The next 2D dimension: a point of `[0, 1)²`.
@@ -35,7 +50,7 @@ impl PixelSampler {
     pub fn next_2d(&mut self) -> (f32, f32) {
         let p = hash2(self.pixel_hash, self.dim);
         self.dim += 1;
-        cmj(self.index % self.count, self.count, p)
+        cmj_grid(self.slot, self.count, self.cols, self.rows, p)
     }
 
     /// How many samples the pixel takes.
@@ -49,7 +64,7 @@ impl PixelSampler {
     pub fn next_1d(&mut self) -> f32 {
         let p = hash2(self.pixel_hash, self.dim);
         self.dim += 1;
-        let s = permute(self.index % self.count, self.count, p);
+        let s = permute(self.slot, self.count, p);
         ((s as f32 + rand_float(self.index, p ^ 0x9e37_79b9)) / self.count as f32).min(ONE_MINUS_EPS)
     }
 }
@@ -57,10 +72,15 @@ impl PixelSampler {
 const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// Point `s` of an `n`-point correlated multi-jittered pattern `p`.
+#[cfg(test)]
 fn cmj(s: u32, n: u32, p: u32) -> (f32, f32) {
-    let m = (n as f32).sqrt() as u32;
-    let m = m.max(1);
-    let k = n.div_ceil(m);
+    let m = ((n as f32).sqrt() as u32).max(1);
+    cmj_grid(s, n, m, n.div_ceil(m), p)
+}
+
+/// [`cmj`] with its `m × k` grid given (`m = ⌊√n⌋`, `k = ⌈n/m⌉`).
+#[inline]
+fn cmj_grid(s: u32, n: u32, m: u32, k: u32, p: u32) -> (f32, f32) {
     let s = permute(s, n, p.wrapping_mul(0x5163_3e2d));
     let sx = permute(s % m, m, p.wrapping_mul(0x68bc_21eb));
     let sy = permute(s / m, k, p.wrapping_mul(0x02e5_be93));
@@ -73,6 +93,7 @@ fn cmj(s: u32, n: u32, p: u32) -> (f32, f32) {
 
 /// A pseudo-random permutation of `0..l` selected by `p` (Kensler 2013): a
 /// hash that is a bijection on the next power of two, cycle-walked into range.
+#[inline]
 fn permute(mut i: u32, l: u32, p: u32) -> u32 {
     if l <= 1 {
         return 0;
@@ -110,6 +131,7 @@ fn permute(mut i: u32, l: u32, p: u32) -> u32 {
 }
 
 /// A hashed float in `[0, 1)` for index `i` under pattern `p`.
+#[inline]
 fn rand_float(mut i: u32, p: u32) -> f32 {
     i ^= p;
     i ^= i >> 17;
