@@ -67,8 +67,14 @@ enum Came {
     Bounce { pdf: f32, n: Vec3 },
 }
 
+/// Sampler calls drawn from stratified patterns per camera sample: the
+/// camera's three and the first hit's light and bounce (see
+/// [`crate::render::sampler`]); deeper bounces draw independent uniforms.
+const STRATIFIED_CALLS: u32 = 8;
+
 /// Radiance arriving along the camera ray `ray`.
 pub fn radiance(scene: &Scene, ray: &Ray, p: &PathParams, st: &mut PathState) -> Vec3 {
+    st.sampler.stratify_first(STRATIFIED_CALLS);
     li(scene, ray, 0, Vec3::ONE, Came::Direct, p, st)
 }
 

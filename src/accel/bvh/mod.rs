@@ -37,10 +37,13 @@ use std::ops::Range;
 
 use glam::{Vec3, Vec3A, Vec4};
 
-use super::bvh_build::{build_binary, Node, SAH_MAX_DEPTH};
+use super::bvh_build::{build_binary, Node, INTERSECT_COST, SAH_MAX_DEPTH};
 pub use super::bvh_build::{BINS, MAX_LEAF};
 use crate::math::{Aabb, Ray};
 
+/// SAH cost of testing one top-level object, against one node visit (see
+/// [`Bvh::build_objects`]).
+const OBJECT_COST: f32 = 4.0;
 /// Marks a child reference as a leaf: `LEAF | first << 3 | (count - 1)`.
 const LEAF: u32 = 1 << 31;
 /// An unused child slot; its box is empty, so it is never entered.
@@ -248,8 +251,22 @@ impl Bvh {
     /// time: the SAH prices a leaf by its number of blocks, so leaves come
     /// out with (up to [`MAX_LEAF`]) primitives filling whole blocks.
     pub fn build_blocked(prim_bounds: &[Aabb], block: u32) -> Bvh {
+        Bvh::build_costed(prim_bounds, block, INTERSECT_COST)
+    }
+
+    /// [`Bvh::build`] for the top level of a scene, whose primitives are
+    /// objects: a mesh's own traversal or an analytic shape costs several
+    /// node visits, so the SAH splits down to small leaves and a ray tests
+    /// only the objects whose boxes it crosses. (Priced like a triangle, the
+    /// eight objects of a Cornell box made one leaf, and every ray tested
+    /// all of them.)
+    pub fn build_objects(prim_bounds: &[Aabb]) -> Bvh {
+        Bvh::build_costed(prim_bounds, 1, OBJECT_COST)
+    }
+
+    fn build_costed(prim_bounds: &[Aabb], block: u32, prim_cost: f32) -> Bvh {
         assert!(prim_bounds.len() <= MAX_PRIMS, "more than 2^28 primitives in one BVH");
-        let Some((b2, prim_order, binary_depth)) = build_binary(prim_bounds, block) else {
+        let Some((b2, prim_order, binary_depth)) = build_binary(prim_bounds, block, prim_cost) else {
             return Bvh {
                 nodes: Vec::new(),
                 root: EMPTY,

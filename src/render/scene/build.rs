@@ -141,7 +141,7 @@ impl Scene {
                 "the object reaches beyond the range of 32-bit floating-point numbers (after its transformations)",
             ));
         }
-        let tlas = Bvh::build(&bounds);
+        let tlas = Bvh::build_objects(&bounds);
         // Put primitives in the BVH's leaf order so a leaf is a contiguous range.
         let mut slots: Vec<Option<Prim>> = prims.into_iter().map(Some).collect();
         let prims = tlas.prim_order().iter().filter_map(|&i| slots[i as usize].take()).collect();
