@@ -157,3 +157,121 @@ fn json_scenes_name_object_lights_and_renderers_alike() {
     let (m, _) = mean_and_se(&img);
     assert!((m - 0.3125).abs() < 0.01 * 0.3125, "mean {m:.4}, expected 0.3125");
 }
+
+/// A constant-radiance lat-long sky `sky.exr` in `dir`.
+fn constant_sky(dir: &Path, l: f32) {
+    let img = image::Rgb32FImage::from_pixel(16, 8, image::Rgb([l, l, l]));
+    image::DynamicImage::ImageRgb32F(img).save(dir.join("sky.exr")).expect("EXR written");
+}
+
+/// Mean of the pixels' green channel over two renders with different seeds,
+/// and its standard error from the seeds' per-pixel differences:
+/// `Var(a_i) ≈ (a_i − b_i)² / 2`, so `Var(mean) = Σ (a_i − b_i)² / 4 / n²`.
+fn two_seed_mean(scene: &Scene, spp: u32, pixels: &[usize]) -> (f64, f64) {
+    let img =
+        |seed| render_with(scene, 0, &RenderOptions { spp: Some(spp), seed, ..Default::default() }, &|_| {});
+    let (a, b) = (img(1), img(2));
+    let n = pixels.len() as f64;
+    let (mut sum, mut d2) = (0.0, 0.0);
+    for &i in pixels {
+        let (x, y) = (f64::from(a.pixels[i].y), f64::from(b.pixels[i].y));
+        sum += (x + y) / 2.0;
+        d2 += (x - y).powi(2);
+    }
+    (sum / n, (d2 / 4.0).sqrt() / n)
+}
+
+/// A diffuse unit sphere (the course's material: `kd cos θ`, no 1/π) under
+/// a constant sky `L` receives `π kd L` everywhere, and a convex object
+/// never sees itself, so the MIS path tracer's answer is exactly that
+/// whatever the environment light's `Sampler`. MIS weighs a bounce that
+/// escapes against the density of the light sampler actually used; weighing
+/// it by the importance map's density while the light draws uniform or
+/// cosine directions counts the sky 20–40% too much.
+#[test]
+fn mis_weighs_escaping_rays_by_the_environment_sampler_in_use() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (l, kd) = (2.0, 0.5);
+    constant_sky(dir.path(), l);
+    let expected = std::f64::consts::PI * kd * f64::from(l);
+    for sampler in ["importance", "uniform", "cosine"] {
+        let text = format!(
+            r#"<Scene>
+  <MaxRecursionDepth>2</MaxRecursionDepth>
+  <Cameras><Camera id="1" type="lookAt"><Position>0 0 5</Position><GazePoint>0 0 0</GazePoint><Up>0 1 0</Up>
+    <FovY>30</FovY><NearDistance>1</NearDistance><ImageResolution>24 24</ImageResolution>
+    <ImageName>a.exr</ImageName><Renderer>PathTracing</Renderer><RendererParams>MIS</RendererParams></Camera></Cameras>
+  <Textures><Images><Image id="1">sky.exr</Image></Images></Textures>
+  <Lights><SphericalDirectionalLight id="1"><ImageId>1</ImageId><Sampler>{sampler}</Sampler></SphericalDirectionalLight></Lights>
+  <Materials><Material id="1"><DiffuseReflectance>{kd} {kd} {kd}</DiffuseReflectance></Material></Materials>
+  <VertexData>0 0 0</VertexData>
+  <Objects><Sphere id="1"><Material>1</Material><Center>1</Center><Radius>1</Radius></Sphere></Objects>
+</Scene>"#
+        );
+        let scene = Scene::build(&load(dir.path(), &text)).expect("scene builds");
+        // Pixels whose centre ray meets the sphere well inside its outline:
+        // half the image spans tan(15°)·5 at the sphere's centre.
+        let half = 15f32.to_radians().tan() * 5.0;
+        let inner: Vec<usize> = (0..24 * 24)
+            .filter(|&i| {
+                let x = ((i % 24) as f32 + 0.5) / 12.0 - 1.0;
+                let y = ((i / 24) as f32 + 0.5) / 12.0 - 1.0;
+                (x * x + y * y).sqrt() * half < 0.8
+            })
+            .collect();
+        assert!(inner.len() > 150, "{} inner pixels", inner.len());
+        let (m, se) = two_seed_mean(&scene, 16, &inner);
+        println!("{sampler:<10} mean {m:.4} ± {se:.4} (expected {expected:.4})");
+        assert!(se < 0.01 * expected, "{sampler}: standard error {se} too large to test");
+        assert!(
+            (m - expected).abs() <= 4.0 * se + 1e-4 * expected,
+            "{sampler}: mean {m:.4} ± {se:.4}, expected π kd L = {expected:.4}"
+        );
+    }
+}
+
+/// A 1×1 `LightMesh` 1 above the floor of [`floor_scene`], moving 3 along x
+/// over the shutter. Next-event estimation, bounces alone and MIS estimate
+/// the same image only if light samples are drawn where the light is at the
+/// ray's time, as bounce rays find it.
+#[test]
+fn a_moving_light_mesh_is_sampled_where_rays_find_it() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = |renderer: &str| {
+        let text = floor_scene(renderer)
+            .replace("<VertexData>0 0 0  0 2 0</VertexData>", "<VertexData>0 0 0  -0.5 1 -0.5  0.5 1 -0.5  0.5 1 0.5  -0.5 1 0.5</VertexData>")
+            .replace(
+                r#"<LightSphere id="1"><Material>2</Material><Center>2</Center><Radius>0.5</Radius><Radiance>10 10 10</Radiance></LightSphere>"#,
+                r#"<LightMesh id="1"><Material>2</Material><Faces>2 3 4  2 4 5</Faces><Radiance>10 10 10</Radiance><MotionBlur>3 0 0</MotionBlur></LightMesh>"#,
+            );
+        Scene::build(&load(dir.path(), &text)).expect("scene builds")
+    };
+    let variants = [
+        ("<Renderer>PathTracing</Renderer><RendererParams>NextEventEstimation</RendererParams>", 64),
+        ("<Renderer>PathTracing</Renderer><RendererParams>ImportanceSampling</RendererParams>", 256),
+        ("<Renderer>PathTracing</Renderer><RendererParams>MIS</RendererParams>", 64),
+    ];
+    let means: Vec<(f64, f64)> = variants
+        .iter()
+        .map(|(renderer, spp)| {
+            let s = scene(renderer);
+            let all: Vec<usize> = (0..16 * 16).collect();
+            let (m, se) = two_seed_mean(&s, *spp, &all);
+            println!("{renderer:<90} {m:.4} ± {se:.4}");
+            assert!(m > 0.01, "{renderer}: no light reached the floor ({m})");
+            (m, se)
+        })
+        .collect();
+    for i in 0..means.len() {
+        for j in i + 1..means.len() {
+            let ((a, sa), (b, sb)) = (means[i], means[j]);
+            let z = (a - b) / (sa * sa + sb * sb).sqrt();
+            assert!(
+                z.abs() <= 4.0,
+                "{} and {} disagree: {a:.4} vs {b:.4} (z = {z:.1})",
+                variants[i].0,
+                variants[j].0
+            );
+        }
+    }
+}

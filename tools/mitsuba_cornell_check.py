@@ -22,8 +22,12 @@ Conventions:
 
 Prints, for the accuracy check (--spp, default 1024): mean HDR-FLIP (NVIDIA's
 flip-evaluator) and the relative difference of the mean luminance; for the
-speed check (--time-spp, default 100, 512x512, the same depth): wall time of
-each renderer in this run, their ratio, and luster's Mrays/s as it reports it.
+speed check (--time-spp, default 100, 512x512, the same depth): the two
+renderers run alternately (luster, Mitsuba, luster, ... --reps times each),
+and the medians of each one's wall time and CPU time (user + system: on a
+machine shared with other jobs the CPU time is the fairer figure), their
+ratios, and luster's Mrays/s as it reports it. Both use every core unless
+--threads is given (then Mitsuba too runs on that many threads).
 
 Setup: python3 -m venv /tmp/mi && /tmp/mi/bin/pip install mitsuba numpy flip-evaluator
 Run:   cargo build --release && /tmp/mi/bin/python tools/mitsuba_cornell_check.py
@@ -33,6 +37,8 @@ luster/Mitsuba <= 0.5.
 
 import argparse
 import os
+import resource
+import statistics
 import re
 import subprocess
 import sys
@@ -154,23 +160,28 @@ def luster_scene(src, dst, spp, res):
     open(dst, "w").write(body)
 
 
+def cpu(who):
+    r = resource.getrusage(who)
+    return r.ru_utime + r.ru_stime
+
+
 def run_luster(luster, scene, work, threads):
     cmd = [luster, "render", "-o", work, scene]
     if threads:
         cmd += ["-t", str(threads)]
-    t = time.time()
+    t, c = time.time(), cpu(resource.RUSAGE_CHILDREN)
     out = subprocess.run(cmd, check=True, capture_output=True, text=True)
-    wall = time.time() - t
+    wall, used = time.time() - t, cpu(resource.RUSAGE_CHILDREN) - c
     m = re.search(r"([\d.]+) Mrays/s", out.stdout)
     img = np.array(mi.Bitmap(os.path.join(work, "luster.exr")))[..., :3].astype(np.float64)
-    return img, wall, float(m.group(1)) if m else float("nan")
+    return img, wall, used, float(m.group(1)) if m else float("nan")
 
 
 def run_mitsuba(d):
-    t = time.time()
+    t, c = time.time(), cpu(resource.RUSAGE_SELF)
     scene = mi.load_dict(d)
     img = np.array(mi.render(scene), dtype=np.float64)[..., :3]
-    return img, time.time() - t
+    return img, time.time() - t, cpu(resource.RUSAGE_SELF) - c
 
 
 def main():
@@ -180,10 +191,14 @@ def main():
     ap.add_argument("--spp", type=int, default=1024, help="samples per pixel of the accuracy check")
     ap.add_argument("--time-spp", type=int, default=100, help="samples per pixel of the speed check (0: skip)")
     ap.add_argument("--res", type=int, default=512)
-    ap.add_argument("--threads", type=int, default=0, help="luster threads (0: all cores, as Mitsuba)")
+    ap.add_argument("--threads", type=int, default=0, help="threads of both renderers (0: all cores)")
+    ap.add_argument("--reps", type=int, default=3, help="alternating runs of each renderer in the speed check")
     ap.add_argument("--keep", help="folder to keep both renders in")
     a = ap.parse_args()
     mi.set_variant("scalar_rgb")
+    if a.threads:
+        import drjit as dr
+        dr.set_thread_count(a.threads)
     import flip_evaluator as flip
 
     _, verts, cam, meshes, lights, spheres, point = read_scene(a.scene)
@@ -194,8 +209,14 @@ def main():
             continue
         ls = os.path.join(work, "luster.xml")
         luster_scene(a.scene, ls, spp, a.res)
-        ours, t_ours, mrays = run_luster(a.luster, ls, work, a.threads)
-        theirs, t_theirs = run_mitsuba(mitsuba_dict(work, verts, cam, meshes, lights, spheres, point, spp, a.res))
+        d = mitsuba_dict(work, verts, cam, meshes, lights, spheres, point, spp, a.res)
+        reps = a.reps if label == "speed" else 1
+        runs = []
+        for _ in range(reps):
+            ours, t_ours, c_ours, mrays = run_luster(a.luster, ls, work, a.threads)
+            theirs, t_theirs, c_theirs = run_mitsuba(d)
+            runs.append((t_ours, c_ours, t_theirs, c_theirs))
+        t_ours, c_ours, t_theirs, c_theirs = (statistics.median(r[k] for r in runs) for k in range(4))
         if a.keep:
             mi.Bitmap(ours.astype(np.float32)).write(os.path.join(work, f"luster_{label}.exr"))
             mi.Bitmap(theirs.astype(np.float32)).write(os.path.join(work, f"mitsuba_{label}.exr"))
@@ -203,8 +224,11 @@ def main():
         _, fl, _ = flip.evaluate(theirs.astype(np.float32), ours.astype(np.float32), "HDR")
         print(f"{label}: {a.res}x{a.res}, {spp} spp, depth 5 (MaxRecursionDepth 3)")
         print(f"  mean HDR-FLIP {fl:.4f}   mean luminance luster {lo:.5f} mitsuba {lt:.5f} ({100 * (lo / lt - 1):+.2f}%)")
-        print(f"  wall time luster {t_ours:.2f} s, mitsuba {t_theirs:.2f} s, ratio {t_ours / t_theirs:.3f}; "
-              f"luster {mrays:.1f} Mrays/s")
+        print(f"  {reps} alternating runs each, medians: wall time luster {t_ours:.2f} s, mitsuba {t_theirs:.2f} s, "
+              f"ratio {t_ours / t_theirs:.3f}; CPU time luster {c_ours:.2f} s, mitsuba {c_theirs:.2f} s, "
+              f"ratio {c_ours / c_theirs:.3f}; luster {mrays:.1f} Mrays/s (last run)")
+        for k, r in enumerate(runs):
+            print(f"    run {k + 1}: luster {r[0]:.2f} s wall / {r[1]:.2f} s CPU, mitsuba {r[2]:.2f} s wall / {r[3]:.2f} s CPU")
 
 
 if __name__ == "__main__":

@@ -49,7 +49,7 @@ pub const MAX_LEAF: usize = 8;
 /// Cost of visiting one inner node relative to one primitive test, in the SAH.
 const TRAVERSAL_COST: f32 = 1.0;
 /// Cost of one primitive test.
-const INTERSECT_COST: f32 = 1.0;
+pub const INTERSECT_COST: f32 = 1.0;
 /// Subtrees with at least this many primitives are built in parallel.
 const PAR_MIN: usize = 4096;
 /// Nodes with at least this many primitives bin in parallel.
@@ -312,6 +312,8 @@ struct Task<'a> {
     depth: usize,
     /// Primitives the caller tests together (see [`build_binary`]).
     block: u32,
+    /// Cost of testing one block against visiting a node (see [`build_binary`]).
+    prim_cost: f32,
 }
 
 /// The build writes each subtree into a region of the node array reserved
@@ -326,9 +328,10 @@ impl Builder {
     /// in `region`, which starts at global index `base`. Returns its depth
     /// and node count.
     fn build(task: Task, slot: &mut Node, region: &mut [Node], base: usize) -> (usize, usize) {
-        let Task { refs, offset, bounds, cbounds, depth, block } = task;
+        let Task { refs, offset, bounds, cbounds, depth, block, prim_cost } = task;
         let n = refs.len();
-        let Some((mid, lb, lcb, rb, rcb)) = Self::split(refs, &bounds, &cbounds, depth, block) else {
+        let Some((mid, lb, lcb, rb, rcb)) = Self::split(refs, &bounds, &cbounds, depth, block, prim_cost)
+        else {
             *slot = Node::leaf(&bounds, offset, n);
             return (depth, 1);
         };
@@ -337,9 +340,16 @@ impl Builder {
         let (lslot, rslot) = pair.split_at_mut(1);
         let (lreg, rreg) = rest.split_at_mut(2 * mid - 2);
         let (lrefs, rrefs) = refs.split_at_mut(mid);
-        let lt = Task { refs: lrefs, offset, bounds: lb, cbounds: lcb, depth: depth + 1, block };
-        let rt =
-            Task { refs: rrefs, offset: offset + mid, bounds: rb, cbounds: rcb, depth: depth + 1, block };
+        let lt = Task { refs: lrefs, offset, bounds: lb, cbounds: lcb, depth: depth + 1, block, prim_cost };
+        let rt = Task {
+            refs: rrefs,
+            offset: offset + mid,
+            bounds: rb,
+            cbounds: rcb,
+            depth: depth + 1,
+            block,
+            prim_cost,
+        };
         let (lbase, rbase) = (base + 2, base + 2 * mid);
         let ((ld, lc), (rd, rc)) = if n >= PAR_MIN {
             rayon::join(
@@ -362,6 +372,7 @@ impl Builder {
         cbounds: &Bounds,
         depth: usize,
         block: u32,
+        prim_cost: f32,
     ) -> Option<(usize, Bounds, Bounds, Bounds, Bounds)> {
         let n = refs.len();
         if n <= 1 {
@@ -384,8 +395,8 @@ impl Builder {
         let Some(s) = best_split(&bins, binner.nb, block) else {
             return (n > MAX_LEAF).then(|| Self::median_split(refs, cbounds));
         };
-        let split_cost = TRAVERSAL_COST + INTERSECT_COST * s.cost / bounds.half_area().max(f32::MIN_POSITIVE);
-        if split_cost >= (n as u32).div_ceil(block) as f32 * INTERSECT_COST && n <= MAX_LEAF {
+        let split_cost = TRAVERSAL_COST + prim_cost * s.cost / bounds.half_area().max(f32::MIN_POSITIVE);
+        if split_cost >= (n as u32).div_ceil(block) as f32 * prim_cost && n <= MAX_LEAF {
             return None;
         }
         let (mid, lcb, rcb) = partition(refs, |c| binner.bin(c, s.axis) < s.bin);
@@ -422,7 +433,16 @@ impl Builder {
 /// triangles tested four to a SIMD block): the SAH then counts a leaf's cost
 /// in blocks, `ceil(n / block)`, as Embree does for its 4-triangle leaves,
 /// so leaves fill their blocks instead of leaving lanes idle.
-pub(super) fn build_binary(prim_bounds: &[Aabb], block: u32) -> Option<(Vec<Node>, Vec<u32>, usize)> {
+///
+/// `prim_cost` is what testing one block costs against visiting a node:
+/// [`INTERSECT_COST`] for triangles; more for the objects of a top-level
+/// tree, each a mesh with its own tree or an analytic shape, which the SAH
+/// then keeps in smaller leaves.
+pub(super) fn build_binary(
+    prim_bounds: &[Aabb],
+    block: u32,
+    prim_cost: f32,
+) -> Option<(Vec<Node>, Vec<u32>, usize)> {
     use rayon::prelude::*;
     let mut refs: Vec<PrimRef> = prim_bounds
         .par_iter()
@@ -437,7 +457,7 @@ pub(super) fn build_binary(prim_bounds: &[Aabb], block: u32) -> Option<(Vec<Node
     let (bounds, cbounds) = ref_bounds(&refs);
     let mut region = vec![Node::inner(&Bounds::EMPTY, 0); 2 * n - 1];
     let (root, rest) = region.split_at_mut(1);
-    let task = Task { refs: &mut refs, offset: 0, bounds, cbounds, depth: 0, block: block.max(1) };
+    let task = Task { refs: &mut refs, offset: 0, bounds, cbounds, depth: 0, block: block.max(1), prim_cost };
     let (depth, _) = Builder::build(task, &mut root[0], rest, 1);
     let prim_order = refs.par_iter().map(PrimRef::index).collect();
     Some((region, prim_order, depth + 1))

@@ -14,6 +14,8 @@
 //! range are dropped at build time: they can never be hit, and leaving them
 //! out means the intersection code never has to think about them.
 
+use std::ops::Range;
+
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -104,13 +106,27 @@ impl MeshAccel {
     /// for triangles the ray actually hits, so culling costs next to nothing.
     #[inline]
     pub fn intersect_culled(&self, ray: &Ray, t_min: f32, t_max: f32, cull: f32) -> Option<TriHit> {
-        let wr = WatertightRay::new(ray);
+        self.intersect_prepared(ray, &WatertightRay::new(ray), t_min, t_max, cull)
+    }
+
+    /// [`MeshAccel::intersect_culled`] with the ray's watertight shear
+    /// already computed (`wr` must be `WatertightRay::new(ray)`): a scene
+    /// whose meshes share one space computes it once per ray, not per mesh.
+    #[inline]
+    pub fn intersect_prepared(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+        t_min: f32,
+        t_max: f32,
+        cull: f32,
+    ) -> Option<TriHit> {
         let mut best = None;
         let blocks = &self.blocks[..];
-        self.bvh.closest(ray, t_max, |range, t_max| {
+        let mut leaf = |range: Range<usize>, t_max: &mut f32| {
             let mut found = false;
             for b in &blocks[range] {
-                let h = b.intersect(&wr, t_min, *t_max);
+                let h = b.intersect(wr, t_min, *t_max);
                 // Lanes in order, each against the nearest hit so far: the
                 // same choice as testing the triangles one by one.
                 let mut m = h.mask;
@@ -127,18 +143,39 @@ impl MeshAccel {
                 }
             }
             found
-        });
+        };
+        match self.bvh.single_leaf() {
+            // A small mesh (a wall, a light): its one or two blocks cost no
+            // more than the box test would.
+            Some(range) => {
+                let mut t = t_max;
+                leaf(range, &mut t);
+            }
+            None => {
+                self.bvh.closest(ray, t_max, leaf);
+            }
+        }
         best
     }
 
     /// True if some triangle is hit with `t_min < t < t_max` (shadow rays).
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        let wr = WatertightRay::new(ray);
+        self.occluded_prepared(ray, &WatertightRay::new(ray), t_min, t_max)
+    }
+
+    /// [`MeshAccel::occluded`] with the ray's shear already computed (see
+    /// [`MeshAccel::intersect_prepared`]).
+    #[inline]
+    pub fn occluded_prepared(&self, ray: &Ray, wr: &WatertightRay, t_min: f32, t_max: f32) -> bool {
         let blocks = &self.blocks[..];
-        self.bvh.any(ray, t_max, |range, t_max| {
-            blocks[range].iter().any(|b| b.intersect(&wr, t_min, t_max).mask != 0)
-        })
+        let leaf = |range: Range<usize>, t_max: f32| {
+            blocks[range].iter().any(|b| b.intersect(wr, t_min, t_max).mask != 0)
+        };
+        match self.bvh.single_leaf() {
+            Some(range) => leaf(range, t_max),
+            None => self.bvh.any(ray, t_max, leaf),
+        }
     }
 
     /// The box around the mesh's (valid) triangles.

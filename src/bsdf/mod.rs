@@ -108,7 +108,9 @@ impl Brdf {
             return 0.0;
         }
         let pd = diffuse_probability(kd, ks);
+        // Without a specular part the lobe has weight zero: skip its `powf`.
         let lobe = match self {
+            _ if pd >= 1.0 => 0.0,
             Brdf::Phong(b) => b.lobe_pdf(wo, wi),
             Brdf::TorranceSparrow(b) => b.lobe_pdf(wo, wi),
         };

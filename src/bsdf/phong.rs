@@ -69,7 +69,9 @@ impl PhongFamily {
         if cos_i <= 0.0 || wo.z <= 0.0 {
             return Vec3::ZERO;
         }
-        let lobe = self.cos_alpha(wi, wo).powf(self.exponent);
+        // A material without a specular colour (the course's Cornell walls)
+        // skips the `powf`: `ks * lobe` is zero either way.
+        let lobe = if ks == Vec3::ZERO { 0.0 } else { self.cos_alpha(wi, wo).powf(self.exponent) };
         let p = self.exponent;
         match self.variant {
             Variant::Original => kd + ks * (lobe / cos_i),

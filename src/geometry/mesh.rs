@@ -93,6 +93,13 @@ impl Mesh {
         self.accel.intersect_culled(ray, t_min, t_max, cull)
     }
 
+    /// The accelerator, for callers that prepare the ray once for many
+    /// meshes ([`MeshAccel::intersect_prepared`]).
+    #[inline]
+    pub fn accel(&self) -> &MeshAccel {
+        &self.accel
+    }
+
     /// Whether anything is hit.
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {

@@ -110,7 +110,7 @@ pub(crate) fn light_reaching(
     n: Vec3,
     st: &mut PathState,
 ) -> Option<(LightSample, f32, Vec3)> {
-    let ls = light.sample(origin, p, Some(n), &mut st.sampler)?;
+    let ls = light.sample(origin, p, Some(n), st.time, &mut st.sampler)?;
     let cos = n.dot(ls.wi);
     if cos <= 0.0 || ls.e == Vec3::ZERO {
         return None;

@@ -61,12 +61,20 @@ pub struct PathParams {
 enum Came {
     /// From the camera or a perfectly specular bounce: in full.
     Direct,
-    /// From a random bounce whose density was `pdf` (solid angle) at `from`.
-    Bounce { pdf: f32 },
+    /// From a random bounce whose density was `pdf` (solid angle), off a
+    /// surface whose facing shading normal was `n` (the normal the light
+    /// samples there were drawn for).
+    Bounce { pdf: f32, n: Vec3 },
 }
+
+/// Sampler calls drawn from stratified patterns per camera sample: the
+/// camera's three and the first hit's light and bounce (see
+/// [`crate::render::sampler`]); deeper bounces draw independent uniforms.
+const STRATIFIED_CALLS: u32 = 8;
 
 /// Radiance arriving along the camera ray `ray`.
 pub fn radiance(scene: &Scene, ray: &Ray, p: &PathParams, st: &mut PathState) -> Vec3 {
+    st.sampler.stratify_first(STRATIFIED_CALLS);
     li(scene, ray, 0, Vec3::ONE, Came::Direct, p, st)
 }
 
@@ -104,7 +112,11 @@ fn escaped(scene: &Scene, ray: &Ray, came: Came, p: &PathParams, st: &PathState)
     let d = ray.d.normalize();
     let w = match came {
         Came::Direct => 1.0,
-        Came::Bounce { pdf } if p.mis => power_heuristic(pdf, env.pdf(d) / scene.lights.len() as f32),
+        // The density of the environment's own sampler (importance, uniform
+        // or cosine about the normal), as its light samples were drawn.
+        Came::Bounce { pdf, n } if p.mis => {
+            power_heuristic(pdf, env.sampling_pdf(Some(n), d) / scene.lights.len() as f32)
+        }
         Came::Bounce { .. } if p.next_event => 0.0,
         Came::Bounce { .. } => 1.0,
     };
@@ -135,9 +147,9 @@ fn shade(
     if let Some((li_index, le)) = scene.emitted(hit, ray.d) {
         let w = match came {
             Came::Direct => 1.0,
-            Came::Bounce { pdf } if p.mis => {
+            Came::Bounce { pdf, .. } if p.mis => {
                 let pick = 1.0 / scene.lights.len() as f32;
-                power_heuristic(pdf, pick * light_pdf(&scene.lights[li_index], ray.o, hit, ray.d))
+                power_heuristic(pdf, pick * light_pdf(&scene.lights[li_index], ray.o, hit, ray.d, st.time))
             }
             Came::Bounce { .. } if p.next_event => 0.0,
             Came::Bounce { .. } => 1.0,
@@ -207,12 +219,12 @@ fn hittable(light: &Light) -> bool {
     matches!(light, Light::Mesh(_) | Light::Sphere(_) | Light::Environment(_))
 }
 
-/// The light's density for the direction `d` of a ray from `from` that hit
-/// it at `hit`.
-fn light_pdf(light: &Light, from: Vec3, hit: &Hit, d: Vec3) -> f32 {
+/// The light's density for the direction `d` of a ray from `from` at
+/// shutter `time` that hit it at `hit`.
+fn light_pdf(light: &Light, from: Vec3, hit: &Hit, d: Vec3, time: f32) -> f32 {
     match light {
         Light::Mesh(l) => l.pdf(from, hit.p, hit.ng),
-        Light::Sphere(l) => l.pdf(from, d.normalize()),
+        Light::Sphere(l) => l.pdf(from - l.motion * time, d.normalize()),
         _ => 0.0,
     }
 }
@@ -292,7 +304,7 @@ fn bounce(
     if !st.spawn(next.max_element()) {
         return Vec3::ZERO;
     }
-    let came = Came::Bounce { pdf };
+    let came = Came::Bounce { pdf, n };
     weight * li(scene, &Ray::new(origin, wi), depth + 1, next, came, p, st) / q
 }
 

@@ -15,6 +15,11 @@
 //! course's mesh lights are closed boxes whose winding is not consistent),
 //! a sphere from its outside.
 //!
+//! A `MotionBlur` translation moves the light with its object: a sample for
+//! a ray at shutter time `t` is drawn on the light moved by `t · motion`,
+//! where the ray itself would find it (the density does not change, since a
+//! translation keeps areas, normals and the subtended cone).
+//!
 //! ```xml
 //! <LightSphere id="1">
 //!     <Material>1</Material> <Center>11</Center> <Radius>0.2</Radius>
@@ -28,12 +33,14 @@ use std::f32::consts::PI;
 /// A mesh that emits `radiance` from every point of both faces, in world space.
 #[derive(Clone, Debug)]
 pub struct LightMesh {
-    /// Each triangle as a corner and two edges.
-    tris: Vec<[Vec3; 3]>,
+    /// Each triangle as a corner, two edges and its unit normal.
+    tris: Vec<[Vec3; 4]>,
     /// Running sums of the triangles' areas, ending at the total.
     cdf: Vec<f32>,
     /// RGB radiance.
     pub radiance: Vec3,
+    /// World-space translation over the shutter interval (`MotionBlur`).
+    pub motion: Vec3,
 }
 
 impl LightMesh {
@@ -53,11 +60,11 @@ impl LightMesh {
             let area = 0.5 * e1.cross(e2).length();
             if area > 0.0 && area.is_finite() {
                 total += area;
-                tris.push([a, e1, e2]);
+                tris.push([a, e1, e2, e1.cross(e2).normalize()]);
                 cdf.push(total);
             }
         }
-        (total > 0.0).then_some(LightMesh { tris, cdf, radiance })
+        (total > 0.0).then_some(LightMesh { tris, cdf, radiance, motion: Vec3::ZERO })
     }
 
     /// Total area.
@@ -67,6 +74,7 @@ impl LightMesh {
     }
 
     /// A point drawn uniformly by area from `(u1, u2)`, and its unit normal.
+    #[inline]
     pub fn point(&self, (u1, u2): (f32, f32)) -> (Vec3, Vec3) {
         let total = self.area();
         let target = u1 * total;
@@ -74,10 +82,10 @@ impl LightMesh {
         let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
         // The part of u1 left over inside the chosen triangle is uniform again.
         let u1 = ((target - lo) / (self.cdf[i] - lo)).clamp(0.0, 1.0);
-        let [a, e1, e2] = self.tris[i];
+        let [a, e1, e2, n] = self.tris[i];
         let s = u1.sqrt();
         let (b1, b2) = (1.0 - s, u2 * s);
-        (a + e1 * b1 + e2 * b2, e1.cross(e2).normalize())
+        (a + e1 * b1 + e2 * b2, n)
     }
 
     /// Solid-angle density of reaching point `q` (normal `n`) from `p`
@@ -103,6 +111,8 @@ pub struct LightSphere {
     pub radius: f32,
     /// RGB radiance.
     pub radiance: Vec3,
+    /// World-space translation over the shutter interval (`MotionBlur`).
+    pub motion: Vec3,
 }
 
 impl LightSphere {
@@ -111,7 +121,7 @@ impl LightSphere {
     /// approximates by the sphere of the same volume.
     pub fn new(center: Vec3, radius: f32, xf: &Transform, radiance: Vec3) -> LightSphere {
         let det = xf.matrix().determinant().abs();
-        LightSphere { center: xf.point(center), radius: radius * det.cbrt(), radiance }
+        LightSphere { center: xf.point(center), radius: radius * det.cbrt(), radiance, motion: Vec3::ZERO }
     }
 
     /// `cos θmax` and `1 − cos θmax` of the cone the sphere fills seen from a

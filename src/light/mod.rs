@@ -177,7 +177,8 @@ pub struct LightSample {
 impl Light {
     /// Light from this light at a surface point `p` (`origin` is `p` moved
     /// off the surface, where shadow rays start; `n` the normal when there is
-    /// a surface). Area and environment lights draw one 2D sample from
+    /// a surface), for a ray at shutter `time` (a moving object light is
+    /// sampled where it is then). Area and environment lights draw one 2D sample from
     /// `sampler`; the others draw none, so adding them changes no other
     /// light's samples. `None` when no light arrives.
     #[inline]
@@ -186,6 +187,7 @@ impl Light {
         origin: Vec3,
         p: Vec3,
         n: Option<Vec3>,
+        time: f32,
         sampler: &mut PixelSampler,
     ) -> Option<LightSample> {
         match self {
@@ -225,6 +227,7 @@ impl Light {
             }
             Light::Mesh(l) => {
                 let (q, nq) = l.point(sampler.next_2d());
+                let q = q + l.motion * time;
                 let to = q - origin;
                 let dist = to.length();
                 let wi = to / dist;
@@ -235,7 +238,8 @@ impl Light {
                 Some(LightSample { wi, dist, e: l.radiance / pdf, point_source: false, pdf })
             }
             Light::Sphere(l) => {
-                let (wi, dist, pdf) = l.sample(origin, sampler.next_2d())?;
+                // Moving the origin back is moving the sphere forward.
+                let (wi, dist, pdf) = l.sample(origin - l.motion * time, sampler.next_2d())?;
                 Some(LightSample { wi, dist, e: l.radiance / pdf, point_source: false, pdf })
             }
             Light::Environment(env) => {
@@ -301,11 +305,11 @@ mod tests {
         let mut sampler = PixelSampler::new(1, 0, 0, 0, 1);
         let p = Vec3::new(0.0, -2.0, 0.0);
         let l = Light::Spot(spot(30.0, 20.0));
-        let s = l.sample(p, p, None, &mut sampler).expect("inside the cone");
+        let s = l.sample(p, p, None, 0.0, &mut sampler).expect("inside the cone");
         assert!((s.e - Vec3::splat(25.0)).abs().max_element() < 1e-4);
         assert!((s.wi - Vec3::Y).length() < 1e-6 && (s.dist - 2.0).abs() < 1e-6);
         let d = Light::Directional { direction: Vec3::new(0.0, -1.0, 0.0), radiance: Vec3::splat(7.0) };
-        let s = d.sample(p * 100.0, p * 100.0, None, &mut sampler).expect("always lit");
+        let s = d.sample(p * 100.0, p * 100.0, None, 0.0, &mut sampler).expect("always lit");
         assert_eq!(s.e, Vec3::splat(7.0));
         assert_eq!(s.wi, Vec3::Y);
         assert!(s.dist.is_infinite());

@@ -11,6 +11,13 @@
 //! and from neighbouring pixels, and sample `i` of a pixel is the same whatever
 //! thread renders it — the image depends only on the scene, the sample count
 //! and the seed.
+//!
+//! A path tracer draws a few dimensions per bounce, and stratifying the deep
+//! ones gains little (the paths through them already differ) while a CMJ
+//! point costs three hashed permutations. [`PixelSampler::stratify_first`]
+//! keeps CMJ for the first calls (the camera and the first hit) and draws
+//! the rest as independent hashed uniforms, still a pure function of (seed,
+//! pixel, sample, call).
 
 /// The samples of one pixel: pattern seeds come from the pixel, sample
 /// `index` of `count` is drawn, and each call moves to the next dimension.
@@ -20,6 +27,13 @@ pub struct PixelSampler {
     index: u32,
     count: u32,
     dim: u32,
+    /// `index % count`, and the CMJ grid's columns `m = ⌊√count⌋` and rows
+    /// `⌈count/m⌉`: the same for every dimension, so worked out once.
+    slot: u32,
+    cols: u32,
+    rows: u32,
+    /// Calls drawn from CMJ patterns; later calls are independent uniforms.
+    stratified: u32,
 }
 
 impl PixelSampler {
@@ -27,15 +41,46 @@ impl PixelSampler {
     #[inline]
     pub fn new(seed: u32, x: u32, y: u32, index: u32, count: u32) -> Self {
         let pixel_hash = hash3(seed, x, y);
-        PixelSampler { pixel_hash, index, count: count.max(1), dim: 0 }
+        let count = count.max(1);
+        let cols = ((count as f32).sqrt() as u32).max(1);
+        let rows = count.div_ceil(cols);
+        PixelSampler {
+            pixel_hash,
+            index,
+            count,
+            dim: 0,
+            slot: index % count,
+            cols,
+            rows,
+            stratified: u32::MAX,
+        }
+    }
+
+    /// Stratifies only the first `calls` calls (counted from the sampler's
+    /// creation); the later ones are independent uniform draws, far cheaper.
+    #[inline]
+    pub fn stratify_first(&mut self, calls: u32) {
+        self.stratified = calls;
+    }
+
+    /// The hash of the current call for an independent draw.
+    #[inline]
+    fn independent(&mut self) -> u32 {
+        let h = hash2(hash2(self.pixel_hash, self.dim), self.index);
+        self.dim += 1;
+        h
     }
 
     /// The next 2D dimension: a point of `[0, 1)²`.
     #[inline]
     pub fn next_2d(&mut self) -> (f32, f32) {
+        if self.dim >= self.stratified {
+            let h = self.independent();
+            return (unit(h), unit(hash2(h, 0x68bc_21eb)));
+        }
         let p = hash2(self.pixel_hash, self.dim);
         self.dim += 1;
-        cmj(self.index % self.count, self.count, p)
+        cmj_grid(self.slot, self.count, self.cols, self.rows, p)
     }
 
     /// How many samples the pixel takes.
@@ -47,9 +92,12 @@ impl PixelSampler {
     /// The next 1D dimension: a value in `[0, 1)` stratified over the samples.
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
+        if self.dim >= self.stratified {
+            return unit(self.independent());
+        }
         let p = hash2(self.pixel_hash, self.dim);
         self.dim += 1;
-        let s = permute(self.index % self.count, self.count, p);
+        let s = permute(self.slot, self.count, p);
         ((s as f32 + rand_float(self.index, p ^ 0x9e37_79b9)) / self.count as f32).min(ONE_MINUS_EPS)
     }
 }
@@ -57,10 +105,15 @@ impl PixelSampler {
 const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// Point `s` of an `n`-point correlated multi-jittered pattern `p`.
+#[cfg(test)]
 fn cmj(s: u32, n: u32, p: u32) -> (f32, f32) {
-    let m = (n as f32).sqrt() as u32;
-    let m = m.max(1);
-    let k = n.div_ceil(m);
+    let m = ((n as f32).sqrt() as u32).max(1);
+    cmj_grid(s, n, m, n.div_ceil(m), p)
+}
+
+/// [`cmj`] with its `m × k` grid given (`m = ⌊√n⌋`, `k = ⌈n/m⌉`).
+#[inline]
+fn cmj_grid(s: u32, n: u32, m: u32, k: u32, p: u32) -> (f32, f32) {
     let s = permute(s, n, p.wrapping_mul(0x5163_3e2d));
     let sx = permute(s % m, m, p.wrapping_mul(0x68bc_21eb));
     let sy = permute(s / m, k, p.wrapping_mul(0x02e5_be93));
@@ -73,6 +126,7 @@ fn cmj(s: u32, n: u32, p: u32) -> (f32, f32) {
 
 /// A pseudo-random permutation of `0..l` selected by `p` (Kensler 2013): a
 /// hash that is a bijection on the next power of two, cycle-walked into range.
+#[inline]
 fn permute(mut i: u32, l: u32, p: u32) -> u32 {
     if l <= 1 {
         return 0;
@@ -110,6 +164,7 @@ fn permute(mut i: u32, l: u32, p: u32) -> u32 {
 }
 
 /// A hashed float in `[0, 1)` for index `i` under pattern `p`.
+#[inline]
 fn rand_float(mut i: u32, p: u32) -> f32 {
     i ^= p;
     i ^= i >> 17;
@@ -122,6 +177,12 @@ fn rand_float(mut i: u32, p: u32) -> f32 {
     i ^= i >> 17;
     i = i.wrapping_mul(1 | (p >> 18));
     (i >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+}
+
+/// The top 24 bits of `h` as a float in `[0, 1)`.
+#[inline]
+fn unit(h: u32) -> f32 {
+    (h >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
 }
 
 /// A 32-bit mix of two words (the finalizer of MurmurHash3 over a combination).
@@ -187,6 +248,38 @@ mod tests {
         assert_eq!(b.next_2d(), p1);
         let mut c = PixelSampler::new(8, 3, 4, 5, 16);
         assert_ne!(c.next_2d(), p0);
+    }
+
+    #[test]
+    fn calls_past_the_stratified_ones_are_uniform_and_repeatable() {
+        // 4096 draws of a late call over samples and pixels: each of 16 bins
+        // per axis holds 256 ± 5 standard deviations (√(256·15/16) ≈ 15.5).
+        let mut bins = [[0u32; 16]; 3];
+        for i in 0..4096u32 {
+            let mut s = PixelSampler::new(3, i % 64, i / 64, i % 7, 7);
+            s.stratify_first(2);
+            let first = s.next_2d();
+            let mut again = PixelSampler::new(3, i % 64, i / 64, i % 7, 7);
+            assert_eq!(again.next_2d(), first, "stratified calls unchanged");
+            for _ in 0..4 {
+                s.next_1d();
+            }
+            let (a, b) = s.next_2d();
+            let c = s.next_1d();
+            for (k, v) in [a, b, c].into_iter().enumerate() {
+                assert!((0.0..1.0).contains(&v));
+                bins[k][(v * 16.0) as usize] += 1;
+            }
+        }
+        for (k, axis) in bins.iter().enumerate() {
+            assert!(axis.iter().all(|&n| n.abs_diff(256) < 78), "axis {k}: {axis:?}");
+        }
+        let draw = || {
+            let mut s = PixelSampler::new(9, 1, 2, 3, 16);
+            s.stratify_first(0);
+            (s.next_2d(), s.next_1d())
+        };
+        assert_eq!(draw(), draw());
     }
 
     #[test]

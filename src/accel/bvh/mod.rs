@@ -37,10 +37,13 @@ use std::ops::Range;
 
 use glam::{Vec3, Vec3A, Vec4};
 
-use super::bvh_build::{build_binary, Node, SAH_MAX_DEPTH};
+use super::bvh_build::{build_binary, Node, INTERSECT_COST, SAH_MAX_DEPTH};
 pub use super::bvh_build::{BINS, MAX_LEAF};
 use crate::math::{Aabb, Ray};
 
+/// SAH cost of testing one top-level object, against one node visit (see
+/// [`Bvh::build_objects`]).
+const OBJECT_COST: f32 = 4.0;
 /// Marks a child reference as a leaf: `LEAF | first << 3 | (count - 1)`.
 const LEAF: u32 = 1 << 31;
 /// An unused child slot; its box is empty, so it is never entered.
@@ -196,12 +199,14 @@ impl RayPre {
         let tiny = Vec3A::splat(1e-30);
         let d = Vec3A::select(d.abs().cmplt(tiny), tiny.copysign(d), d);
         let inv = d.recip();
-        let neg = |a: usize| (inv[a] < 0.0) as usize;
+        // Written out instead of `[0, 1, 2].map(..)`: the array maps were
+        // not inlined and cost as much as a node test per traversal.
+        let (nx, ny, nz) = ((inv.x < 0.0) as usize, (inv.y < 0.0) as usize, (inv.z < 0.0) as usize);
         RayPre {
-            o: [0, 1, 2].map(|a| Vec4::splat(ray.o[a])),
-            inv: [0, 1, 2].map(|a| Vec4::splat(inv[a])),
-            near: [0, 1, 2].map(|a| 2 * a + neg(a)),
-            far: [0, 1, 2].map(|a| 2 * a + 1 - neg(a)),
+            o: [Vec4::splat(ray.o.x), Vec4::splat(ray.o.y), Vec4::splat(ray.o.z)],
+            inv: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
+            near: [nx, 2 + ny, 4 + nz],
+            far: [1 - nx, 3 - ny, 5 - nz],
         }
     }
 
@@ -217,14 +222,17 @@ impl RayPre {
         (tn, tn.cmple(tf).bitmask())
     }
 
-    /// The same test for one box (the root of a one-leaf tree).
+    /// The same test for one box (the root of a one-leaf tree), one lane
+    /// wide: the operations of [`RayPre::hit`] on lane 0.
+    #[inline(always)]
     fn hit_box(&self, b: &Aabb, t_max: f32) -> bool {
-        let mut n = Node4::EMPTY;
-        for a in 0..3 {
-            n.bounds[2 * a][0] = b.min[a];
-            n.bounds[2 * a + 1][0] = b.max[a];
-        }
-        self.hit(&n, t_max).1 & 1 != 0
+        // Row `2a` of a node is axis a's minimum, row `2a + 1` its maximum.
+        let (lo, hi) = (b.min.to_array(), b.max.to_array());
+        let bound = |row: usize| if row % 2 == 0 { lo[row / 2] } else { hi[row / 2] };
+        let slab = |row: usize, a: usize| (bound(row) - self.o[a].x) * self.inv[a].x;
+        let tn = slab(self.near[0], 0).max(slab(self.near[1], 1)).max(slab(self.near[2], 2).max(0.0));
+        let tf = slab(self.far[0], 0).min(slab(self.far[1], 1)).min(slab(self.far[2], 2));
+        tn <= (tf * SLAB_EXPAND).min(t_max)
     }
 }
 
@@ -243,8 +251,22 @@ impl Bvh {
     /// time: the SAH prices a leaf by its number of blocks, so leaves come
     /// out with (up to [`MAX_LEAF`]) primitives filling whole blocks.
     pub fn build_blocked(prim_bounds: &[Aabb], block: u32) -> Bvh {
+        Bvh::build_costed(prim_bounds, block, INTERSECT_COST)
+    }
+
+    /// [`Bvh::build`] for the top level of a scene, whose primitives are
+    /// objects: a mesh's own traversal or an analytic shape costs several
+    /// node visits, so the SAH splits down to small leaves and a ray tests
+    /// only the objects whose boxes it crosses. (Priced like a triangle, the
+    /// eight objects of a Cornell box made one leaf, and every ray tested
+    /// all of them.)
+    pub fn build_objects(prim_bounds: &[Aabb]) -> Bvh {
+        Bvh::build_costed(prim_bounds, 1, OBJECT_COST)
+    }
+
+    fn build_costed(prim_bounds: &[Aabb], block: u32, prim_cost: f32) -> Bvh {
         assert!(prim_bounds.len() <= MAX_PRIMS, "more than 2^28 primitives in one BVH");
-        let Some((b2, prim_order, binary_depth)) = build_binary(prim_bounds, block) else {
+        let Some((b2, prim_order, binary_depth)) = build_binary(prim_bounds, block, prim_cost) else {
             return Bvh {
                 nodes: Vec::new(),
                 root: EMPTY,
@@ -291,6 +313,14 @@ impl Bvh {
                 }
             }
         }
+    }
+
+    /// The root's range when the whole tree is one leaf. Its caller may
+    /// test that leaf without the box test: a leaf of at most [`MAX_LEAF`]
+    /// primitives costs about what the box test does.
+    #[inline]
+    pub fn single_leaf(&self) -> Option<Range<usize>> {
+        (self.root != EMPTY && self.root & LEAF != 0).then(|| leaf_range(self.root))
     }
 
     /// The permutation of input primitive indices that leaf ranges index

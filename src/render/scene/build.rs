@@ -71,13 +71,17 @@ impl Scene {
         for e in &desc.emitters {
             let o = &desc.objects[e.object];
             let light = match &o.shape {
-                Shape::Sphere { center, radius } => {
-                    Light::Sphere(LightSphere::new(*center, *radius, &o.transform, e.radiance))
-                }
+                Shape::Sphere { center, radius } => Light::Sphere(LightSphere {
+                    motion: o.motion,
+                    ..LightSphere::new(*center, *radius, &o.transform, e.radiance)
+                }),
                 Shape::Mesh { .. } => {
                     let m = &meshes[mesh_of_object[&e.object] as usize];
                     match LightMesh::new(m.corners(), &o.transform, e.radiance) {
-                        Some(l) => Light::Mesh(Arc::new(l)),
+                        Some(mut l) => {
+                            l.motion = o.motion;
+                            Light::Mesh(Arc::new(l))
+                        }
                         None => continue,
                     }
                 }
@@ -137,7 +141,7 @@ impl Scene {
                 "the object reaches beyond the range of 32-bit floating-point numbers (after its transformations)",
             ));
         }
-        let tlas = Bvh::build(&bounds);
+        let tlas = Bvh::build_objects(&bounds);
         // Put primitives in the BVH's leaf order so a leaf is a contiguous range.
         let mut slots: Vec<Option<Prim>> = prims.into_iter().map(Some).collect();
         let prims = tlas.prim_order().iter().filter_map(|&i| slots[i as usize].take()).collect();

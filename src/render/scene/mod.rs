@@ -10,6 +10,7 @@
 //! (`MotionBlur`) sit in the top level with boxes swept over the shutter
 //! interval, so one BVH serves every ray time.
 
+use crate::accel::triangle::WatertightRay;
 use crate::accel::{Bvh, TriHit};
 use crate::geometry::{Ellipsoid, Mesh, Plane, Sphere};
 use crate::light::{Environment, Light};
@@ -54,6 +55,13 @@ struct Prim {
 const NO_LIGHT: u32 = u32::MAX;
 
 impl Prim {
+    /// Whether the object's space is world space at every time (no
+    /// transform, no motion): the world ray's prepared forms serve it.
+    #[inline]
+    fn in_world(&self) -> bool {
+        self.xf.is_none() && self.motion == Vec3::ZERO
+    }
+
     /// The ray at `time` in the primitive's object space (same `t` as in
     /// world space): motion blur undoes the object's translation at that time,
     /// then the inverse transform.
@@ -234,6 +242,9 @@ impl Scene {
                 best = Some(Closest::Plane(i));
             }
         }
+        // The shear of the watertight triangle test, shared by every mesh
+        // that needs no transform.
+        let world = WatertightRay::new(ray);
         self.tlas.closest(ray, best_t, |range, t_max| {
             let mut hit = false;
             for pi in range {
@@ -242,7 +253,12 @@ impl Scene {
                 match p.geom {
                     Geom::Mesh(m) => {
                         let cull = if cull_back_faces { 1.0 } else { 0.0 };
-                        if let Some(h) = self.meshes[m as usize].intersect(&local, t_min, *t_max, cull) {
+                        let accel = self.meshes[m as usize].accel();
+                        let h = match p.in_world() {
+                            true => accel.intersect_prepared(&local, &world, t_min, *t_max, cull),
+                            false => accel.intersect_culled(&local, t_min, *t_max, cull),
+                        };
+                        if let Some(h) = h {
                             *t_max = h.t;
                             best = Some(Closest::Triangle(pi, h));
                             hit = true;
@@ -387,11 +403,15 @@ impl Scene {
         if self.planes.iter().any(|(pl, _, _, _)| pl.intersect(ray, t_min, t_max).is_some()) {
             return true;
         }
+        let world = WatertightRay::new(ray);
         self.tlas.any(ray, t_max, |range, t_max| {
             range.into_iter().any(|pi| {
                 let p = &self.prims[pi];
                 let local = p.to_local(ray, time);
                 match p.geom {
+                    Geom::Mesh(m) if p.in_world() => {
+                        self.meshes[m as usize].accel().occluded_prepared(&local, &world, t_min, t_max)
+                    }
                     Geom::Mesh(m) => self.meshes[m as usize].occluded(&local, t_min, t_max),
                     Geom::Sphere(s) => s.intersect(&local, t_min, t_max).is_some(),
                     Geom::Ellipsoid(e) => {
