@@ -207,7 +207,8 @@ fn suite_shows_hdr_rows_with_tone_mapped_thumbnails_and_hdr_metrics() {
     let mean =
         |t: &image::RgbImage| t.as_raw().iter().map(|&v| f64::from(v)).sum::<f64>() / t.as_raw().len() as f64;
     assert!(mean(&thumbs[0]) > 1.0, "our thumbnail is not black");
-    assert!(mean(&thumbs[0]) < mean(&thumbs[1]) - 0.5, "one curve for both: ours shows darker");
+    let (a, b) = (mean(&thumbs[0]), mean(&thumbs[1]));
+    assert!(a < 0.99 * b, "one curve for both: ours shows darker ({a} against {b})");
 
     let html = text(&report.join("index.html"));
     assert!(html.contains(&format!("rel. MAE {:.2}%", 100.0 * mae)), "HDR numbers shown");

@@ -75,7 +75,8 @@ const KEY: f64 = 0.18;
 
 /// `image` (linear radiance) tone-mapped for display by Reinhard et al.'s
 /// global photographic operator, `L / (1 + L)` with `L = key / Ȳ · Y`, where
-/// `Ȳ` is the log-average luminance of `keyed_by`, and sRGB-encoded. Keying
+/// `Ȳ` is the log-average luminance of `keyed_by`'s non-black pixels, and
+/// sRGB-encoded. Keying
 /// two images by the same one maps them by the same curve.
 pub fn tonemap_like(keyed_by: &Rgb32Image, image: &Rgb32Image) -> image::RgbImage {
     let lum = |p: &[f32; 3]| {
@@ -86,8 +87,15 @@ pub fn tonemap_like(keyed_by: &Rgb32Image, image: &Rgb32Image) -> image::RgbImag
             0.0
         }
     };
-    let n = keyed_by.pixels.len().max(1) as f64;
-    let log_avg = (keyed_by.pixels.iter().map(|p| (1e-5 + f64::from(lum(p))).ln()).sum::<f64>() / n).exp();
+    // Over the lit pixels only: a black background would drag the
+    // log-average down and wash the thumbnail out to white.
+    let (log_sum, n) = keyed_by
+        .pixels
+        .iter()
+        .map(lum)
+        .filter(|&y| y > 0.0)
+        .fold((0.0f64, 0usize), |(s, n), y| (s + f64::from(y).ln(), n + 1));
+    let log_avg = if n == 0 { 1.0 } else { (log_sum / n as f64).exp() };
     let scale = (KEY / log_avg) as f32;
     let mut out = image::RgbImage::new(image.width, image.height);
     for (dst, p) in out.pixels_mut().zip(&image.pixels) {
