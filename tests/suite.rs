@@ -164,3 +164,54 @@ fn suite_only_strict_and_bad_arguments() {
     let out = luster(&["suite", r, "-o", report.to_str().unwrap(), "--only", "nothing-matches"]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// An HDR camera (`.exr`, hw5's semantics: the `.exr` and a tone-mapped
+/// `.png`) whose expected `.exr` is our render made 10% brighter: the row
+/// must carry the HDR numbers (relative MAE = 0.1/1.1 exactly, HDR-FLIP
+/// above 0) and two thumbnails of the linear images tone-mapped by one
+/// curve, so ours shows darker than the course's.
+#[test]
+fn suite_shows_hdr_rows_with_tone_mapped_thumbnails_and_hdr_metrics() {
+    use luster::image::Rgb32Image;
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path().join("course");
+    let (xml, expected) = (root.join("hw5/xml"), root.join("hw5/expected"));
+    std::fs::create_dir_all(&xml).unwrap();
+    std::fs::create_dir_all(&expected).unwrap();
+    std::fs::write(xml.join("h.xml"), GOOD.replace("a.png", "h.exr")).unwrap();
+    let out =
+        luster(&["render", "-q", xml.join("h.xml").to_str().unwrap(), "-o", expected.to_str().unwrap()]);
+    assert!(out.status.success(), "render failed: {}", String::from_utf8_lossy(&out.stderr));
+    let exr = expected.join("h.exr");
+    let ours = Rgb32Image::load(&exr).unwrap();
+    let brighter: Vec<f32> = ours.pixels.iter().flat_map(|p| p.map(|c| c * 1.1)).collect();
+    luster::image::output::write_rgb32f(&exr, ours.width, ours.height, &brighter).unwrap();
+
+    let report = dir.path().join("report");
+    let out = luster(&["suite", root.to_str().unwrap(), "-o", report.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let json: serde_json::Value = serde_json::from_str(&text(&report.join("results.json"))).unwrap();
+    let row = &json["scenes"][0]["images"][0];
+    let hdr = &row["hdr"];
+    let mae = hdr["relative_mae"].as_f64().expect("the HDR row has a relative MAE");
+    assert!((mae - 0.1 / 1.1).abs() < 1e-4, "relative MAE {mae}");
+    assert!(hdr["hdr_flip"].as_f64().is_some_and(|f| f > 0.0), "{hdr}");
+    assert!(report.join(hdr["render"].as_str().unwrap()).is_file());
+    assert!(report.join(hdr["expected"].as_str().unwrap()).is_file());
+    let thumbs: Vec<image::RgbImage> = hdr["thumbs"]
+        .as_array()
+        .expect("the HDR row has thumbnails")
+        .iter()
+        .map(|t| image::open(report.join(t.as_str().unwrap())).unwrap().to_rgb8())
+        .collect();
+    let mean =
+        |t: &image::RgbImage| t.as_raw().iter().map(|&v| f64::from(v)).sum::<f64>() / t.as_raw().len() as f64;
+    assert!(mean(&thumbs[0]) > 1.0, "our thumbnail is not black");
+    let (a, b) = (mean(&thumbs[0]), mean(&thumbs[1]));
+    assert!(a < 0.99 * b, "one curve for both: ours shows darker ({a} against {b})");
+
+    let html = text(&report.join("index.html"));
+    assert!(html.contains(&format!("rel. MAE {:.2}%", 100.0 * mae)), "HDR numbers shown");
+    assert!(html.contains("HDR-FLIP"));
+    assert!(html.contains("HDR, same curve"), "tone-mapped HDR thumbnails shown");
+}

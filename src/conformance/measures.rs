@@ -1,8 +1,7 @@
-//! What the conformance bars measure besides PSNR and FLIP: per-block
-//! z-scores of a multi-sample image against the reference, with the variance
-//! taken from a second render with another seed; the PSNR of 8×8 block means
-//! (shown in reports); and the luma statistics of images that can only match
-//! in look (see `thresholds.rs`).
+//! What the conformance bars measure besides PSNR, FLIP and the noise
+//! judgement of [`noise`](super::noise): the PSNR of 8×8 block means (shown
+//! in reports), and the luma statistics of images that can only match in
+//! look (see `thresholds.rs`).
 
 /// Edge of the blocks whose means the coarse test compares: 8×8 pixels cut
 /// uncorrelated noise by 64× in variance (18 dB) and still resolve a bias
@@ -93,94 +92,6 @@ pub fn coarse_psnr(a: &crate::image::Rgb32Image, b: &crate::image::Rgb32Image) -
     Some(if mse > 0.0 { -10.0 * mse.log10() } else { f64::INFINITY })
 }
 
-/// Per-block z-scores of our image against the reference (see [`block_z`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BlockZ {
-    /// Mean of z² over every block and channel: 1 plus the reference's share
-    /// of the noise for an unbiased image, more where a bias adds to it.
-    pub mean_z2: f64,
-    /// Share of blocks and channels with |z| > [`Z_OUTLIER`]: a local bias.
-    pub outliers: f64,
-    /// Largest |z|.
-    pub max_abs_z: f64,
-    /// Blocks × channels tested.
-    pub count: usize,
-}
-
-/// |z| beyond which a block counts as an outlier: a normal variable passes
-/// it with probability 6·10⁻⁷, so even 30,000 blocks × 3 channels of pure
-/// noise expect less than one.
-pub const Z_OUTLIER: f64 = 5.0;
-
-/// Smallest standard deviation of a block mean, in 8-bit levels: both images
-/// are rounded to 8 bits, so even a converged block may differ by about
-/// half a level without any bias.
-const Z_FLOOR_LEVELS: f64 = 0.5;
-
-/// Per-block z-scores of `ours` against `reference`, judged by our own noise.
-///
-/// For each `COARSE`×`COARSE` block and channel, `z = (m_ours − m_ref) / σ`
-/// with `m` the block means. Our per-pixel noise is measured by `second`,
-/// the same render with another seed: `(a − a')²/2` estimates a pixel's
-/// variance, so `Σ (a − a')² / (2 n²)` estimates the variance of the block
-/// mean of `n` pixels, at exactly the sample count rendered. The reference
-/// is a Monte Carlo estimate too, with its own noise that we cannot measure:
-/// it is taken as ours scaled by `ref_variance_ratio` (its per-sample
-/// variance relative to ours times our sample count over its count).
-/// `σ² = σ²_ours (1 + ref_variance_ratio) + floor²`, with a floor of half an
-/// 8-bit level. Noise alone gives z ~ N(0, 1); a bias gives large |z| where it
-/// is, however few samples were rendered. `None` when the sizes differ or no
-/// whole block fits.
-pub fn block_z(
-    ours: &crate::image::Rgb32Image,
-    second: &crate::image::Rgb32Image,
-    reference: &crate::image::Rgb32Image,
-    ref_variance_ratio: f64,
-) -> Option<BlockZ> {
-    let same = |b: &crate::image::Rgb32Image| {
-        (b.width, b.height) == (ours.width, ours.height) && b.pixels.len() == ours.pixels.len()
-    };
-    if !same(second) || !same(reference) {
-        return None;
-    }
-    let (bw, bh) = (ours.width / COARSE, ours.height / COARSE);
-    if bw == 0 || bh == 0 {
-        return None;
-    }
-    let n = f64::from(COARSE * COARSE);
-    let floor2 = (Z_FLOOR_LEVELS / 255.0).powi(2);
-    let (mut sum_z2, mut outliers, mut max_abs_z, mut count) = (0.0, 0usize, 0.0f64, 0usize);
-    for by in 0..bh {
-        for bx in 0..bw {
-            let (mut diff, mut noise) = ([0.0f64; 3], [0.0f64; 3]);
-            for y in by * COARSE..(by + 1) * COARSE {
-                for x in bx * COARSE..(bx + 1) * COARSE {
-                    let i = (y * ours.width + x) as usize;
-                    for c in 0..3 {
-                        let a = f64::from(ours.pixels[i][c]);
-                        diff[c] += a - f64::from(reference.pixels[i][c]);
-                        noise[c] += (a - f64::from(second.pixels[i][c])).powi(2);
-                    }
-                }
-            }
-            for c in 0..3 {
-                let var_ours = noise[c] / (2.0 * n * n);
-                let z = (diff[c] / n) / (var_ours * (1.0 + ref_variance_ratio) + floor2).sqrt();
-                sum_z2 += z * z;
-                outliers += usize::from(z.abs() > Z_OUTLIER);
-                max_abs_z = max_abs_z.max(z.abs());
-                count += 1;
-            }
-        }
-    }
-    Some(BlockZ {
-        mean_z2: sum_z2 / count as f64,
-        outliers: outliers as f64 / count as f64,
-        max_abs_z,
-        count,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -205,32 +116,5 @@ mod tests {
         let p = coarse_psnr(&base, &biased).unwrap_or(f64::INFINITY);
         assert!((p - 42.1).abs() < 0.1, "{p}");
         assert_eq!(coarse_psnr(&base, &image(4, 4, |_, _| 0.0)), None);
-    }
-
-    #[test]
-    fn block_z_scores_find_a_bias_that_noise_does_not_hide() {
-        // Two seeds of a noisy flat grey: a pseudo-random ±20-level noise per pixel.
-        let mut state = 7u64;
-        let mut rnd = move || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((state >> 33) as f64 / f64::from(1u32 << 31)) as f32 - 0.5
-        };
-        let mut noisy = || {
-            let v: Vec<f32> = (0..64 * 64).map(|_| 0.5 + 40.0 / 255.0 * rnd()).collect();
-            image(64, 64, move |x, y| v[(y * 64 + x) as usize])
-        };
-        let (a, b, reference) = (noisy(), noisy(), noisy());
-        let z = block_z(&a, &b, &reference, 1.0).unwrap();
-        assert_eq!(z.count, 64 * 3);
-        assert!(z.mean_z2 > 0.5 && z.mean_z2 < 1.6 && z.outliers == 0.0, "{z:?}");
-        // The same noise on a reference 4 levels darker in one quarter: a bias
-        // of about twice the block mean's noise there (σ ≈ 2 levels).
-        let biased = image(64, 64, |x, y| {
-            let i = (y * 64 + x) as usize;
-            reference.pixels[i][0] - if x < 32 && y < 32 { 4.0 / 255.0 } else { 0.0 }
-        });
-        let zb = block_z(&a, &b, &biased, 1.0).unwrap();
-        assert!(zb.mean_z2 > z.mean_z2 + 0.6, "{zb:?} against {z:?}");
-        assert_eq!(block_z(&a, &b, &image(8, 8, |_, _| 0.0), 1.0), None);
     }
 }

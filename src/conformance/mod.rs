@@ -9,14 +9,17 @@
 //! older images belong to the older XML version of a scene.
 
 pub mod measures;
+pub mod noise;
 pub mod runner;
 pub mod thresholds;
 
+use crate::film::Film;
 use crate::image::{compare, CompareOptions, Comparison, Rgb32Image};
 use crate::render::{self, RenderOptions, Scene};
+pub use noise::Space;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-pub use thresholds::{threshold, Bar, Rule, Threshold};
+pub use thresholds::{threshold, Bar, Rule, Threshold, STOCHASTIC};
 
 /// Which encoding a scene uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -78,6 +81,21 @@ impl Case {
         };
         let dirs = years.iter().map(|y| exp.join(y)).chain(std::iter::once(exp.clone()));
         dirs.flat_map(|d| names.iter().map(move |n| d.join(n)).collect::<Vec<_>>()).find(|p| p.is_file())
+    }
+
+    /// The course's HDR image for a camera whose `ImageName` is an `.exr` or
+    /// `.hdr`, found as [`Case::expected_image`] finds images but without
+    /// falling back to the `.png`: the linear radiance the noise judgement
+    /// and the HDR metrics use.
+    pub fn expected_hdr(&self, image_name: &str) -> Option<PathBuf> {
+        let is_hdr = Path::new(image_name)
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| crate::image::output::HDR_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()));
+        self.expected_image(image_name).filter(|_| is_hdr).and_then(|ldr| {
+            let hdr = ldr.with_file_name(Path::new(image_name).file_name()?);
+            hdr.is_file().then_some(hdr)
+        })
     }
 
     /// Whether the scene file names one of its homework's expected images.
@@ -176,6 +194,9 @@ pub struct ImageResult {
     /// Per-block z-scores against the expected image, with the variance from
     /// the second render, when the bar tests them.
     pub block_z: Option<thresholds::BlockZ>,
+    /// HDR numbers against the course's `.exr`/`.hdr`, for an HDR camera
+    /// that has one.
+    pub hdr: Option<HdrResult>,
     /// The camera's own sample count (the expected image's).
     pub scene_spp: u32,
     /// A known quirk of the course's data that makes this image differ.
@@ -188,6 +209,19 @@ pub struct ImageResult {
     pub pass: bool,
     /// Why it failed beyond the metrics (an unreadable expected image, ...).
     pub error: Option<String>,
+}
+
+/// An HDR camera's linear image against the course's.
+#[derive(Clone, Debug)]
+pub struct HdrResult {
+    /// Our linear image (`.exr`).
+    pub render: PathBuf,
+    /// The course's.
+    pub expected: PathBuf,
+    /// Relative mean absolute error `Σ|t − r| / Σ|r|`.
+    pub relative_mae: f64,
+    /// Mean HDR-FLIP.
+    pub hdr_flip: f64,
 }
 
 /// The outcome for one scene.
@@ -351,12 +385,12 @@ fn run_case_into(
         };
         let threshold = threshold(case, &ldr_name, cam.num_samples);
         let expected = case.expected_image(&ldr_name);
+        let expected_hdr = case.expected_hdr(&cam.image_name);
         // The second render is only worth its time when there is a
         // reference to judge.
         let second = (threshold.needs_pair() && expected.is_some()).then(|| {
             let next = RenderOptions { seed: opts.seed.wrapping_add(1), ..*opts };
-            let film = render::render_with(&scene, i, &next, &|_| {}).film;
-            crate::film::outputs::rgb8(&film, &ldr).unwrap_or_default()
+            render::render_with(&scene, i, &next, &|_| {}).film
         });
         let seconds = t.elapsed().as_secs_f64();
         let png = outdir.join(format!("{stem}__{}", sanitize(&cam.image_name))).with_extension("png");
@@ -372,6 +406,7 @@ fn run_case_into(
             coarse_psnr: None,
             stats: None,
             block_z: None,
+            hdr: None,
             scene_spp: cam.num_samples.max(1),
             quirk: thresholds::known_quirk(case, &cam.image_name),
             spp: opts.spp.unwrap_or(cam.num_samples).max(1),
@@ -385,22 +420,48 @@ fn run_case_into(
             result.images.push(r);
             continue;
         }
-        if let Some(second) = &second {
-            match compare_rgb8(img.width, img.height, second, &rgb) {
+        let second_rgb = second.as_ref().map(|f| crate::film::outputs::rgb8(f, &ldr).unwrap_or_default());
+        if let Some(second_rgb) = &second_rgb {
+            match compare_rgb8(img.width, img.height, second_rgb, &rgb) {
                 Ok(p) => r.pair = Some(p),
                 Err(e) => r.error = Some(e),
             }
             let pair_png =
                 png.with_file_name(format!("{}__seed{}.png", file_stem(&png), opts.seed.wrapping_add(1)));
             // Kept for looking at; judging does not need the file.
-            let _ = crate::image::output::write_rgb8(&pair_png, img.width, img.height, second);
+            let _ = crate::image::output::write_rgb8(&pair_png, img.width, img.height, second_rgb);
+        }
+        let hdr_reference = match expected_hdr.as_deref().map(Rgb32Image::load) {
+            Some(Ok(reference)) => Some(reference),
+            Some(Err(e)) => {
+                r.error = Some(e.to_string());
+                None
+            }
+            None => None,
+        };
+        if let (Some(reference), Some(path)) = (&hdr_reference, &expected_hdr) {
+            let exr = png.with_extension("exr");
+            match hdr_result(&img.film, reference, &exr, path) {
+                Ok(h) => r.hdr = Some(h),
+                Err(e) => r.error = Some(e),
+            }
         }
         if let Some(exp) = expected {
-            let z = second.as_deref().map(|s| (s, thresholds::ref_variance_ratio(r.spp, r.scene_spp)));
-            match compare_with(&exp, img.width, img.height, &rgb, r.bar.tests_stats(), z) {
+            let judged = second.as_ref().map(|s| Judged {
+                second_film: s,
+                second_rgb: second_rgb.as_deref().unwrap_or_default(),
+                film: &img.film,
+                hdr_reference: hdr_reference.as_ref(),
+                spp: r.spp,
+                ref_spp: r.scene_spp,
+            });
+            match compare_with(&exp, img.width, img.height, &rgb, r.bar.tests_stats(), judged) {
                 Ok((c, coarse, stats, block_z)) => {
                     r.coarse_psnr = coarse;
                     r.stats = stats;
+                    if let Some(z) = &block_z {
+                        r.bar = r.threshold.bar_in(z.space);
+                    }
                     r.block_z = block_z;
                     let heat = png.with_file_name(format!("{}__heatmap.png", file_stem(&png)));
                     if let Ok(h) = crate::image::comparison_heatmap(&c, crate::image::HeatmapSource::Flip) {
@@ -419,37 +480,80 @@ fn run_case_into(
     }
 }
 
+/// Writes our linear image to `exr` and measures it against the course's.
+fn hdr_result(film: &Film, reference: &Rgb32Image, exr: &Path, expected: &Path) -> Result<HdrResult, String> {
+    crate::image::output::write_rgb32f(exr, film.width, film.height, &film.rgb32f())
+        .map_err(|e| e.to_string())?;
+    let ours = linear_image(film);
+    let rel = crate::image::relative_error(reference, &ours).map_err(|e| e.to_string())?;
+    let c = compare(reference, &ours, &CompareOptions::default()).map_err(|e| e.to_string())?;
+    Ok(HdrResult {
+        render: exr.to_path_buf(),
+        expected: expected.to_path_buf(),
+        relative_mae: rel.mae,
+        hdr_flip: c.flip,
+    })
+}
+
+/// A film as a linear image.
+fn linear_image(film: &Film) -> Rgb32Image {
+    Rgb32Image {
+        width: film.width,
+        height: film.height,
+        pixels: film.pixels.iter().map(|p| p.to_array()).collect(),
+        encoding: crate::image::Encoding::Linear,
+    }
+}
+
+/// What the noise judgement of a multi-sample image needs: both renders, as
+/// 8-bit values and as films, and the course's linear image when it has one.
+struct Judged<'a> {
+    film: &'a Film,
+    second_film: &'a Film,
+    second_rgb: &'a [u8],
+    hdr_reference: Option<&'a Rgb32Image>,
+    spp: u32,
+    ref_spp: u32,
+}
+
 fn file_stem(p: &Path) -> String {
     p.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default()
 }
 
 /// What [`compare_with`] measures: the comparison, the PSNR of block means,
-/// and, when asked for, the luma statistics and the block z-scores.
+/// and, when asked for, the luma statistics and the noise judgement.
 type Measured = (Comparison, Option<f64>, Option<thresholds::StatsPair>, Option<thresholds::BlockZ>);
 
 /// Compares an 8-bit render with the expected image file, and measures the
 /// PSNR of the means of 8×8 blocks (see [`thresholds::coarse_psnr`]); with
-/// `stats`, also the luma statistics of both; with `second` (our render
-/// with another seed, and the reference's variance relative to ours), the
-/// per-block z-scores (see [`measures::block_z`]).
+/// `stats`, also the luma statistics of both; with `judged` (a multi-sample
+/// image rendered twice), the noise judgement of [`noise::block_z`]: in
+/// linear radiance against the course's HDR image when there is one, on the
+/// 8-bit values otherwise.
 fn compare_with(
     expected: &Path,
     w: u32,
     h: u32,
     rgb: &[u8],
     stats: bool,
-    second: Option<(&[u8], f64)>,
+    judged: Option<Judged>,
 ) -> Result<Measured, String> {
     let reference = Rgb32Image::load(expected).map_err(|e| e.to_string())?;
     let test = rgb8_image(w, h, rgb).ok_or("render buffer has the wrong size")?;
     let c = compare(&reference, &test, &CompareOptions::default()).map_err(|e| e.to_string())?;
     let coarse = thresholds::coarse_psnr(&reference, &test);
     let stats = stats.then(|| thresholds::StatsPair::of(&test, &reference));
-    let z = match second {
-        Some((rgb2, ratio)) => {
-            let second = rgb8_image(w, h, rgb2).ok_or("the second render has the wrong size")?;
-            measures::block_z(&test, &second, &reference, ratio)
-        }
+    let z = match judged {
+        Some(j) => match j.hdr_reference {
+            Some(hdr) => {
+                let model = noise::NoiseModel::linear(j.spp, j.ref_spp, hdr);
+                noise::block_z(&linear_image(j.film), &linear_image(j.second_film), hdr, &model)
+            }
+            None => {
+                let second = rgb8_image(w, h, j.second_rgb).ok_or("the second render has the wrong size")?;
+                noise::block_z(&test, &second, &reference, &noise::NoiseModel::display(j.spp, j.ref_spp))
+            }
+        },
         None => None,
     };
     Ok((c, coarse, stats, z))

@@ -7,23 +7,22 @@
 //!   pixel, so the bar is PSNR ≥ 40 dB on 8-bit RGB. Mean LDR-FLIP is a second
 //!   guard against a visible but low-energy difference: our hw1/hw2 renders
 //!   score 0.0000–0.0020, so its bar for these scenes is 0.01.
-//! * **Noise-aware** — a multi-sample image (hw3) is a Monte Carlo estimate and
-//!   so is the course's: both are noisy, with other noise. We render twice
-//!   with different seeds, at the sample count being tested, and judge the
-//!   image per 8×8 block (see [`block_z`](super::measures::block_z)): each
-//!   block's mean (per channel) against the reference's, in units of the
-//!   standard deviation that our two renders measure for that block at that
-//!   count, widened by the reference's own noise. The reference's variance
-//!   per sample is taken as [`REF_NOISE_PER_SAMPLE`] = 4 times ours (measured
-//!   at the course's full counts: 1.2× on `cornellbox_area`, 2.5× on
-//!   `metal_glass_plates`, 4× on `spheres_dof`), scaled by our count over
-//!   the camera's. Noise alone gives z-scores of unit variance whatever the
-//!   count; a bias (a wrong falloff, a lens of the wrong size, a misplaced
-//!   object) adds `(bias/σ)²` to z² where it is. The bar: mean z² ≤ 2 (an
-//!   RMS bias no larger than the noise of a block mean) and at most 0.1% of
-//!   blocks with |z| > 5 (a normal variable passes 5 with probability
-//!   6·10⁻⁷: an outlier is a local bias). PSNR ≥ 25 dB and FLIP ≤ 0.1 are
-//!   kept as a floor no noise excuses.
+//! * **Noise-aware** — a multi-sample image (hw3, hw4's, hw7) is a Monte
+//!   Carlo estimate and so is the course's: both are noisy, with other noise.
+//!   We render twice with different seeds, at the sample count being tested,
+//!   and judge block means and the mean luminance in units of the noise our
+//!   two renders measure, widened by the reference's own (scaled from ours by
+//!   the two sample counts): see [`noise`](super::noise), which also says
+//!   when an image is judged in linear radiance against the course's `.exr`
+//!   rather than on its 8-bit `.png`. Noise alone gives z-scores of unit
+//!   variance whatever the count; a bias adds `(bias/σ)²` to z² where it is.
+//!   The bar: mean z² ≤ 2 (an RMS bias no larger than the noise of a block
+//!   mean), at most 0.1% of blocks with |z| > 5 (a normal variable passes 5
+//!   with probability 6·10⁻⁷: an outlier is a local bias), and the mean
+//!   luminance within 4 standard errors. On 8-bit images PSNR ≥ 25 dB and
+//!   FLIP ≤ 0.1 are kept as a floor no noise excuses; a linear judgement has
+//!   none (at 4 spp a path-traced image is far noisier than that, and the
+//!   PNG's tone curve depends on its noise).
 //!
 //! * **Textured** — hw4's single-sample image-texture scenes are
 //!   deterministic too, but a texel lookup is discontinuous: where our hit
@@ -42,7 +41,8 @@
 //! Scenes of homeworks whose features are not implemented yet are judged by
 //! the same rules and are expected to fail until they are.
 
-pub use super::measures::{coarse_psnr, BlockZ, ImageStats, StatsPair, COARSE, Z_OUTLIER};
+pub use super::measures::{coarse_psnr, ImageStats, StatsPair, COARSE};
+pub use super::noise::{ref_variance_ratio, BlockZ, Space, REF_NOISE_PER_SAMPLE, Z_OUTLIER};
 use super::Case;
 use crate::image::Comparison;
 
@@ -66,6 +66,8 @@ pub enum Rule {
         max_mean_z2: f64,
         /// Largest share of blocks and channels with |z| > [`Z_OUTLIER`].
         max_outliers: f64,
+        /// Largest |offset| of the mean luminance in standard errors.
+        max_luminance_z: f64,
     },
     /// By image statistics, for patterns that cannot match pixel for pixel.
     Statistical {
@@ -105,6 +107,9 @@ pub struct Bar {
     pub max_mean_z2: f64,
     /// Largest share of outlier blocks; ∞ when not tested.
     pub max_outliers: f64,
+    /// Largest |offset| of the mean luminance in standard errors; ∞ when not
+    /// tested.
+    pub max_luminance_z: f64,
 }
 
 impl Bar {
@@ -132,7 +137,12 @@ impl Bar {
     /// Whether the block z-scores are within the bar (true when not tested;
     /// false when tested without them).
     pub fn z_ok(&self, z: Option<&BlockZ>) -> bool {
-        !self.tests_z() || z.is_some_and(|z| z.mean_z2 <= self.max_mean_z2 && z.outliers <= self.max_outliers)
+        !self.tests_z()
+            || z.is_some_and(|z| {
+                z.mean_z2 <= self.max_mean_z2
+                    && z.outliers <= self.max_outliers
+                    && z.luminance_z.abs() <= self.max_luminance_z
+            })
     }
 
     /// Whether the bar compares image statistics.
@@ -180,13 +190,19 @@ impl std::fmt::Display for Rule {
                 "statistical: mean luma within {max_mean_diff}, luma contrast within {:.0}%, FLIP ≤ {max_flip}",
                 max_contrast_diff * 100.0
             ),
-            Rule::NoiseAware { floor_psnr, ceiling_flip, max_mean_z2, max_outliers } => write!(
+            Rule::NoiseAware { floor_psnr, ceiling_flip, max_mean_z2, max_outliers, max_luminance_z } => write!(
                 f,
-                "noise-aware: means of {COARSE}×{COARSE} blocks against the reference's, in units of \
-                 the noise our render with another seed measures at the same count (and the \
-                 reference's own): mean z² ≤ {max_mean_z2}, at most {:.1}% of blocks with |z| > \
-                 {Z_OUTLIER}; and PSNR ≥ {floor_psnr} dB, FLIP ≤ {ceiling_flip} whatever the noise",
-                max_outliers * 100.0
+                "noise-aware: block means against the reference's, in units of the noise our render \
+                 with the next seed measures at the same count (widened by the reference's, scaled \
+                 from ours by {REF_NOISE_PER_SAMPLE} × our spp / its spp): mean z² ≤ {max_mean_z2}, \
+                 at most {:.1}% of blocks with |z| > {Z_OUTLIER}, mean luminance within \
+                 {max_luminance_z} standard errors; on 8-bit images {COARSE}×{COARSE} blocks (those clipped \
+                 at white in the reference left out) and PSNR ≥ {floor_psnr} dB, FLIP ≤ {ceiling_flip} \
+                 whatever the noise; against the course's .exr {}×{} blocks of linear radiance (those \
+                 showing a light left out)",
+                max_outliers * 100.0,
+                super::noise::LINEAR_BLOCK,
+                super::noise::LINEAR_BLOCK
             ),
         }
     }
@@ -203,15 +219,27 @@ impl Threshold {
         matches!(self.rule, Rule::NoiseAware { .. })
     }
 
-    /// The numbers an image must reach under this rule.
+    /// The numbers an image must reach under this rule, judged on 8-bit
+    /// display values.
     pub fn bar(&self) -> Bar {
+        self.bar_in(Space::Display)
+    }
+
+    /// The numbers an image must reach under this rule when judged in
+    /// `space`: a noise-aware rule keeps its PSNR and FLIP floor only on
+    /// display values (see the module documentation).
+    pub fn bar_in(&self, space: Space) -> Bar {
         match self.rule {
             Rule::Fixed { min_psnr, max_flip } => Bar { min_psnr, max_flip, ..UNTESTED },
             Rule::Statistical { max_flip, max_mean_diff, max_contrast_diff } => {
                 Bar { min_psnr: f64::NEG_INFINITY, max_flip, max_mean_diff, max_contrast_diff, ..UNTESTED }
             }
-            Rule::NoiseAware { floor_psnr, ceiling_flip, max_mean_z2, max_outliers } => {
-                Bar { min_psnr: floor_psnr, max_flip: ceiling_flip, max_mean_z2, max_outliers, ..UNTESTED }
+            Rule::NoiseAware { floor_psnr, ceiling_flip, max_mean_z2, max_outliers, max_luminance_z } => {
+                let z = Bar { max_mean_z2, max_outliers, max_luminance_z, ..UNTESTED };
+                match space {
+                    Space::Display => Bar { min_psnr: floor_psnr, max_flip: ceiling_flip, ..z },
+                    Space::Linear => z,
+                }
             }
         }
     }
@@ -226,6 +254,7 @@ const UNTESTED: Bar = Bar {
     max_contrast_diff: f64::INFINITY,
     max_mean_z2: f64::INFINITY,
     max_outliers: f64::INFINITY,
+    max_luminance_z: f64::INFINITY,
 };
 
 /// The deterministic bar's PSNR, and the most a noise-aware bar asks.
@@ -240,20 +269,13 @@ pub const DEFAULT: Threshold = Threshold {
 };
 
 /// The noise-aware rule's numbers (see the module comment).
-const NOISE_AWARE: Rule =
-    Rule::NoiseAware { floor_psnr: 25.0, ceiling_flip: 0.1, max_mean_z2: 2.0, max_outliers: 0.001 };
-
-/// The course references' variance per sample relative to ours (see the
-/// module comment): the largest measured, so a noisier reference is never
-/// mistaken for a bias.
-pub const REF_NOISE_PER_SAMPLE: f64 = 4.0;
-
-/// The reference's variance relative to ours in a render of `spp` samples,
-/// for a reference of `ref_spp`: what [`block_z`](super::measures::block_z)
-/// widens the noise by.
-pub fn ref_variance_ratio(spp: u32, ref_spp: u32) -> f64 {
-    REF_NOISE_PER_SAMPLE * f64::from(spp.max(1)) / f64::from(ref_spp.max(1))
-}
+const NOISE_AWARE: Rule = Rule::NoiseAware {
+    floor_psnr: 25.0,
+    ceiling_flip: 0.1,
+    max_mean_z2: 2.0,
+    max_outliers: 0.001,
+    max_luminance_z: 4.0,
+};
 
 /// The bar of single-sample textured scenes (hw4).
 pub const TEXTURED: Threshold = Threshold {
@@ -338,26 +360,50 @@ const EXCEPTIONS: &[(&str, &str, &str, Threshold)] = &[
 ];
 
 /// Known quirks of the course's data (see the shared folder's README): an
-/// image whose scene file is not the scene its expected image shows.
-/// (homework, encoding or "*", image name, the quirk). Such an image is
-/// judged by its usual bar and shown with its numbers, but a miss is counted
-/// as the data's, not ours.
-const QUIRKS: &[(&str, &str, &str, &str)] = &[(
+/// image whose scene file is not the scene its expected image shows, or
+/// that disagrees with the course's own images of the same scene.
+/// (homework, encoding or "*", image name — `*suffix` matches every name
+/// whose stem ends so —, the quirk). Such an image is judged by its usual
+/// bar and shown with its numbers, but a miss is counted as the data's, not
+/// ours.
+const QUIRKS: &[(&str, &str, &str, &str)] = &[
+    (
+        "hw7",
+        "*",
+        "*_russian",
+        "data quirk: the course's Russian-roulette images are 1.30–1.55× as bright (mean luminance) as \
+         its own images of the same scene and year without roulette (diffuse 1.093 against 0.748 in \
+         2022), which an unbiased estimator converges to; the course's roulette rule is not known",
+    ),
+    (
     "hw4",
     "json",
     "bump_mapping_transformed.png",
     "data quirk: the 2025 JSON scales the ellipsoid by (-1.5, 1, 1), the XML by (-2, 1, 1), and the only \
      expected image was rendered from the XML",
-)];
+    ),
+];
 
 /// The known data quirk of one camera's image of a case, if any.
 pub fn known_quirk(case: &Case, image_name: &str) -> Option<&'static str> {
     QUIRKS
         .iter()
         .find(|(hw, enc, name, _)| {
-            *hw == case.hw && (*enc == "*" || *enc == case.encoding.name()) && *name == image_name
+            *hw == case.hw && (*enc == "*" || *enc == case.encoding.name()) && name_matches(name, image_name)
         })
         .map(|q| q.3)
+}
+
+/// Whether an image name matches a table's name: exactly, or, for
+/// `*suffix`, when the name's stem ends with `suffix` (`*_russian` matches
+/// `glass_russian.exr`).
+fn name_matches(pattern: &str, image_name: &str) -> bool {
+    match pattern.strip_prefix('*') {
+        Some(suffix) => std::path::Path::new(image_name)
+            .file_stem()
+            .is_some_and(|s| s.to_string_lossy().ends_with(suffix)),
+        None => pattern == image_name,
+    }
 }
 
 /// hw4 scenes whose look is Perlin noise (see the module comment).
@@ -437,15 +483,39 @@ mod tests {
     }
 
     #[test]
+    fn roulette_images_of_hw7_are_known_quirks() {
+        assert!(known_quirk(&case("hw7"), "glass_next_russian.exr").is_some());
+        assert!(known_quirk(&case("hw7"), "glass_next.exr").is_none());
+        assert!(known_quirk(&case("hw3"), "glass_next_russian.exr").is_none());
+    }
+
+    #[test]
     fn the_noise_aware_bar_judges_block_z_scores() {
         let b = STOCHASTIC.bar();
         let c = pair(30.0, 0.05);
-        let z = |mean_z2, outliers| BlockZ { mean_z2, outliers, max_abs_z: 6.0, count: 10_000 };
-        assert!(b.accepts(&c, None, None, Some(&z(1.1, 0.0))));
-        assert!(!b.accepts(&c, None, None, Some(&z(2.5, 0.0))), "a bias as large as the noise everywhere");
-        assert!(!b.accepts(&c, None, None, Some(&z(1.1, 0.01))), "a local bias");
+        let z = |mean_z2, outliers, luminance_z| BlockZ {
+            space: Space::Display,
+            block: 8,
+            mean_z2,
+            outliers,
+            max_abs_z: 6.0,
+            count: 10_000,
+            left_out: 0,
+            luminance_z,
+            mean_luminance: [0.5, 0.5],
+        };
+        assert!(b.accepts(&c, None, None, Some(&z(1.1, 0.0, 1.0))));
+        assert!(
+            !b.accepts(&c, None, None, Some(&z(2.5, 0.0, 1.0))),
+            "a bias as large as the noise everywhere"
+        );
+        assert!(!b.accepts(&c, None, None, Some(&z(1.1, 0.01, 1.0))), "a local bias");
+        assert!(!b.accepts(&c, None, None, Some(&z(1.1, 0.0, -4.5))), "a global bias");
         assert!(!b.accepts(&c, None, None, None), "no second render, no verdict");
-        assert!(!b.accepts(&pair(20.0, 0.05), None, None, Some(&z(1.0, 0.0))), "below the floor");
-        assert_eq!(ref_variance_ratio(9, 36), 1.0);
+        assert!(!b.accepts(&pair(20.0, 0.05), None, None, Some(&z(1.0, 0.0, 1.0))), "below the floor");
+        // Judged in linear radiance, a noisy 4-spp image has no PSNR floor.
+        let linear = STOCHASTIC.bar_in(Space::Linear);
+        assert!(linear.accepts(&pair(12.0, 0.4), None, None, Some(&z(1.0, 0.0, 1.0))));
+        assert!(!linear.accepts(&pair(12.0, 0.4), None, None, Some(&z(3.0, 0.0, 1.0))));
     }
 }

@@ -33,7 +33,7 @@ pub mod html;
 pub mod json;
 
 use crate::conformance::thresholds::{BlockZ, StatsPair};
-use crate::conformance::{Bar, CaseResult, ImageResult, Rule};
+use crate::conformance::{Bar, CaseResult, HdrResult, ImageResult, Rule};
 use crate::image::{Comparison, MetricSpace};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -108,6 +108,15 @@ pub struct HomeworkSummary {
     /// Seconds spent on its scenes (summed over scenes; with several jobs
     /// this exceeds the wall-clock time).
     pub seconds: f64,
+    /// The failed and errored rows, as `image (verdict)` or the scene's
+    /// label when it has no image.
+    pub problems: Vec<String>,
+    /// How many rows each kind of bar judged (`fixed`, `noise-aware`, ...),
+    /// in order of first appearance.
+    pub bars: Vec<(String, usize)>,
+    /// The sample counts the noise-aware rows were rendered at (lowest,
+    /// highest), when there were any.
+    pub noise_spp: Option<[u32; 2]>,
 }
 
 /// The verdict of a row.
@@ -204,10 +213,28 @@ pub struct ImageEntry {
     pub metrics: Option<Metrics>,
     /// The bar it was judged by.
     pub threshold: ThresholdEntry,
+    /// An HDR camera's linear image against the course's, when it has one.
+    pub hdr: Option<HdrEntry>,
     /// Render seconds.
     pub seconds: f64,
     /// Why it could not be written or compared.
     pub error: Option<String>,
+}
+
+/// An HDR row's linear images and their numbers.
+#[derive(Clone, Debug, Serialize)]
+pub struct HdrEntry {
+    /// Our `.exr`, relative to the report folder.
+    pub render: String,
+    /// The copy of the course's `.exr`/`.hdr`.
+    pub expected: Option<String>,
+    /// Thumbnails of both, tone-mapped by one curve (keyed by the course's
+    /// image): ours, then the course's.
+    pub thumbs: Option<[String; 2]>,
+    /// Relative mean absolute error `Σ|t − r| / Σ|r|`.
+    pub relative_mae: f64,
+    /// Mean HDR-FLIP.
+    pub hdr_flip: f64,
 }
 
 /// Thumbnail paths, relative to the report folder.
@@ -258,11 +285,23 @@ pub struct Metrics {
     pub contrast: Option<[f64; 2]>,
     /// Whether the statistics agreed (true when not tested).
     pub stats_ok: bool,
-    /// Noise-aware rule: mean z² of the 8×8 block means (see
-    /// `conformance::measures::block_z`).
+    /// Noise-aware rule: the space the noise was judged in (`display` on the
+    /// 8-bit images, `linear` against the course's `.exr`).
+    pub noise_space: Option<&'static str>,
+    /// Noise-aware rule: the block edge in pixels.
+    pub block: Option<u32>,
+    /// Noise-aware rule: mean z² of the block means (see
+    /// `conformance::noise::block_z`).
     pub block_mean_z2: Option<f64>,
     /// Noise-aware rule: share of blocks with |z| > 5.
     pub block_outliers: Option<f64>,
+    /// Noise-aware rule: blocks left out (showing a light, or clipped at white).
+    pub left_out_blocks: Option<usize>,
+    /// Noise-aware rule: our mean luminance minus the course's, in standard
+    /// errors.
+    pub luminance_z: Option<f64>,
+    /// Noise-aware rule: mean luminance of ours and of the expected image.
+    pub mean_luminance: Option<[f64; 2]>,
     /// Whether the z-scores met the bar (true when not tested).
     pub z_ok: bool,
 }
@@ -289,6 +328,9 @@ pub struct ThresholdEntry {
     pub max_mean_z2: Option<f64>,
     /// Noise-aware: the largest share of blocks with |z| > 5.
     pub max_outliers: Option<f64>,
+    /// Noise-aware: the largest |offset| of the mean luminance in standard
+    /// errors.
+    pub max_luminance_z: Option<f64>,
 }
 
 /// How the run was made, for the report's header.
@@ -320,17 +362,34 @@ impl Report {
                 hw: s.hw.clone(),
                 counts: Counts::default(),
                 seconds: 0.0,
+                problems: Vec::new(),
+                bars: Vec::new(),
+                noise_spp: None,
             });
             hw.counts.scenes += 1;
             summary.scenes += 1;
             hw.seconds += s.seconds;
-            let verdicts: Vec<Verdict> = match s.verdict() {
-                Some(v) => vec![v],
-                None => s.images.iter().map(|i| i.verdict).collect(),
-            };
-            for v in verdicts {
+            if let Some(v) = s.verdict() {
                 hw.counts.add(v);
                 summary.add(v);
+                if matches!(v, Verdict::Fail | Verdict::Error) {
+                    hw.problems.push(format!("{} ({})", s.label, v.name()));
+                }
+            }
+            for i in &s.images {
+                hw.counts.add(i.verdict);
+                summary.add(i.verdict);
+                if matches!(i.verdict, Verdict::Fail | Verdict::Error) {
+                    hw.problems.push(format!("{} ({})", i.image_name, i.verdict.name()));
+                }
+                match hw.bars.iter_mut().find(|(k, _)| k == i.threshold.kind) {
+                    Some((_, n)) => *n += 1,
+                    None => hw.bars.push((i.threshold.kind.to_string(), 1)),
+                }
+                if i.threshold.kind == "noise-aware" {
+                    let spp = i.threshold.spp;
+                    hw.noise_spp = Some(hw.noise_spp.map_or([spp, spp], |[a, b]| [a.min(spp), b.max(spp)]));
+                }
             }
         }
         let mut homeworks: Vec<HomeworkSummary> = per_hw.into_values().collect();
@@ -462,10 +521,33 @@ fn image_entry(i: &ImageResult, root: &Path, outdir: &Path, unsupported: bool) -
             pair_flip: i.pair.as_ref().map(|p| p.flip),
             max_mean_z2: t.tests_z().then_some(t.max_mean_z2),
             max_outliers: t.tests_z().then_some(t.max_outliers),
+            max_luminance_z: t.tests_z().then_some(t.max_luminance_z),
         },
+        hdr: i.hdr.as_ref().map(|h| hdr_entry(h, root, outdir, &mut note)),
         seconds: i.seconds,
         error,
     }
+}
+
+/// Copies the course's HDR image and makes the tone-mapped pair of
+/// thumbnails; a problem is noted on the row.
+fn hdr_entry(h: &HdrResult, root: &Path, outdir: &Path, note: &mut impl FnMut(String)) -> HdrEntry {
+    let mut entry = HdrEntry {
+        render: assets::relative(&h.render, outdir),
+        expected: None,
+        thumbs: None,
+        relative_mae: h.relative_mae,
+        hdr_flip: h.hdr_flip,
+    };
+    match assets::copy_expected(&h.expected, root, outdir) {
+        Ok(copy) => {
+            let original = copy.original.unwrap_or(copy.shown);
+            entry.thumbs = assets::hdr_thumbnails(&h.render, &original, outdir).map_err(&mut *note).ok();
+            entry.expected = Some(assets::relative(&original, outdir));
+        }
+        Err(e) => note(e),
+    }
+    entry
 }
 
 fn metrics(
@@ -496,8 +578,13 @@ fn metrics(
         mean_luma: stats.map(|s| [s.ours.mean, s.reference.mean]),
         contrast: stats.map(|s| [s.ours.contrast, s.reference.contrast]),
         stats_ok: t.stats_ok(stats),
+        noise_space: z.map(|z| z.space.name()),
+        block: z.map(|z| z.block),
         block_mean_z2: z.map(|z| z.mean_z2),
         block_outliers: z.map(|z| z.outliers),
+        left_out_blocks: z.map(|z| z.left_out),
+        luminance_z: z.map(|z| z.luminance_z),
+        mean_luminance: z.map(|z| z.mean_luminance),
         z_ok: t.z_ok(z),
     }
 }
