@@ -459,6 +459,10 @@ pub enum DecalMode {
     /// `km`); a luster extension, mainly for shaders' `reflect`. A point of a
     /// material with no mirror part becomes a mirror.
     ReplaceKm,
+    /// A shader sets every material output its script defines (base and
+    /// specular colour, roughness, metalness, emission, mirror reflectance);
+    /// a luster extension for shader maps only (`docs/shaders.md`).
+    Material,
 }
 
 /// How Perlin noise in [-1, 1] becomes a texture value in [0, 1].

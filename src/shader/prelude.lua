@@ -22,6 +22,10 @@ typedef struct {
   int32_t object_id, instance_id, depth, pixel_x, pixel_y, __luster_pad;
 } luster_shade;
 typedef struct { double r, g, b; int32_t bad; } luster_out;
+typedef struct {
+  double color[3], specular[3], emission[3], reflect[3];
+  double roughness, metalness;
+} luster_material;
 typedef struct { uint64_t start_ns, timeout_ns; int32_t expired; } luster_clock;
 typedef struct { double f1, f2, px, py, pz, id; } luster_cell;
 typedef struct {
@@ -54,6 +58,7 @@ local shade = ffi.new("luster_shade")
 local shade3 = ffi.new("luster_shade[3]")
 local shade_size = ffi.sizeof("luster_shade")
 local out = ffi.new("luster_out")
+local material = ffi.new("luster_material")
 local clock = ffi.new("luster_clock")
 local grad = ffi.new("luster_vec3")
 local cell = ffi.new("luster_cell")
@@ -800,8 +805,52 @@ end
 local function make_entry(env, entry, shader_name)
   local f = env[entry]
   if type(f) ~= "function" then return nil end
-  if entry == "height" or entry == "density" then return scalar_entry(f, shader_name, entry) end
+  if entry == "height" or entry == "density" or entry == "roughness" or entry == "metalness" then
+    return scalar_entry(f, shader_name, entry)
+  end
   return color_entry(f, shader_name, entry)
+end
+
+-- DecalMode material: every material output the script defines, in one call
+-- from Rust, checked against its range (docs/shaders.md, "Material outputs").
+-- hi == nil: no upper bound (emitted radiance).
+local function material_color(f, shader_name, entry, dst, hi)
+  local r, g, b = f(shade)
+  if isvec(r) and g == nil then r, g, b = r.x, r.y, r.z end
+  local names = { "red", "green", "blue" }
+  for i = 1, 3 do
+    local v = select(i, r, g, b)
+    if not finite(v) then
+      bad(shader_name, entry, format("%s as its %s value (expected finite r, g, b numbers or a vec3)", describe(v), names[i]))
+    end
+    if v < 0 or (hi and v > hi) then
+      local range = hi and "0 to 1: a reflectance" or "0 or more: a radiance"
+      bad(shader_name, entry, format("%s as its %s value (expected %s)", describe(v), names[i], range))
+    end
+  end
+  dst[0], dst[1], dst[2] = r, g, b
+end
+local function material_scalar(f, shader_name, entry)
+  local v = f(shade)
+  if not finite(v) then bad(shader_name, entry, describe(v) .. " (expected a finite number from 0 to 1)") end
+  if v < 0 or v > 1 then bad(shader_name, entry, describe(v) .. " (expected a number from 0 to 1)") end
+  return v
+end
+local function make_material(env, shader_name)
+  local color, specular, emission, reflect = env.color, env.specular, env.emission, env.reflect
+  local roughness, metalness = env.roughness, env.metalness
+  local function fn(f) if type(f) == "function" then return f end return nil end
+  color, specular, emission, reflect = fn(color), fn(specular), fn(emission), fn(reflect)
+  roughness, metalness = fn(roughness), fn(metalness)
+  if not (color or specular or emission or reflect or roughness or metalness) then return nil end
+  return function()
+    if color then material_color(color, shader_name, "color", material.color, 1) end
+    if specular then material_color(specular, shader_name, "specular", material.specular, 1) end
+    if reflect then material_color(reflect, shader_name, "reflect", material.reflect, 1) end
+    if emission then material_color(emission, shader_name, "emission", material.emission, nil) end
+    if roughness then material.roughness = material_scalar(roughness, shader_name, "roughness") end
+    if metalness then material.metalness = material_scalar(metalness, shader_name, "metalness") end
+  end
 end
 
 -- Scripts run in their own environments, but the real globals lose the
@@ -816,6 +865,7 @@ return {
   make_env = make_env,
   make_entry = make_entry,
   make_height3 = make_height3,
+  make_material = make_material,
   tick = tick,
   -- LuaJIT's messages name the records by number ('struct 97'): the names
   -- the author knows them by.
@@ -824,7 +874,9 @@ return {
   shade = address(shade),
   shade3 = address(shade3),
   out = address(out),
+  material = address(material),
   clock = address(clock),
   sizes = { shade = ffi.sizeof("luster_shade"), shade3 = ffi.sizeof("luster_shade[3]"), out = ffi.sizeof("luster_out"),
+    material = ffi.sizeof("luster_material"),
     clock = ffi.sizeof("luster_clock"), cell = ffi.sizeof("luster_cell") },
 }

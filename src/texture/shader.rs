@@ -10,6 +10,7 @@
 //! | `replace_all` | `color` | the point's colour, unlit |
 //! | `replace_km` | `reflect` | the mirror reflectance |
 //! | `bump_normal` | `height` | [`bump::height_bump`], scaled by `BumpFactor` |
+//! | `material` | every material output the script defines | [`apply_outputs`] |
 //!
 //! `replace_normal` and `replace_background` take no shader: a tangent-space
 //! normal is what `height` already expresses better, and the background has
@@ -18,12 +19,14 @@
 use std::time::Duration;
 
 use super::{bump, Image, TexFrame, TextureMap, Textures};
+use crate::bsdf::{Brdf, Microfacet};
 use crate::material::Material;
 use crate::material::Specular;
 use crate::math::{Vec2, Vec3};
 use crate::scene::description::{DecalMode, ImageDesc, TextureMapDesc, TextureSource};
 use crate::shader::{
-    ImageSampler, SampleFilter, ShadeInput, ShaderError, ShaderImages, ShaderSet, ShaderSource,
+    ImageSampler, MaterialOutputs, SampleFilter, ShadeInput, ShaderError, ShaderImages, ShaderSet,
+    ShaderSource,
 };
 use std::sync::Arc;
 
@@ -44,6 +47,7 @@ fn entry_for(decal: DecalMode) -> Option<&'static str> {
         }
         DecalMode::ReplaceKm => Some("reflect"),
         DecalMode::BumpNormal => Some("height"),
+        DecalMode::Material => Some("material"),
         DecalMode::ReplaceNormal | DecalMode::ReplaceBackground => None,
     }
 }
@@ -97,7 +101,7 @@ pub fn compile(
                 map: m,
                 message: format!(
                     "a shader cannot drive DecalMode {} (shaders take replace_kd, blend_kd, replace_ks, \
-                     replace_all, replace_km or bump_normal)",
+                     replace_all, replace_km, bump_normal or material)",
                     decal_name(decal)
                 ),
             });
@@ -105,11 +109,22 @@ pub fn compile(
         let has = match entry {
             "color" => set.has_color(id),
             "reflect" => set.has_reflect(id),
+            "material" => set.has_material(id),
             _ => set.has_height(id),
         };
         if !has {
             let name = set.name(id).unwrap_or("?");
             let TextureSource::Shader { path, .. } = &descs[m].source else { continue };
+            if decal == DecalMode::Material {
+                return Err(MapError {
+                    map: m,
+                    message: format!(
+                        "shader '{name}': {} defines none of color, specular, roughness, metalness, \
+                         emission or reflect, one of which DecalMode material needs",
+                        path.display()
+                    ),
+                });
+            }
             return Err(MapError {
                 map: m,
                 message: format!(
@@ -131,6 +146,7 @@ fn decal_name(d: DecalMode) -> &'static str {
         DecalMode::ReplaceAll => "replace_all",
         DecalMode::ReplaceKm => "replace_km",
         DecalMode::BumpNormal => "bump_normal",
+        DecalMode::Material => "material",
         DecalMode::ReplaceNormal => "replace_normal",
         DecalMode::ReplaceBackground => "replace_background",
     }
@@ -248,10 +264,55 @@ impl Textures {
                     }
                 }
             }
+            DecalMode::Material => apply_outputs(&set.material(id, &input(f, f.p_object, f.uv, *n))?, m),
             DecalMode::ReplaceNormal | DecalMode::ReplaceBackground => {}
         }
         Ok(None)
     }
+}
+
+/// What a `DecalMode material` shader's outputs do to the point's material
+/// (the table in `docs/shaders.md`, "Material outputs"):
+///
+/// * `color` is the base colour (`kd`), `specular` the specular colour
+///   (`ks`), `reflect` the mirror reflectance (a non-mirror becomes a mirror,
+///   as with `replace_km`), `emission` the emitted radiance;
+/// * `roughness` or `metalness` switch the point to the GGX microfacet BRDF
+///   ([`Microfacet`]) whatever the material's own model: `α = roughness²`,
+///   or without a `roughness` the width matching the material's exponent;
+///   metalness `μ` turns the diffuse part off and tints the specular colour
+///   by the base: `kd ← (1 - μ) kd`, `ks ← (1 - μ) ks + μ kd`.
+pub fn apply_outputs(o: &MaterialOutputs, m: &mut Material) {
+    if let Some(c) = o.color {
+        m.diffuse = Vec3::from_array(c);
+    }
+    if let Some(c) = o.specular {
+        m.specular = Vec3::from_array(c);
+    }
+    if let Some(c) = o.reflect {
+        m.mirror = Vec3::from_array(c);
+        if m.kind == Specular::None {
+            m.kind = Specular::Mirror;
+        }
+    }
+    if let Some(c) = o.emission {
+        m.emission = Vec3::from_array(c);
+    }
+    if o.roughness.is_none() && o.metalness.is_none() {
+        return;
+    }
+    let lobe = match (o.roughness, m.brdf) {
+        (Some(r), _) => Microfacet::from_roughness(r),
+        (None, Some(Brdf::Microfacet(mf))) => mf,
+        (None, Some(Brdf::Phong(p))) => Microfacet::from_exponent(p.exponent),
+        (None, Some(Brdf::TorranceSparrow(t))) => Microfacet::from_exponent(t.exponent),
+        (None, None) => Microfacet::from_exponent(m.phong),
+    };
+    if let Some(mu) = o.metalness {
+        m.specular = m.specular * (1.0 - mu) + m.diffuse * mu;
+        m.diffuse *= 1.0 - mu;
+    }
+    m.brdf = Some(Brdf::Microfacet(lobe));
 }
 
 #[cfg(test)]
