@@ -424,5 +424,70 @@ mod tests {
         assert!(e.message.contains("s.lua:2: bad"), "{}", e.message);
     }
 
+    #[test]
+    fn material_outputs_set_the_material_and_switch_to_the_microfacet_model() {
+        let code = "function color(s) return 0.8, 0.4, 0.2 end\n\
+                    function specular(s) return 0.04, 0.04, 0.04 end\n\
+                    function roughness(s) return 0.5 end\n\
+                    function metalness(s) return 0.25 end\n\
+                    function emission(s) return 3, 2, 1 end";
+        let descs = [map(code, DecalMode::Material, &[])];
+        let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
+        let mut mat = Material { phong: 30.0, ..Material::default() };
+        let mut n = Vec3::Z;
+        assert_eq!(tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut n).unwrap(), None);
+        let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-6;
+        assert!(close(mat.diffuse, Vec3::new(0.6, 0.3, 0.15)), "{}", mat.diffuse);
+        assert!(close(mat.specular, Vec3::new(0.23, 0.13, 0.08)), "{}", mat.specular);
+        assert_eq!(mat.emission, Vec3::new(3.0, 2.0, 1.0));
+        assert_eq!(mat.brdf, Some(Brdf::Microfacet(Microfacet { alpha: 0.25 })));
+        assert_eq!(mat.kind, Specular::None);
+    }
+
+    #[test]
+    fn material_mode_keeps_what_the_script_does_not_define() {
+        // Only emission: the material's own model, colours and exponent stay.
+        let descs = [map("function emission(s) return 0, 5, 0 end", DecalMode::Material, &[])];
+        let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
+        let before = Material { diffuse: Vec3::splat(0.5), specular: Vec3::ONE, phong: 40.0, ..Material::default() };
+        let mut mat = before;
+        tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut Vec3::Z.clone()).unwrap();
+        assert_eq!((mat.diffuse, mat.specular, mat.phong, mat.brdf), (before.diffuse, before.specular, 40.0, None));
+        assert_eq!(mat.emission, Vec3::new(0.0, 5.0, 0.0));
+        // Metalness without roughness keeps the exponent's highlight width.
+        let descs = [map("function metalness(s) return 1 end", DecalMode::Material, &[])];
+        let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
+        let mut mat = before;
+        tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut Vec3::Z.clone()).unwrap();
+        assert_eq!((mat.diffuse, mat.specular), (Vec3::ZERO, Vec3::splat(0.5)));
+        assert_eq!(mat.brdf, Some(Brdf::Microfacet(Microfacet::from_exponent(40.0))));
+    }
+
+    #[test]
+    fn out_of_range_material_outputs_are_one_sentence_errors() {
+        for (code, what) in [
+            ("function roughness(s) return 1.5 end", "roughness() returned 1.5 (expected a number from 0 to 1)"),
+            ("function metalness(s) return -0.1 end", "metalness() returned -0.1"),
+            ("function roughness(s) return 0/0 end", "roughness() returned NaN"),
+            ("function color(s) return 1.2, 0, 0 end", "color() returned 1.2 as its red value (expected 0 to 1"),
+            ("function specular(s) return 0, 0, -1 end", "specular() returned -1 as its blue value"),
+            ("function emission(s) return 0, -2, 0 end", "emission() returned -2 as its green value (expected 0 or more"),
+            ("function emission(s) return 1/0, 0, 0 end", "emission() returned inf as its red value"),
+            ("function reflect(s) return 0.5 end", "reflect() returned nothing (nil) as its green value"),
+        ] {
+            let descs = [map(code, DecalMode::Material, &[])];
+            let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
+            let mut mat = Material::default();
+            let e = tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut Vec3::Z.clone()).unwrap_err();
+            assert_eq!(e.kind, crate::shader::ShaderErrorKind::BadResult, "{code}: {e}");
+            let text = e.to_string();
+            assert!(text.contains(what) && !text.contains('\n'), "{code}: {text}");
+        }
+        // A script with no material output cannot drive the mode.
+        let descs = [map("function height(s) return 0 end", DecalMode::Material, &[])];
+        let e = compile(&descs, DEFAULT, None).unwrap_err();
+        assert!(e.message.contains("defines none of color, specular, roughness"), "{}", e.message);
+    }
+
     const DEFAULT: Duration = crate::shader::DEFAULT_TIMEOUT;
 }
