@@ -52,6 +52,7 @@
 mod error;
 mod ffi;
 mod instrument;
+mod modules;
 mod params;
 /// The instrumenter, for the fuzz entry points.
 pub(crate) use instrument::instrument as instrument_script;
@@ -60,6 +61,8 @@ mod state;
 mod tests;
 #[cfg(test)]
 mod tests_author;
+#[cfg(test)]
+mod tests_modules;
 #[cfg(test)]
 mod tests_sandbox;
 mod threads;
@@ -70,6 +73,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 pub use error::{ShaderError, ShaderErrorKind};
+pub use modules::{search_path, set_library_dirs, MAX_MODULE_BYTES};
 
 /// The pixel `--debug-pixel` names, packed (`u64::MAX`: none).
 static DEBUG_PIXEL: AtomicU64 = AtomicU64::new(u64::MAX);
@@ -282,6 +286,7 @@ pub(crate) struct Shared {
     sources: Vec<ShaderSource>,
     timeout: Duration,
     images: Option<ShaderImages>,
+    modules: Arc<modules::Modules>,
 }
 
 /// A compiled set of shaders, addressed by their index in the list given to
@@ -306,9 +311,25 @@ impl ShaderSet {
         timeout: Duration,
         images: Option<ShaderImages>,
     ) -> Result<ShaderSet, ShaderError> {
+        ShaderSet::with_modules(sources, timeout, images, Vec::new())
+    }
+
+    /// Like [`ShaderSet::with_images`], with the folders `require` searches,
+    /// in order ([`search_path`] makes them from the scene's).
+    pub fn with_modules(
+        sources: Vec<ShaderSource>,
+        timeout: Duration,
+        images: Option<ShaderImages>,
+        module_dirs: Vec<PathBuf>,
+    ) -> Result<ShaderSet, ShaderError> {
         static NEXT_ID: AtomicU64 = AtomicU64::new(1);
-        let shared =
-            Arc::new(Shared { id: NEXT_ID.fetch_add(1, Ordering::Relaxed), sources, timeout, images });
+        let shared = Arc::new(Shared {
+            id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
+            sources,
+            timeout,
+            images,
+            modules: Arc::new(modules::Modules::new(module_dirs)),
+        });
         let state = state::ThreadState::new(&shared)?;
         let entries = (0..shared.sources.len()).map(|id| state.entries(id)).collect();
         threads::adopt(&shared, state);
@@ -323,6 +344,14 @@ impl ShaderSet {
     /// Whether the set holds no shader.
     pub fn is_empty(&self) -> bool {
         self.entries.is_empty()
+    }
+
+    /// The module files the scripts have required so far (canonical paths):
+    /// every top-level `require` once the set is built, and those a script
+    /// makes inside its functions once a call has made them. A watcher
+    /// watches these with the scripts.
+    pub fn required_files(&self) -> Vec<PathBuf> {
+        self.shared.modules.required()
     }
 
     /// The name of shader `id`.

@@ -5,8 +5,10 @@
 -- to build sandboxes and entry wrappers. Its locals (ffi, the built-in table,
 -- the scratch records) are reachable from user code only through the wrapper
 -- functions: user scripts get no debug library, no getfenv and no ffi.
-local builtins_address, log, images_ctx, image_names = ...
+local builtins_address, log, images_ctx, image_names, load_module = ...
 local ffi = ffi
+-- Kept for require (below) before the real globals lose them.
+local loadstring, setfenv, pcall = loadstring, setfenv, pcall
 local error, type, tostring, select, pairs, ipairs = error, type, tostring, select, pairs, ipairs
 local setmetatable, tonumber = setmetatable, tonumber
 local floor, sqrt, format, abs, min = math.floor, math.sqrt, string.format, math.abs, math.min
@@ -564,9 +566,8 @@ local REMOVED = {
   debug = "it would reach past the sandbox",
   ffi = "it would reach past the sandbox",
   jit = "it would reach past the sandbox",
-  package = "shaders cannot load modules",
-  require = "shaders cannot load modules",
-  module = "shaders cannot load modules",
+  package = "modules are loaded with require \"name\" only",
+  module = "a module returns its table instead (see require in docs/shaders.md)",
   load = "shaders cannot compile code while they run",
   loadstring = "shaders cannot compile code while they run",
   loadfile = "shaders cannot read files",
@@ -653,8 +654,10 @@ local function convert(kind, v)
   return nil, format("is %s, but the script declares %s", got[given] or given, want[kind])
 end
 
+local require_module
 local function make_env(shader_name, params)
   local env = {}
+  env.require = require_module
   for _, k in ipairs(SAFE_GLOBALS) do env[k] = real_globals[k] end
   for k, v in pairs(BUILTINS) do env[k] = v end
   env.math = copy(math, { random = true, randomseed = true })
@@ -730,6 +733,47 @@ local function make_env(shader_name, params)
   env._G = env
   setmetatable(env, removed("", REMOVED))
   return env, function() return declared end
+end
+
+---------------------------------------------------------------------------
+-- require "name": Rust finds and reads the file inside the allowed folders
+-- (modules.rs) and instruments it for the time limit; here it runs once per
+-- state, in its own sandboxed environment, and its result is cached. A
+-- module being loaded that is required again is a cycle, an error.
+---------------------------------------------------------------------------
+-- Results by name, and by file: "lib.wood" and "lib/wood" are one module.
+local by_name, by_file, module_loading, loading_chain = {}, {}, {}, {}
+require_module = function(name)
+  if type(name) ~= "string" then
+    error(format("require: expected a module name (a string), got a %s", typename(name)), 2)
+  end
+  local cached = by_name[name]
+  if cached ~= nil then return cached end
+  local file, code, key = load_module(name)
+  if not file then error(code, 2) end
+  cached = by_file[key]
+  if cached ~= nil then
+    by_name[name] = cached
+    return cached
+  end
+  if module_loading[key] then
+    local chain = {}
+    for i, n in ipairs(loading_chain) do chain[i] = format("'%s'", n) end
+    chain[#chain + 1] = format("'%s'", name)
+    error(format("require: modules require each other in a cycle: %s", table.concat(chain, " -> ")), 2)
+  end
+  local f, err = loadstring(code, "@" .. file)
+  if not f then error(err, 0) end
+  setfenv(f, (make_env("module " .. name, {})))
+  module_loading[key] = true
+  loading_chain[#loading_chain + 1] = name
+  local ok, result = pcall(f, tick)
+  loading_chain[#loading_chain] = nil
+  module_loading[key] = nil
+  if not ok then error(result, 0) end
+  if result == nil then result = true end
+  by_name[name], by_file[key] = result, result
+  return result
 end
 
 ---------------------------------------------------------------------------

@@ -73,6 +73,16 @@ impl ThreadState {
                 Ok(())
             })
             .map_err(internal)?;
+        let modules = Arc::clone(&shared.modules);
+        let load_module = lua
+            .create_function(move |_, name: String| {
+                // (file as shown, code, canonical path) or (nil, why).
+                Ok(match modules.load(&name) {
+                    Ok((file, code, key)) => (Some(file), code, Some(key)),
+                    Err(why) => (None, why, None),
+                })
+            })
+            .map_err(internal)?;
         let images: Option<Box<Arc<dyn ImageSampler>>> =
             shared.images.as_ref().map(|i| Box::new(Arc::clone(&i.sampler)));
         let images_ctx = images.as_ref().map_or(std::ptr::null_mut(), |b| {
@@ -85,7 +95,13 @@ impl ThreadState {
         let api: Table = lua
             .load(PRELUDE)
             .set_name("@luster/prelude.lua")
-            .call((LightUserData(ffi::builtins_address()), log, LightUserData(images_ctx), image_names))
+            .call((
+                LightUserData(ffi::builtins_address()),
+                log,
+                LightUserData(images_ctx),
+                image_names,
+                load_module,
+            ))
             .map_err(internal)?;
         // The C declarations in the prelude must describe Rust's records.
         let sizes: Table = api.get("sizes").map_err(internal)?;

@@ -273,6 +273,12 @@ impl Textures {
         Textures { images, maps, lists: Vec::new(), background: background.map(|b| b as u32), shaders }
     }
 
+    /// The module files the shader maps' scripts required (canonical
+    /// paths), for a watcher to watch with the scripts themselves.
+    pub fn shader_modules(&self) -> Vec<std::path::PathBuf> {
+        self.shaders.as_ref().map(ShaderSet::required_files).unwrap_or_default()
+    }
+
     /// Records an object's maps; returns its list.
     pub fn add_list(&mut self, maps: &[usize]) -> TexList {
         let start = self.lists.len() as u32;

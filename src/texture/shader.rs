@@ -66,6 +66,16 @@ pub fn compile(
     timeout: Duration,
     images: Option<ShaderImages>,
 ) -> Result<Option<ShaderSet>, MapError> {
+    compile_with_modules(descs, timeout, images, Vec::new())
+}
+
+/// Like [`compile`], with the folders the scripts' `require` searches.
+pub fn compile_with_modules(
+    descs: &[TextureMapDesc],
+    timeout: Duration,
+    images: Option<ShaderImages>,
+    module_dirs: Vec<std::path::PathBuf>,
+) -> Result<Option<ShaderSet>, MapError> {
     let mut maps = Vec::new();
     let mut sources = Vec::new();
     for (i, d) in descs.iter().enumerate() {
@@ -79,7 +89,9 @@ pub fn compile(
     if sources.is_empty() {
         return Ok(None);
     }
-    let make = |sources: Vec<ShaderSource>| ShaderSet::with_images(sources, timeout, images.clone());
+    let make = |sources: Vec<ShaderSource>| {
+        ShaderSet::with_modules(sources, timeout, images.clone(), module_dirs.clone())
+    };
     let set = match make(sources.clone()) {
         Ok(set) => set,
         // The set reports the first script that fails; compile them one by
@@ -449,10 +461,14 @@ mod tests {
         // Only emission: the material's own model, colours and exponent stay.
         let descs = [map("function emission(s) return 0, 5, 0 end", DecalMode::Material, &[])];
         let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
-        let before = Material { diffuse: Vec3::splat(0.5), specular: Vec3::ONE, phong: 40.0, ..Material::default() };
+        let before =
+            Material { diffuse: Vec3::splat(0.5), specular: Vec3::ONE, phong: 40.0, ..Material::default() };
         let mut mat = before;
         tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut Vec3::Z.clone()).unwrap();
-        assert_eq!((mat.diffuse, mat.specular, mat.phong, mat.brdf), (before.diffuse, before.specular, 40.0, None));
+        assert_eq!(
+            (mat.diffuse, mat.specular, mat.phong, mat.brdf),
+            (before.diffuse, before.specular, 40.0, None)
+        );
         assert_eq!(mat.emission, Vec3::new(0.0, 5.0, 0.0));
         // Metalness without roughness keeps the exponent's highlight width.
         let descs = [map("function metalness(s) return 1 end", DecalMode::Material, &[])];
@@ -466,12 +482,21 @@ mod tests {
     #[test]
     fn out_of_range_material_outputs_are_one_sentence_errors() {
         for (code, what) in [
-            ("function roughness(s) return 1.5 end", "roughness() returned 1.5 (expected a number from 0 to 1)"),
+            (
+                "function roughness(s) return 1.5 end",
+                "roughness() returned 1.5 (expected a number from 0 to 1)",
+            ),
             ("function metalness(s) return -0.1 end", "metalness() returned -0.1"),
             ("function roughness(s) return 0/0 end", "roughness() returned NaN"),
-            ("function color(s) return 1.2, 0, 0 end", "color() returned 1.2 as its red value (expected 0 to 1"),
+            (
+                "function color(s) return 1.2, 0, 0 end",
+                "color() returned 1.2 as its red value (expected 0 to 1",
+            ),
             ("function specular(s) return 0, 0, -1 end", "specular() returned -1 as its blue value"),
-            ("function emission(s) return 0, -2, 0 end", "emission() returned -2 as its green value (expected 0 or more"),
+            (
+                "function emission(s) return 0, -2, 0 end",
+                "emission() returned -2 as its green value (expected 0 or more",
+            ),
             ("function emission(s) return 1/0, 0, 0 end", "emission() returned inf as its red value"),
             ("function reflect(s) return 0.5 end", "reflect() returned nothing (nil) as its green value"),
         ] {
