@@ -124,3 +124,33 @@ fn a_roughness_output_widens_the_highlight() {
     println!("pixels above half the peak: roughness 0.2: {narrow}, 0.4: {wide}");
     assert!(narrow >= 1 && wide >= 6 * narrow, "roughness 0.2: {narrow} pixels, 0.4: {wide}");
 }
+
+#[test]
+fn a_require_escape_is_a_one_sentence_error_with_exit_code_2() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = glowing_sphere("", "0 2 3", "0 2 0");
+    std::fs::write(dir.path().join("s.xml"), &scene).expect("scene");
+    std::fs::write(
+        dir.path().join("glow.lua"),
+        "local x = require '../secret'\nfunction emission(s) return 1, 1, 1 end",
+    )
+    .expect("shader");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_luster"))
+        .args(["render", "-q", "-o"])
+        .arg(dir.path().join("out"))
+        .arg(dir.path().join("s.xml"))
+        .output()
+        .expect("luster runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("glow.lua:1") && err.contains("'../secret' is not a module name"), "{err}");
+    // A --shader-lib that is not a folder is refused before anything runs.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_luster"))
+        .args(["render", "-q", "--shader-lib"])
+        .arg(dir.path().join("nope"))
+        .arg(dir.path().join("s.xml"))
+        .output()
+        .expect("luster runs");
+    assert_eq!(out.status.code(), Some(2));
+}
