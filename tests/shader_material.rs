@@ -129,7 +129,7 @@ fn a_roughness_output_widens_the_highlight() {
 fn a_require_escape_is_a_one_sentence_error_with_exit_code_2() {
     let dir = tempfile::tempdir().expect("temp dir");
     let scene = glowing_sphere("", "0 2 3", "0 2 0");
-    std::fs::write(dir.path().join("s.xml"), &scene).expect("scene");
+    std::fs::write(dir.path().join("s.xml"), scene).expect("scene");
     std::fs::write(
         dir.path().join("glow.lua"),
         "local x = require '../secret'\nfunction emission(s) return 1, 1, 1 end",
