@@ -47,6 +47,10 @@ pub struct Material {
     pub roughness: f32,
     /// A reflection model replacing Blinn-Phong in direct lighting.
     pub brdf: Option<Brdf>,
+    /// Radiance the surface emits, from a shader's `emission(s)` (the scene's
+    /// own materials emit nothing; object lights carry their radiance
+    /// separately, as lights).
+    pub emission: Vec3,
 }
 
 impl Default for Material {
@@ -61,6 +65,7 @@ impl Default for Material {
             kind: Specular::None,
             roughness: 0.0,
             brdf: None,
+            emission: Vec3::ZERO,
         }
     }
 }
@@ -88,6 +93,7 @@ impl Material {
                 .brdf
                 .as_ref()
                 .map(|b| Brdf::from_desc(b, d.phong_exponent, d.refraction_index, d.absorption_index)),
+            emission: Vec3::ZERO,
         }
     }
 }

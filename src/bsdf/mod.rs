@@ -13,6 +13,7 @@
 //! [`Brdf::pdf`] is the matching mixture density.
 
 pub mod fresnel;
+pub mod microfacet;
 pub mod phong;
 pub mod sampling;
 pub mod torrance_sparrow;
@@ -20,6 +21,7 @@ pub mod torrance_sparrow;
 #[cfg(test)]
 mod tests;
 
+pub use microfacet::Microfacet;
 pub use phong::{Lobe, PhongFamily, Variant};
 pub use torrance_sparrow::TorranceSparrow;
 
@@ -34,6 +36,8 @@ pub enum Brdf {
     Phong(PhongFamily),
     /// Torrance-Sparrow microfacets.
     TorranceSparrow(TorranceSparrow),
+    /// GGX over a Lambertian base, for shader-driven materials (`ks` is `F0`).
+    Microfacet(Microfacet),
 }
 
 /// A direction drawn by [`Brdf::sample`].
@@ -76,6 +80,7 @@ impl Brdf {
         match self {
             Brdf::Phong(b) => b.eval(kd, ks, wi, wo),
             Brdf::TorranceSparrow(b) => b.eval(kd, ks, wi, wo),
+            Brdf::Microfacet(b) => b.eval(kd, ks, wi, wo),
         }
     }
 
@@ -92,6 +97,7 @@ impl Brdf {
             match self {
                 Brdf::Phong(b) => b.sample_lobe(wo, u),
                 Brdf::TorranceSparrow(b) => b.sample_lobe(wo, u),
+                Brdf::Microfacet(b) => b.sample_lobe(wo, u),
             }
         };
         if wi.z <= 0.0 {
@@ -113,6 +119,7 @@ impl Brdf {
             _ if pd >= 1.0 => 0.0,
             Brdf::Phong(b) => b.lobe_pdf(wo, wi),
             Brdf::TorranceSparrow(b) => b.lobe_pdf(wo, wi),
+            Brdf::Microfacet(b) => b.lobe_pdf(wo, wi),
         };
         pd * power_cosine_pdf(1.0, wi.z) + (1.0 - pd) * lobe
     }

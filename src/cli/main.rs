@@ -68,6 +68,10 @@ enum Command {
         #[arg(long, value_name = "SECONDS", value_parser = parse_timeout,
               default_value_t = luster::shader::DEFAULT_TIMEOUT.as_secs_f64())]
         shader_timeout: f64,
+        /// A folder shaders' `require "name"` searches, after the scene's
+        /// folder and its <ShaderLibrary> folders (repeatable).
+        #[arg(long = "shader-lib", value_name = "DIR", value_parser = parse_shader_lib)]
+        shader_lib: Vec<PathBuf>,
         /// Render only part K of N of the images (for a cluster: see `luster
         /// slurm`), into OUTDIR/<ImageName>.part-K-of-N; `luster merge OUTDIR`
         /// then writes the images. Not with --size, --scale, --crop or --time (a part
@@ -281,6 +285,7 @@ fn main() -> ExitCode {
             seed,
             filter,
             shader_timeout,
+            shader_lib,
             part,
             resume,
             checkpoint,
@@ -288,6 +293,7 @@ fn main() -> ExitCode {
             model,
             frame,
         } => {
+            luster::shader::set_library_dirs(shader_lib);
             let filter = filter.filter();
             let time_limit = time.map(std::time::Duration::from_secs_f64);
             let opts = luster::render::RenderOptions { spp, seed, filter, time_limit, ..Default::default() };
@@ -355,6 +361,16 @@ fn main() -> ExitCode {
                 max_spp,
             })
         }
+    }
+}
+
+/// A `--shader-lib` folder: one that exists.
+fn parse_shader_lib(s: &str) -> Result<PathBuf, String> {
+    let p = PathBuf::from(s);
+    if p.is_dir() {
+        Ok(p)
+    } else {
+        Err(format!("{s} is not a folder"))
     }
 }
 

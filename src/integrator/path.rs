@@ -156,6 +156,11 @@ fn shade(
         };
         color += le * w;
     }
+    // A shader's emission is never sampled as a light, so whatever reaches it
+    // counts in full: no other technique could have found it.
+    if m.emission != Vec3::ZERO {
+        color += m.emission;
+    }
 
     let inside_dielectric = !entering && matches!(m.kind, Specular::Dielectric { .. });
     let reflects = m.diffuse.max_element() > 0.0 || m.specular.max_element() > 0.0;

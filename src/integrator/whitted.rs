@@ -83,6 +83,10 @@ fn shade(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, weight: f32, st: &mut 
     let inside_dielectric = !entering && matches!(m.kind, Specular::Dielectric { .. });
     // An emitter's surface shows its radiance (hw7 object lights).
     let mut color = scene.emitted(hit, ray.d).map_or(Vec3::ZERO, |(_, l)| l);
+    // A shader's emission shows as it is (it lights nothing here).
+    if m.emission != Vec3::ZERO {
+        color += m.emission;
+    }
 
     if !inside_dielectric {
         color += direct(scene, m, hit, ns, ray, st);

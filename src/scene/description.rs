@@ -8,6 +8,16 @@ use crate::shader::ParamValue;
 use std::path::PathBuf;
 use std::sync::Arc;
 
+impl Description {
+    /// The folders shaders' `require` searches: the scene's folder, its
+    /// `<ShaderLibrary>` folders, then `--shader-lib`'s.
+    pub fn module_search_path(&self) -> Vec<PathBuf> {
+        let mut dirs = vec![self.base_dir.clone()];
+        dirs.extend(self.shader_libraries.iter().cloned());
+        crate::shader::search_path(&dirs)
+    }
+}
+
 /// A whole scene as the file describes it.
 #[derive(Clone, Debug)]
 pub struct Description {
@@ -15,6 +25,9 @@ pub struct Description {
     pub file: PathBuf,
     /// Folder that relative asset paths (PLY files) are resolved against.
     pub base_dir: PathBuf,
+    /// Folders shaders' `require` searches after `base_dir`
+    /// (`<ShaderLibrary>`, relative to the scene file), in order.
+    pub shader_libraries: Vec<PathBuf>,
     /// Reflection/refraction bounces allowed after the camera ray.
     pub max_recursion_depth: u32,
     /// Colour of rays that hit nothing.
@@ -459,6 +472,10 @@ pub enum DecalMode {
     /// `km`); a luster extension, mainly for shaders' `reflect`. A point of a
     /// material with no mirror part becomes a mirror.
     ReplaceKm,
+    /// A shader sets every material output its script defines (base and
+    /// specular colour, roughness, metalness, emission, mirror reflectance);
+    /// a luster extension for shader maps only (`docs/shaders.md`).
+    Material,
 }
 
 /// How Perlin noise in [-1, 1] becomes a texture value in [0, 1].

@@ -97,6 +97,19 @@ pub(crate) struct Out {
     pub bad: i32,
 }
 
+/// Where the `DecalMode material` wrapper writes every material output the
+/// script defines (`luster_material`); the others keep their defaults.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct MaterialOut {
+    pub color: [f64; 3],
+    pub specular: [f64; 3],
+    pub emission: [f64; 3],
+    pub reflect: [f64; 3],
+    pub roughness: f64,
+    pub metalness: f64,
+}
+
 /// The per-call deadline (`luster_clock`). `start_ns == 0` means "not started":
 /// the first check of a call starts it, so a call that never reaches a check
 /// never reads the clock.
@@ -353,6 +366,7 @@ pub(crate) struct IoBlock {
     /// The three points of a bump evaluation (`luster_shade[3]`).
     shade3: *mut [Shade; 3],
     out: *mut Out,
+    material: *mut MaterialOut,
     clock: *mut Clock,
 }
 
@@ -364,19 +378,26 @@ impl IoBlock {
         shade: usize,
         shade3: usize,
         out: usize,
+        material: usize,
         clock: usize,
         timeout_ns: u64,
     ) -> Option<IoBlock> {
         fn ok<T>(a: usize) -> bool {
             a != 0 && a % std::mem::align_of::<T>() == 0
         }
-        if !(ok::<Shade>(shade) && ok::<[Shade; 3]>(shade3) && ok::<Out>(out) && ok::<Clock>(clock)) {
+        if !(ok::<Shade>(shade)
+            && ok::<[Shade; 3]>(shade3)
+            && ok::<Out>(out)
+            && ok::<MaterialOut>(material)
+            && ok::<Clock>(clock))
+        {
             return None;
         }
         let block = IoBlock {
             shade: shade as *mut Shade,
             shade3: shade3 as *mut [Shade; 3],
             out: out as *mut Out,
+            material: material as *mut MaterialOut,
             clock: clock as *mut Clock,
         };
         // SAFETY: see the module doc; no Lua code runs during this write.
@@ -393,6 +414,20 @@ impl IoBlock {
             (*self.clock).start_ns = 0;
             (*self.clock).expired = 0;
         }
+    }
+
+    /// Writes the shading point, clears the material outputs and arms the
+    /// clock for one `DecalMode material` call.
+    pub(crate) fn begin_material(&self, shade: &Shade) {
+        self.begin(shade);
+        // SAFETY: see the module doc; no Lua code runs during this write.
+        unsafe { *self.material = MaterialOut::default() }
+    }
+
+    /// The material outputs the wrapper wrote.
+    pub(crate) fn material(&self) -> MaterialOut {
+        // SAFETY: see the module doc; the Lua call has returned.
+        unsafe { *self.material }
     }
 
     /// Writes the three points of a bump evaluation and arms the clock: the

@@ -52,6 +52,7 @@
 mod error;
 mod ffi;
 mod instrument;
+mod modules;
 mod params;
 /// The instrumenter, for the fuzz entry points.
 pub(crate) use instrument::instrument as instrument_script;
@@ -60,6 +61,8 @@ mod state;
 mod tests;
 #[cfg(test)]
 mod tests_author;
+#[cfg(test)]
+mod tests_modules;
 #[cfg(test)]
 mod tests_sandbox;
 mod threads;
@@ -70,6 +73,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 pub use error::{ShaderError, ShaderErrorKind};
+pub use modules::{search_path, set_library_dirs, MAX_MODULE_BYTES};
 
 /// The pixel `--debug-pixel` names, packed (`u64::MAX`: none).
 static DEBUG_PIXEL: AtomicU64 = AtomicU64::new(u64::MAX);
@@ -178,8 +182,9 @@ pub struct ShadeInput {
     pub pixel: [u32; 2],
 }
 
-/// The entry points a script may define: three for surfaces, two for
-/// volumes.
+/// The entry points a script may define: for surfaces (`emission` is a
+/// surface's emitted radiance under `DecalMode material`) and for volumes
+/// (`density`, and `emission` per unit length).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Entry {
     Color = 0,
@@ -187,14 +192,25 @@ pub(crate) enum Entry {
     Reflect = 2,
     Density = 3,
     Emission = 4,
+    Specular = 5,
+    Roughness = 6,
+    Metalness = 7,
 }
 
 /// How many entry points there are.
-pub(crate) const ENTRIES: usize = 5;
+pub(crate) const ENTRIES: usize = 8;
 
 impl Entry {
-    pub(crate) const ALL: [Entry; ENTRIES] =
-        [Entry::Color, Entry::Height, Entry::Reflect, Entry::Density, Entry::Emission];
+    pub(crate) const ALL: [Entry; ENTRIES] = [
+        Entry::Color,
+        Entry::Height,
+        Entry::Reflect,
+        Entry::Density,
+        Entry::Emission,
+        Entry::Specular,
+        Entry::Roughness,
+        Entry::Metalness,
+    ];
 
     pub(crate) fn name(self) -> &'static str {
         match self {
@@ -203,8 +219,29 @@ impl Entry {
             Entry::Reflect => "reflect",
             Entry::Density => "density",
             Entry::Emission => "emission",
+            Entry::Specular => "specular",
+            Entry::Roughness => "roughness",
+            Entry::Metalness => "metalness",
         }
     }
+}
+
+/// What a `DecalMode material` shader says about a surface point: one value
+/// per output the script defines (`None` for the others).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct MaterialOutputs {
+    /// `color(s)`: the base colour, 0–1.
+    pub color: Option<[f32; 3]>,
+    /// `specular(s)`: the specular colour (`F0` of the microfacet model), 0–1.
+    pub specular: Option<[f32; 3]>,
+    /// `roughness(s)`, 0–1.
+    pub roughness: Option<f32>,
+    /// `metalness(s)`, 0–1.
+    pub metalness: Option<f32>,
+    /// `emission(s)`: emitted radiance in output units, not negative.
+    pub emission: Option<[f32; 3]>,
+    /// `reflect(s)`: the mirror reflectance, 0–1.
+    pub reflect: Option<[f32; 3]>,
 }
 
 /// How `texture(name, u, v, filter)` filters an image.
@@ -249,6 +286,7 @@ pub(crate) struct Shared {
     sources: Vec<ShaderSource>,
     timeout: Duration,
     images: Option<ShaderImages>,
+    modules: Arc<modules::Modules>,
 }
 
 /// A compiled set of shaders, addressed by their index in the list given to
@@ -273,9 +311,25 @@ impl ShaderSet {
         timeout: Duration,
         images: Option<ShaderImages>,
     ) -> Result<ShaderSet, ShaderError> {
+        ShaderSet::with_modules(sources, timeout, images, Vec::new())
+    }
+
+    /// Like [`ShaderSet::with_images`], with the folders `require` searches,
+    /// in order ([`search_path`] makes them from the scene's).
+    pub fn with_modules(
+        sources: Vec<ShaderSource>,
+        timeout: Duration,
+        images: Option<ShaderImages>,
+        module_dirs: Vec<PathBuf>,
+    ) -> Result<ShaderSet, ShaderError> {
         static NEXT_ID: AtomicU64 = AtomicU64::new(1);
-        let shared =
-            Arc::new(Shared { id: NEXT_ID.fetch_add(1, Ordering::Relaxed), sources, timeout, images });
+        let shared = Arc::new(Shared {
+            id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
+            sources,
+            timeout,
+            images,
+            modules: Arc::new(modules::Modules::new(module_dirs)),
+        });
         let state = state::ThreadState::new(&shared)?;
         let entries = (0..shared.sources.len()).map(|id| state.entries(id)).collect();
         threads::adopt(&shared, state);
@@ -290,6 +344,14 @@ impl ShaderSet {
     /// Whether the set holds no shader.
     pub fn is_empty(&self) -> bool {
         self.entries.is_empty()
+    }
+
+    /// The module files the scripts have required so far (canonical paths):
+    /// every top-level `require` once the set is built, and those a script
+    /// makes inside its functions once a call has made them. A watcher
+    /// watches these with the scripts.
+    pub fn required_files(&self) -> Vec<PathBuf> {
+        self.shared.modules.required()
     }
 
     /// The name of shader `id`.
@@ -324,6 +386,32 @@ impl ShaderSet {
     /// Whether shader `id` defines `emission(s)`.
     pub fn has_emission(&self, id: usize) -> bool {
         self.has(id, Entry::Emission)
+    }
+
+    /// Whether shader `id` defines any material output (`color`, `specular`,
+    /// `roughness`, `metalness`, `emission` or `reflect`), which
+    /// `DecalMode material` needs.
+    pub fn has_material(&self, id: usize) -> bool {
+        [Entry::Color, Entry::Specular, Entry::Roughness, Entry::Metalness, Entry::Emission, Entry::Reflect]
+            .into_iter()
+            .any(|e| self.has(id, e))
+    }
+
+    /// Every material output shader `id` defines at `input`, in one call into
+    /// Lua, each checked against its range (reflectances and `roughness`,
+    /// `metalness` in 0–1, `emission` finite and not negative).
+    pub fn material(&self, id: usize, input: &ShadeInput) -> Result<MaterialOutputs, ShaderError> {
+        let m = threads::with_state(&self.shared, |state| state.call_material(id, input))?;
+        let rgb = |e: Entry, c: [f64; 3]| self.has(id, e).then(|| c.map(|x| x as f32));
+        let num = |e: Entry, x: f64| self.has(id, e).then_some(x as f32);
+        Ok(MaterialOutputs {
+            color: rgb(Entry::Color, m.color),
+            specular: rgb(Entry::Specular, m.specular),
+            roughness: num(Entry::Roughness, m.roughness),
+            metalness: num(Entry::Metalness, m.metalness),
+            emission: rgb(Entry::Emission, m.emission),
+            reflect: rgb(Entry::Reflect, m.reflect),
+        })
     }
 
     /// The density of volume shader `id` at `input` (a number; the caller

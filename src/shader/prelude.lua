@@ -5,8 +5,10 @@
 -- to build sandboxes and entry wrappers. Its locals (ffi, the built-in table,
 -- the scratch records) are reachable from user code only through the wrapper
 -- functions: user scripts get no debug library, no getfenv and no ffi.
-local builtins_address, log, images_ctx, image_names = ...
+local builtins_address, log, images_ctx, image_names, load_module = ...
 local ffi = ffi
+-- Kept for require (below) before the real globals lose them.
+local loadstring, setfenv, pcall = loadstring, setfenv, pcall
 local error, type, tostring, select, pairs, ipairs = error, type, tostring, select, pairs, ipairs
 local setmetatable, tonumber = setmetatable, tonumber
 local floor, sqrt, format, abs, min = math.floor, math.sqrt, string.format, math.abs, math.min
@@ -22,6 +24,10 @@ typedef struct {
   int32_t object_id, instance_id, depth, pixel_x, pixel_y, __luster_pad;
 } luster_shade;
 typedef struct { double r, g, b; int32_t bad; } luster_out;
+typedef struct {
+  double color[3], specular[3], emission[3], reflect[3];
+  double roughness, metalness;
+} luster_material;
 typedef struct { uint64_t start_ns, timeout_ns; int32_t expired; } luster_clock;
 typedef struct { double f1, f2, px, py, pz, id; } luster_cell;
 typedef struct {
@@ -54,6 +60,7 @@ local shade = ffi.new("luster_shade")
 local shade3 = ffi.new("luster_shade[3]")
 local shade_size = ffi.sizeof("luster_shade")
 local out = ffi.new("luster_out")
+local material = ffi.new("luster_material")
 local clock = ffi.new("luster_clock")
 local grad = ffi.new("luster_vec3")
 local cell = ffi.new("luster_cell")
@@ -559,9 +566,8 @@ local REMOVED = {
   debug = "it would reach past the sandbox",
   ffi = "it would reach past the sandbox",
   jit = "it would reach past the sandbox",
-  package = "shaders cannot load modules",
-  require = "shaders cannot load modules",
-  module = "shaders cannot load modules",
+  package = "modules are loaded with require \"name\" only",
+  module = "a module returns its table instead (see require in docs/shaders.md)",
   load = "shaders cannot compile code while they run",
   loadstring = "shaders cannot compile code while they run",
   loadfile = "shaders cannot read files",
@@ -648,8 +654,10 @@ local function convert(kind, v)
   return nil, format("is %s, but the script declares %s", got[given] or given, want[kind])
 end
 
+local require_module
 local function make_env(shader_name, params)
   local env = {}
+  env.require = require_module
   for _, k in ipairs(SAFE_GLOBALS) do env[k] = real_globals[k] end
   for k, v in pairs(BUILTINS) do env[k] = v end
   env.math = copy(math, { random = true, randomseed = true })
@@ -728,6 +736,47 @@ local function make_env(shader_name, params)
 end
 
 ---------------------------------------------------------------------------
+-- require "name": Rust finds and reads the file inside the allowed folders
+-- (modules.rs) and instruments it for the time limit; here it runs once per
+-- state, in its own sandboxed environment, and its result is cached. A
+-- module being loaded that is required again is a cycle, an error.
+---------------------------------------------------------------------------
+-- Results by name, and by file: "lib.wood" and "lib/wood" are one module.
+local by_name, by_file, module_loading, loading_chain = {}, {}, {}, {}
+require_module = function(name)
+  if type(name) ~= "string" then
+    error(format("require: expected a module name (a string), got a %s", typename(name)), 2)
+  end
+  local cached = by_name[name]
+  if cached ~= nil then return cached end
+  local file, code, key = load_module(name)
+  if not file then error(code, 2) end
+  cached = by_file[key]
+  if cached ~= nil then
+    by_name[name] = cached
+    return cached
+  end
+  if module_loading[key] then
+    local chain = {}
+    for i, n in ipairs(loading_chain) do chain[i] = format("'%s'", n) end
+    chain[#chain + 1] = format("'%s'", name)
+    error(format("require: modules require each other in a cycle: %s", table.concat(chain, " -> ")), 2)
+  end
+  local f, err = loadstring(code, "@" .. file)
+  if not f then error(err, 0) end
+  setfenv(f, (make_env("module " .. name, {})))
+  module_loading[key] = true
+  loading_chain[#loading_chain + 1] = name
+  local ok, result = pcall(f, tick)
+  loading_chain[#loading_chain] = nil
+  module_loading[key] = nil
+  if not ok then error(result, 0) end
+  if result == nil then result = true end
+  by_name[name], by_file[key] = result, result
+  return result
+end
+
+---------------------------------------------------------------------------
 -- Entry wrappers: Rust writes the shading point into `shade`, calls the
 -- wrapper with no arguments, and reads `out`. Results are checked here, where
 -- their Lua types are still known.
@@ -800,8 +849,52 @@ end
 local function make_entry(env, entry, shader_name)
   local f = env[entry]
   if type(f) ~= "function" then return nil end
-  if entry == "height" or entry == "density" then return scalar_entry(f, shader_name, entry) end
+  if entry == "height" or entry == "density" or entry == "roughness" or entry == "metalness" then
+    return scalar_entry(f, shader_name, entry)
+  end
   return color_entry(f, shader_name, entry)
+end
+
+-- DecalMode material: every material output the script defines, in one call
+-- from Rust, checked against its range (docs/shaders.md, "Material outputs").
+-- hi == nil: no upper bound (emitted radiance).
+local function material_color(f, shader_name, entry, dst, hi)
+  local r, g, b = f(shade)
+  if isvec(r) and g == nil then r, g, b = r.x, r.y, r.z end
+  local names = { "red", "green", "blue" }
+  for i = 1, 3 do
+    local v = select(i, r, g, b)
+    if not finite(v) then
+      bad(shader_name, entry, format("%s as its %s value (expected finite r, g, b numbers or a vec3)", describe(v), names[i]))
+    end
+    if v < 0 or (hi and v > hi) then
+      local range = hi and "0 to 1: a reflectance" or "0 or more: a radiance"
+      bad(shader_name, entry, format("%s as its %s value (expected %s)", describe(v), names[i], range))
+    end
+  end
+  dst[0], dst[1], dst[2] = r, g, b
+end
+local function material_scalar(f, shader_name, entry)
+  local v = f(shade)
+  if not finite(v) then bad(shader_name, entry, describe(v) .. " (expected a finite number from 0 to 1)") end
+  if v < 0 or v > 1 then bad(shader_name, entry, describe(v) .. " (expected a number from 0 to 1)") end
+  return v
+end
+local function make_material(env, shader_name)
+  local color, specular, emission, reflect = env.color, env.specular, env.emission, env.reflect
+  local roughness, metalness = env.roughness, env.metalness
+  local function fn(f) if type(f) == "function" then return f end return nil end
+  color, specular, emission, reflect = fn(color), fn(specular), fn(emission), fn(reflect)
+  roughness, metalness = fn(roughness), fn(metalness)
+  if not (color or specular or emission or reflect or roughness or metalness) then return nil end
+  return function()
+    if color then material_color(color, shader_name, "color", material.color, 1) end
+    if specular then material_color(specular, shader_name, "specular", material.specular, 1) end
+    if reflect then material_color(reflect, shader_name, "reflect", material.reflect, 1) end
+    if emission then material_color(emission, shader_name, "emission", material.emission, nil) end
+    if roughness then material.roughness = material_scalar(roughness, shader_name, "roughness") end
+    if metalness then material.metalness = material_scalar(metalness, shader_name, "metalness") end
+  end
 end
 
 -- Scripts run in their own environments, but the real globals lose the
@@ -816,6 +909,7 @@ return {
   make_env = make_env,
   make_entry = make_entry,
   make_height3 = make_height3,
+  make_material = make_material,
   tick = tick,
   -- LuaJIT's messages name the records by number ('struct 97'): the names
   -- the author knows them by.
@@ -824,7 +918,9 @@ return {
   shade = address(shade),
   shade3 = address(shade3),
   out = address(out),
+  material = address(material),
   clock = address(clock),
   sizes = { shade = ffi.sizeof("luster_shade"), shade3 = ffi.sizeof("luster_shade[3]"), out = ffi.sizeof("luster_out"),
+    material = ffi.sizeof("luster_material"),
     clock = ffi.sizeof("luster_clock"), cell = ffi.sizeof("luster_cell") },
 }

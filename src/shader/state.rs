@@ -26,6 +26,8 @@ struct Compiled {
     entries: [Option<Function>; ENTRIES],
     /// `height` at three points in one call, for bump mapping.
     height3: Option<Function>,
+    /// Every material output in one call (`DecalMode material`).
+    material: Option<Function>,
 }
 
 /// A Lua state and the compiled shaders of one set.
@@ -71,6 +73,16 @@ impl ThreadState {
                 Ok(())
             })
             .map_err(internal)?;
+        let modules = Arc::clone(&shared.modules);
+        let load_module = lua
+            .create_function(move |_, name: String| {
+                // (file as shown, code, canonical path) or (nil, why).
+                Ok(match modules.load(&name) {
+                    Ok((file, code, key)) => (Some(file), code, Some(key)),
+                    Err(why) => (None, why, None),
+                })
+            })
+            .map_err(internal)?;
         let images: Option<Box<Arc<dyn ImageSampler>>> =
             shared.images.as_ref().map(|i| Box::new(Arc::clone(&i.sampler)));
         let images_ctx = images.as_ref().map_or(std::ptr::null_mut(), |b| {
@@ -83,7 +95,13 @@ impl ThreadState {
         let api: Table = lua
             .load(PRELUDE)
             .set_name("@luster/prelude.lua")
-            .call((LightUserData(ffi::builtins_address()), log, LightUserData(images_ctx), image_names))
+            .call((
+                LightUserData(ffi::builtins_address()),
+                log,
+                LightUserData(images_ctx),
+                image_names,
+                load_module,
+            ))
             .map_err(internal)?;
         // The C declarations in the prelude must describe Rust's records.
         let sizes: Table = api.get("sizes").map_err(internal)?;
@@ -91,6 +109,7 @@ impl ThreadState {
             ("shade", std::mem::size_of::<Shade>()),
             ("shade3", std::mem::size_of::<[Shade; 3]>()),
             ("out", std::mem::size_of::<ffi::Out>()),
+            ("material", std::mem::size_of::<ffi::MaterialOut>()),
             ("clock", std::mem::size_of::<ffi::Clock>()),
             ("cell", std::mem::size_of::<ffi::CellOut>()),
         ] {
@@ -101,14 +120,17 @@ impl ThreadState {
         }
         let addr = |k: &str| api.get::<f64>(k).map(|a| a as usize).map_err(internal);
         let timeout_ns = u64::try_from(timeout.as_nanos()).unwrap_or(u64::MAX);
-        let io = IoBlock::new(addr("shade")?, addr("shade3")?, addr("out")?, addr("clock")?, timeout_ns)
-            .ok_or_else(|| {
-                ShaderError::new(
-                    ShaderErrorKind::Internal,
-                    "(prelude)",
-                    "shader runtime: bad record addresses",
-                )
-            })?;
+        let io = IoBlock::new(
+            addr("shade")?,
+            addr("shade3")?,
+            addr("out")?,
+            addr("material")?,
+            addr("clock")?,
+            timeout_ns,
+        )
+        .ok_or_else(|| {
+            ShaderError::new(ShaderErrorKind::Internal, "(prelude)", "shader runtime: bad record addresses")
+        })?;
 
         let ctypes: Table = api.get("ctypes").map_err(internal)?;
         let mut ctype_names = Vec::new();
@@ -130,9 +152,11 @@ impl ThreadState {
         let make_env: Function = api.get("make_env").map_err(internal)?;
         let make_entry: Function = api.get("make_entry").map_err(internal)?;
         let make_height3: Function = api.get("make_height3").map_err(internal)?;
+        let make_material: Function = api.get("make_material").map_err(internal)?;
         let tick: Function = api.get("tick").map_err(internal)?;
         for src in sources {
-            let compiled = state.compile(src, &make_env, &[&make_entry, &make_height3], &tick)?;
+            let makers = [&make_entry, &make_height3, &make_material];
+            let compiled = state.compile(src, &make_env, &makers, &tick)?;
             state.shaders.push(compiled);
         }
         Ok(state)
@@ -142,7 +166,7 @@ impl ThreadState {
         &self,
         src: &ShaderSource,
         make_env: &Function,
-        [make_entry, make_height3]: &[&Function; 2],
+        [make_entry, make_height3, make_material]: &[&Function; 3],
         tick: &Function,
     ) -> Result<Compiled, ShaderError> {
         let name = src.name.as_str();
@@ -203,11 +227,15 @@ impl ThreadState {
             return Err(ShaderError::new(
                 ShaderErrorKind::NoEntryPoint,
                 name,
-                format!("{file}: defines none of the functions color, height, reflect, density or emission"),
+                format!(
+                    "{file}: defines none of the functions color, height, reflect, specular, roughness, \
+                     metalness, emission or density"
+                ),
             ));
         }
-        let height3 = make_height3.call((env, name)).map_err(lua_err)?;
-        Ok(Compiled { name: name.to_string(), entries, height3 })
+        let height3 = make_height3.call((env.clone(), name)).map_err(lua_err)?;
+        let material = make_material.call((env, name)).map_err(lua_err)?;
+        Ok(Compiled { name: name.to_string(), entries, height3, material })
     }
 
     /// A call that ran past its deadline fails even when the script caught
@@ -279,7 +307,14 @@ impl ThreadState {
         };
         if super::debug_pixel() == Some(input.pixel) {
             let out = match &result {
-                Ok(c) if matches!(entry, Entry::Height | Entry::Density) => format!("{}", c[0]),
+                Ok(c)
+                    if matches!(
+                        entry,
+                        Entry::Height | Entry::Density | Entry::Roughness | Entry::Metalness
+                    ) =>
+                {
+                    format!("{}", c[0])
+                }
                 Ok(c) => format!("{} {} {}", c[0], c[1], c[2]),
                 Err(e) => format!("error: {}", e.message),
             };
@@ -304,6 +339,42 @@ impl ThreadState {
                 format!("no shader with id {id} (the set has {})", self.shaders.len()),
             )
         })
+    }
+
+    /// Calls every material output shader `id` defines, in one Lua call.
+    pub(crate) fn call_material(
+        &self,
+        id: usize,
+        input: &ShadeInput,
+    ) -> Result<ffi::MaterialOut, ShaderError> {
+        let shader = self.shader(id)?;
+        let Some(f) = &shader.material else {
+            return Err(ShaderError::new(
+                ShaderErrorKind::Usage,
+                &shader.name,
+                "the script defines none of the material outputs (color, specular, roughness, metalness, \
+                 emission, reflect)",
+            ));
+        };
+        self.io.begin_material(&shade_of(input));
+        let result = match f.call::<()>(()) {
+            Ok(()) => self.check_deadline(&shader.name).map(|()| self.io.material()),
+            Err(e) => Err(self.error(&shader.name, &e)),
+        };
+        if super::debug_pixel() == Some(input.pixel) {
+            let out = match &result {
+                Ok(m) => format!("{m:?}"),
+                Err(e) => format!("error: {}", e.message),
+            };
+            eprintln!(
+                "[shader {} at pixel {},{}] material(s) -> {out}\n  s = {}",
+                shader.name,
+                input.pixel[0],
+                input.pixel[1],
+                describe(input)
+            );
+        }
+        result
     }
 
     /// Calls `height` at three points in one Lua call (bump mapping).

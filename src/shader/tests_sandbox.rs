@@ -20,7 +20,6 @@ fn dangerous_globals_are_absent() {
     for expr in [
         "os.execute('true')",
         "io.open('/etc/passwd')",
-        "require('os')",
         "package.loaded.os.exit()",
         "debug.getinfo(1)",
         "ffi.C.abort()",

@@ -21,6 +21,7 @@
 //! | `replace_normal` | `n = normalize(T x + B y + N z)` with `(x, y, z) = 2 texel/255 - 1` |
 //! | `bump_normal` | see [`bump`] |
 //! | `replace_background` | rays that miss take `255 c` at their camera sample's image position |
+//! | `material` | shader maps only: every material output the script defines ([`shader::apply_outputs`]) |
 //!
 //! Shader maps (a Lua script, [`shader`]) call the script's entry point that
 //! the decal mode needs; a script's runtime error comes back from
@@ -273,6 +274,12 @@ impl Textures {
         Textures { images, maps, lists: Vec::new(), background: background.map(|b| b as u32), shaders }
     }
 
+    /// The module files the shader maps' scripts required (canonical
+    /// paths), for a watcher to watch with the scripts themselves.
+    pub fn shader_modules(&self) -> Vec<std::path::PathBuf> {
+        self.shaders.as_ref().map(ShaderSet::required_files).unwrap_or_default()
+    }
+
     /// Records an object's maps; returns its list.
     pub fn add_list(&mut self, maps: &[usize]) -> TexList {
         let start = self.lists.len() as u32;
@@ -389,7 +396,8 @@ impl Textures {
                     *n = f.normal_to_world(bump::normal_map(f, c * 2.0 - Vec3::ONE));
                 }
                 DecalMode::BumpNormal => *n = bump::bump(self, map, f),
-                DecalMode::ReplaceBackground => {}
+                // Only shader maps are built with this mode (the reader refuses others).
+                DecalMode::ReplaceBackground | DecalMode::Material => {}
             }
         }
         Ok(Applied::Lit)

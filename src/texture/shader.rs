@@ -10,6 +10,7 @@
 //! | `replace_all` | `color` | the point's colour, unlit |
 //! | `replace_km` | `reflect` | the mirror reflectance |
 //! | `bump_normal` | `height` | [`bump::height_bump`], scaled by `BumpFactor` |
+//! | `material` | every material output the script defines | [`apply_outputs`] |
 //!
 //! `replace_normal` and `replace_background` take no shader: a tangent-space
 //! normal is what `height` already expresses better, and the background has
@@ -18,12 +19,14 @@
 use std::time::Duration;
 
 use super::{bump, Image, TexFrame, TextureMap, Textures};
+use crate::bsdf::{Brdf, Microfacet};
 use crate::material::Material;
 use crate::material::Specular;
 use crate::math::{Vec2, Vec3};
 use crate::scene::description::{DecalMode, ImageDesc, TextureMapDesc, TextureSource};
 use crate::shader::{
-    ImageSampler, SampleFilter, ShadeInput, ShaderError, ShaderImages, ShaderSet, ShaderSource,
+    ImageSampler, MaterialOutputs, SampleFilter, ShadeInput, ShaderError, ShaderImages, ShaderSet,
+    ShaderSource,
 };
 use std::sync::Arc;
 
@@ -44,6 +47,7 @@ fn entry_for(decal: DecalMode) -> Option<&'static str> {
         }
         DecalMode::ReplaceKm => Some("reflect"),
         DecalMode::BumpNormal => Some("height"),
+        DecalMode::Material => Some("material"),
         DecalMode::ReplaceNormal | DecalMode::ReplaceBackground => None,
     }
 }
@@ -62,6 +66,16 @@ pub fn compile(
     timeout: Duration,
     images: Option<ShaderImages>,
 ) -> Result<Option<ShaderSet>, MapError> {
+    compile_with_modules(descs, timeout, images, Vec::new())
+}
+
+/// Like [`compile`], with the folders the scripts' `require` searches.
+pub fn compile_with_modules(
+    descs: &[TextureMapDesc],
+    timeout: Duration,
+    images: Option<ShaderImages>,
+    module_dirs: Vec<std::path::PathBuf>,
+) -> Result<Option<ShaderSet>, MapError> {
     let mut maps = Vec::new();
     let mut sources = Vec::new();
     for (i, d) in descs.iter().enumerate() {
@@ -75,7 +89,9 @@ pub fn compile(
     if sources.is_empty() {
         return Ok(None);
     }
-    let make = |sources: Vec<ShaderSource>| ShaderSet::with_images(sources, timeout, images.clone());
+    let make = |sources: Vec<ShaderSource>| {
+        ShaderSet::with_modules(sources, timeout, images.clone(), module_dirs.clone())
+    };
     let set = match make(sources.clone()) {
         Ok(set) => set,
         // The set reports the first script that fails; compile them one by
@@ -97,7 +113,7 @@ pub fn compile(
                 map: m,
                 message: format!(
                     "a shader cannot drive DecalMode {} (shaders take replace_kd, blend_kd, replace_ks, \
-                     replace_all, replace_km or bump_normal)",
+                     replace_all, replace_km, bump_normal or material)",
                     decal_name(decal)
                 ),
             });
@@ -105,11 +121,22 @@ pub fn compile(
         let has = match entry {
             "color" => set.has_color(id),
             "reflect" => set.has_reflect(id),
+            "material" => set.has_material(id),
             _ => set.has_height(id),
         };
         if !has {
             let name = set.name(id).unwrap_or("?");
             let TextureSource::Shader { path, .. } = &descs[m].source else { continue };
+            if decal == DecalMode::Material {
+                return Err(MapError {
+                    map: m,
+                    message: format!(
+                        "shader '{name}': {} defines none of color, specular, roughness, metalness, \
+                         emission or reflect, one of which DecalMode material needs",
+                        path.display()
+                    ),
+                });
+            }
             return Err(MapError {
                 map: m,
                 message: format!(
@@ -131,6 +158,7 @@ fn decal_name(d: DecalMode) -> &'static str {
         DecalMode::ReplaceAll => "replace_all",
         DecalMode::ReplaceKm => "replace_km",
         DecalMode::BumpNormal => "bump_normal",
+        DecalMode::Material => "material",
         DecalMode::ReplaceNormal => "replace_normal",
         DecalMode::ReplaceBackground => "replace_background",
     }
@@ -248,10 +276,55 @@ impl Textures {
                     }
                 }
             }
+            DecalMode::Material => apply_outputs(&set.material(id, &input(f, f.p_object, f.uv, *n))?, m),
             DecalMode::ReplaceNormal | DecalMode::ReplaceBackground => {}
         }
         Ok(None)
     }
+}
+
+/// What a `DecalMode material` shader's outputs do to the point's material
+/// (the table in `docs/shaders.md`, "Material outputs"):
+///
+/// * `color` is the base colour (`kd`), `specular` the specular colour
+///   (`ks`), `reflect` the mirror reflectance (a non-mirror becomes a mirror,
+///   as with `replace_km`), `emission` the emitted radiance;
+/// * `roughness` or `metalness` switch the point to the GGX microfacet BRDF
+///   ([`Microfacet`]) whatever the material's own model: `α = roughness²`,
+///   or without a `roughness` the width matching the material's exponent;
+///   metalness `μ` turns the diffuse part off and tints the specular colour
+///   by the base: `kd ← (1 - μ) kd`, `ks ← (1 - μ) ks + μ kd`.
+pub fn apply_outputs(o: &MaterialOutputs, m: &mut Material) {
+    if let Some(c) = o.color {
+        m.diffuse = Vec3::from_array(c);
+    }
+    if let Some(c) = o.specular {
+        m.specular = Vec3::from_array(c);
+    }
+    if let Some(c) = o.reflect {
+        m.mirror = Vec3::from_array(c);
+        if m.kind == Specular::None {
+            m.kind = Specular::Mirror;
+        }
+    }
+    if let Some(c) = o.emission {
+        m.emission = Vec3::from_array(c);
+    }
+    if o.roughness.is_none() && o.metalness.is_none() {
+        return;
+    }
+    let lobe = match (o.roughness, m.brdf) {
+        (Some(r), _) => Microfacet::from_roughness(r),
+        (None, Some(Brdf::Microfacet(mf))) => mf,
+        (None, Some(Brdf::Phong(p))) => Microfacet::from_exponent(p.exponent),
+        (None, Some(Brdf::TorranceSparrow(t))) => Microfacet::from_exponent(t.exponent),
+        (None, None) => Microfacet::from_exponent(m.phong),
+    };
+    if let Some(mu) = o.metalness {
+        m.specular = m.specular * (1.0 - mu) + m.diffuse * mu;
+        m.diffuse *= 1.0 - mu;
+    }
+    m.brdf = Some(Brdf::Microfacet(lobe));
 }
 
 #[cfg(test)]
@@ -361,6 +434,84 @@ mod tests {
         let high = TexFrame { p_object: Vec3::new(0.0, 2.0, 0.0), ..frame() };
         let e = tex.apply_shader(0, &tex.maps[0], &high, &mut mat, &mut n).unwrap_err();
         assert!(e.message.contains("s.lua:2: bad"), "{}", e.message);
+    }
+
+    #[test]
+    fn material_outputs_set_the_material_and_switch_to_the_microfacet_model() {
+        let code = "function color(s) return 0.8, 0.4, 0.2 end\n\
+                    function specular(s) return 0.04, 0.04, 0.04 end\n\
+                    function roughness(s) return 0.5 end\n\
+                    function metalness(s) return 0.25 end\n\
+                    function emission(s) return 3, 2, 1 end";
+        let descs = [map(code, DecalMode::Material, &[])];
+        let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
+        let mut mat = Material { phong: 30.0, ..Material::default() };
+        let mut n = Vec3::Z;
+        assert_eq!(tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut n).unwrap(), None);
+        let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-6;
+        assert!(close(mat.diffuse, Vec3::new(0.6, 0.3, 0.15)), "{}", mat.diffuse);
+        assert!(close(mat.specular, Vec3::new(0.23, 0.13, 0.08)), "{}", mat.specular);
+        assert_eq!(mat.emission, Vec3::new(3.0, 2.0, 1.0));
+        assert_eq!(mat.brdf, Some(Brdf::Microfacet(Microfacet { alpha: 0.25 })));
+        assert_eq!(mat.kind, Specular::None);
+    }
+
+    #[test]
+    fn material_mode_keeps_what_the_script_does_not_define() {
+        // Only emission: the material's own model, colours and exponent stay.
+        let descs = [map("function emission(s) return 0, 5, 0 end", DecalMode::Material, &[])];
+        let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
+        let before =
+            Material { diffuse: Vec3::splat(0.5), specular: Vec3::ONE, phong: 40.0, ..Material::default() };
+        let mut mat = before;
+        tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut Vec3::Z.clone()).unwrap();
+        assert_eq!(
+            (mat.diffuse, mat.specular, mat.phong, mat.brdf),
+            (before.diffuse, before.specular, 40.0, None)
+        );
+        assert_eq!(mat.emission, Vec3::new(0.0, 5.0, 0.0));
+        // Metalness without roughness keeps the exponent's highlight width.
+        let descs = [map("function metalness(s) return 1 end", DecalMode::Material, &[])];
+        let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
+        let mut mat = before;
+        tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut Vec3::Z.clone()).unwrap();
+        assert_eq!((mat.diffuse, mat.specular), (Vec3::ZERO, Vec3::splat(0.5)));
+        assert_eq!(mat.brdf, Some(Brdf::Microfacet(Microfacet::from_exponent(40.0))));
+    }
+
+    #[test]
+    fn out_of_range_material_outputs_are_one_sentence_errors() {
+        for (code, what) in [
+            (
+                "function roughness(s) return 1.5 end",
+                "roughness() returned 1.5 (expected a number from 0 to 1)",
+            ),
+            ("function metalness(s) return -0.1 end", "metalness() returned -0.1"),
+            ("function roughness(s) return 0/0 end", "roughness() returned NaN"),
+            (
+                "function color(s) return 1.2, 0, 0 end",
+                "color() returned 1.2 as its red value (expected 0 to 1",
+            ),
+            ("function specular(s) return 0, 0, -1 end", "specular() returned -1 as its blue value"),
+            (
+                "function emission(s) return 0, -2, 0 end",
+                "emission() returned -2 as its green value (expected 0 or more",
+            ),
+            ("function emission(s) return 1/0, 0, 0 end", "emission() returned inf as its red value"),
+            ("function reflect(s) return 0.5 end", "reflect() returned nothing (nil) as its green value"),
+        ] {
+            let descs = [map(code, DecalMode::Material, &[])];
+            let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
+            let mut mat = Material::default();
+            let e = tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut Vec3::Z.clone()).unwrap_err();
+            assert_eq!(e.kind, crate::shader::ShaderErrorKind::BadResult, "{code}: {e}");
+            let text = e.to_string();
+            assert!(text.contains(what) && !text.contains('\n'), "{code}: {text}");
+        }
+        // A script with no material output cannot drive the mode.
+        let descs = [map("function height(s) return 0 end", DecalMode::Material, &[])];
+        let e = compile(&descs, DEFAULT, None).unwrap_err();
+        assert!(e.message.contains("defines none of color, specular, roughness"), "{}", e.message);
     }
 
     const DEFAULT: Duration = crate::shader::DEFAULT_TIMEOUT;

@@ -212,11 +212,13 @@ impl Volumes {
         let shaders = if sources.is_empty() {
             None
         } else {
-            Some(ShaderSet::with_images(sources, timeout, images).map_err(|e| {
-                // The set names the failing shader; find its volume for the location.
-                let at = owners.iter().find(|(_, n)| *n == e.shader).map_or(owners[0].0, |o| o.0);
-                err(&desc.volumes[at], e.to_string())
-            })?)
+            Some(ShaderSet::with_modules(sources, timeout, images, desc.module_search_path()).map_err(
+                |e| {
+                    // The set names the failing shader; find its volume for the location.
+                    let at = owners.iter().find(|(_, n)| *n == e.shader).map_or(owners[0].0, |o| o.0);
+                    err(&desc.volumes[at], e.to_string())
+                },
+            )?)
         };
         let mut out = Volumes { media: Vec::new(), surfaces: Vec::new(), shaders: None };
         let mut next_script = 0;

@@ -10,6 +10,7 @@ fn desc(volumes: Vec<VolumeDesc>) -> Description {
     let mut d = crate::scene::description::Description {
         file: "v.xml".into(),
         base_dir: ".".into(),
+        shader_libraries: Vec::new(),
         max_recursion_depth: 1,
         background: Vec3::ZERO,
         shadow_ray_epsilon: 1e-3,

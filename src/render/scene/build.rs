@@ -265,9 +265,13 @@ fn build_textures(desc: &Description, opts: &BuildOptions) -> Result<Textures, S
             Ok(img)
         })
         .collect::<Result<_, _>>()?;
-    let shaders =
-        shader::compile(&desc.texture_maps, opts.shader_timeout, Some(shader_images(desc, &images)))
-            .map_err(|e| SceneError::at(&desc.file, &desc.texture_maps[e.map].loc, e.message))?;
+    let shaders = shader::compile_with_modules(
+        &desc.texture_maps,
+        opts.shader_timeout,
+        Some(shader_images(desc, &images)),
+        desc.module_search_path(),
+    )
+    .map_err(|e| SceneError::at(&desc.file, &desc.texture_maps[e.map].loc, e.message))?;
     Ok(Textures::new(images, &desc.texture_maps, desc.background_texture, shaders))
 }
 

@@ -88,6 +88,7 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
             "Textures",
             "Objects",
             "Volumes",
+            "ShaderLibrary",
         ],
     );
     let max_recursion_depth = match root.child("MaxRecursionDepth") {
@@ -146,6 +147,14 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
         None => Vec::new(),
     };
     let base_dir = file.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut shader_libraries = Vec::new();
+    for lib in root.children_named("ShaderLibrary") {
+        let rel = lib.text.trim();
+        if rel.is_empty() {
+            return Err(r.err(lib, "<ShaderLibrary> names no folder"));
+        }
+        shader_libraries.push(base_dir.join(rel));
+    }
     let (mut images, mut texture_maps) = match root.child("Textures") {
         Some(t) => textures::read_all(&r, t, &base_dir, &mut w)?,
         None => (Vec::new(), Vec::new()),
@@ -198,6 +207,7 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
     Ok(Description {
         file: file.to_path_buf(),
         base_dir,
+        shader_libraries,
         max_recursion_depth,
         background: r.vec3_or(root, "BackgroundColor", Vec3::ZERO)?,
         shadow_ray_epsilon,

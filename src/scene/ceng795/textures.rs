@@ -105,12 +105,13 @@ fn texture_map(
         "bump_normal" => DecalMode::BumpNormal,
         "replace_all" => DecalMode::ReplaceAll,
         "replace_km" => DecalMode::ReplaceKm,
+        "material" => DecalMode::Material,
         other => {
             return Err(r.err(
                 decal_el,
                 format!(
                     "<DecalMode> \"{other}\" is unknown (expected replace_kd, blend_kd, replace_ks, \
-                     replace_km, replace_background, replace_normal, bump_normal or replace_all)"
+                     replace_km, replace_background, replace_normal, bump_normal, replace_all or material)"
                 ),
             ))
         }
@@ -200,6 +201,9 @@ fn texture_map(
             ))
         }
     };
+    if decal == DecalMode::Material && !matches!(source, TextureSource::Shader { .. }) {
+        return Err(r.err(decal_el, "<DecalMode> material is for shader maps (type=\"shader\") only"));
+    }
     Ok(TextureMapDesc {
         id: id_of(el),
         source,

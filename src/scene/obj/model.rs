@@ -174,6 +174,7 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
     Ok(Description {
         file: path.to_path_buf(),
         base_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+        shader_libraries: Vec::new(),
         max_recursion_depth: 6,
         background: SKY,
         shadow_ray_epsilon: 1e-4 * radius,

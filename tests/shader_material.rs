@@ -1,0 +1,156 @@
+//! Shaders that drive the BSDF (`DecalMode material`, `docs/shaders.md`
+//! "Material outputs") in whole renders: an emissive shader lights a floor
+//! with the analytic irradiance in the path tracer, shows as itself in the
+//! recursive ray tracer, and a roughness output widens a highlight.
+
+use luster::render::{render_with, RenderOptions, RenderedImage, Scene};
+use luster::scene::Description;
+use std::path::Path;
+
+fn load(dir: &Path, text: &str, shaders: &[(&str, &str)]) -> Description {
+    for (name, code) in shaders {
+        std::fs::write(dir.join(name), code).expect("temp shader");
+    }
+    let p = dir.join("s.xml");
+    std::fs::write(&p, text).expect("temp file");
+    luster::scene::load(&p).expect("scene loads")
+}
+
+fn render(desc: &Description, spp: u32, seed: u32) -> RenderedImage {
+    let scene = Scene::build(desc).expect("scene builds");
+    render_with(&scene, 0, &RenderOptions { spp: Some(spp), seed, ..Default::default() }, &|_| {})
+}
+
+/// A diffuse floor (albedo 0.5, normalized Phong: `ρ/π`) under a sphere of
+/// radius 0.5 centred 2 above the origin whose only light is a shader's
+/// `emission(s)` of 10; a narrow camera looks at the origin. The sphere is
+/// no light of the scene, so only bounces find it; the radiance leaving the
+/// floor there is `ρ/π · π L R²/d² = 0.5 · 10 · 0.25 / 4 = 0.3125`.
+fn glowing_sphere(renderer: &str, position: &str, gaze: &str) -> String {
+    format!(
+        r#"<Scene>
+  <MaxRecursionDepth>1</MaxRecursionDepth>
+  <Cameras><Camera id="1" type="lookAt"><Position>{position}</Position><GazePoint>{gaze}</GazePoint><Up>0 1 0</Up>
+    <FovY>1</FovY><NearDistance>1</NearDistance><ImageResolution>16 16</ImageResolution>
+    <ImageName>a.exr</ImageName>{renderer}</Camera></Cameras>
+  <BRDFs><ModifiedPhong id="1" normalized="true"><Exponent>1</Exponent></ModifiedPhong></BRDFs>
+  <Materials>
+    <Material id="1" BRDF="1"><DiffuseReflectance>0.5 0.5 0.5</DiffuseReflectance><SpecularReflectance>0 0 0</SpecularReflectance></Material>
+    <Material id="2"><DiffuseReflectance>0 0 0</DiffuseReflectance><SpecularReflectance>0 0 0</SpecularReflectance></Material>
+  </Materials>
+  <Textures><TextureMap id="1" type="shader"><Shader>glow.lua</Shader><DecalMode>material</DecalMode></TextureMap></Textures>
+  <VertexData>0 0 0  0 2 0</VertexData>
+  <Objects>
+    <Plane id="1"><Material>1</Material><Point>1</Point><Normal>0 1 0</Normal></Plane>
+    <Sphere id="2"><Material>2</Material><Textures>1</Textures><Center>2</Center><Radius>0.5</Radius></Sphere>
+  </Objects>
+</Scene>"#
+    )
+}
+
+const GLOW: &str = "function emission(s) return 10, 10, 10 end";
+
+fn green(img: &RenderedImage) -> Vec<f64> {
+    img.pixels.iter().map(|p| f64::from(p.y)).collect()
+}
+
+#[test]
+fn an_emissive_shader_lights_a_floor_with_the_analytic_irradiance() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let expected = 0.3125;
+    for params in ["MIS", "NextEventEstimation ImportanceSampling", "ImportanceSampling"] {
+        let renderer = format!("<Renderer>PathTracing</Renderer><RendererParams>{params}</RendererParams>");
+        let desc = load(dir.path(), &glowing_sphere(&renderer, "0 1 3", "0 0 0"), &[("glow.lua", GLOW)]);
+        let (a, b) = (green(&render(&desc, 64, 1)), green(&render(&desc, 64, 2)));
+        // The two seeds' pixel-by-pixel differences give the variance of
+        // one pixel's estimate (var(a - b) = 2σ²) without assuming the
+        // pixels share one true value; the mean of both renders then has
+        // standard error σ / sqrt(2n).
+        let n = a.len() as f64;
+        let var = a.iter().zip(&b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / (2.0 * n);
+        let mean = (a.iter().sum::<f64>() + b.iter().sum::<f64>()) / (2.0 * n);
+        let se = (var / (2.0 * n)).sqrt();
+        let z = (mean - expected) / se;
+        println!("{params:<40} mean {mean:.4} ± {se:.4} (expected {expected}), z = {z:.2}");
+        // The pixels see points up to 0.03 from the origin, where the
+        // radiance is lower by under 0.1%, far inside the bar.
+        assert!(se > 0.0 && z.abs() < 4.0, "{params}: mean {mean:.4} ± {se:.4}, expected {expected}");
+    }
+}
+
+#[test]
+fn the_recursive_ray_tracer_shows_an_emissive_shader_as_it_is() {
+    // Looking straight at the sphere: its black material reflects nothing,
+    // so every pixel is exactly the emission.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let desc = load(dir.path(), &glowing_sphere("", "0 2 3", "0 2 0"), &[("glow.lua", GLOW)]);
+    let img = render(&desc, 1, 0);
+    assert!(img.pixels.iter().all(|p| p.to_array() == [10.0; 3]), "{:?}", &img.pixels[..4]);
+}
+
+/// A white metal sphere under a point light beside the camera, its
+/// roughness from a shader parameter, in the recursive ray tracer.
+fn highlight(roughness: f64) -> Vec<f64> {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let text = format!(
+        r#"<Scene>
+  <Cameras><Camera id="1" type="lookAt"><Position>0 0 5</Position><GazePoint>0 0 0</GazePoint><Up>0 1 0</Up>
+    <FovY>30</FovY><NearDistance>1</NearDistance><ImageResolution>128 128</ImageResolution><ImageName>a.png</ImageName></Camera></Cameras>
+  <Lights><PointLight id="1"><Position>0 0 5</Position><Intensity>1000 1000 1000</Intensity></PointLight></Lights>
+  <Materials><Material id="1"><DiffuseReflectance>1 1 1</DiffuseReflectance><SpecularReflectance>0.04 0.04 0.04</SpecularReflectance></Material></Materials>
+  <Textures><TextureMap id="1" type="shader"><Shader>metal.lua</Shader><DecalMode>material</DecalMode>
+    <Parameter name="roughness">{roughness}</Parameter></TextureMap></Textures>
+  <VertexData>0 0 0</VertexData>
+  <Objects><Sphere id="1"><Material>1</Material><Textures>1</Textures><Center>1</Center><Radius>1</Radius></Sphere></Objects>
+</Scene>"#
+    );
+    let metal = "params { roughness = 0.3 }\n\
+                 function metalness(s) return 1 end\n\
+                 function roughness(s) return param.roughness end";
+    green(&render(&load(dir.path(), &text, &[("metal.lua", metal)]), 1, 0))
+}
+
+#[test]
+fn a_roughness_output_widens_the_highlight() {
+    // The highlight's area, counted as pixels above half its peak: GGX's
+    // half-maximum cone grows about as α² = roughness⁴, so doubling the
+    // roughness should grow the area by an order of magnitude.
+    let area = |v: &[f64]| {
+        let peak = v.iter().copied().fold(0.0, f64::max);
+        assert!(peak > 0.0);
+        v.iter().filter(|&&x| x > 0.5 * peak).count()
+    };
+    let (narrow, wide) = (area(&highlight(0.2)), area(&highlight(0.4)));
+    println!("pixels above half the peak: roughness 0.2: {narrow}, 0.4: {wide}");
+    assert!(narrow >= 1 && wide >= 6 * narrow, "roughness 0.2: {narrow} pixels, 0.4: {wide}");
+}
+
+#[test]
+fn a_require_escape_is_a_one_sentence_error_with_exit_code_2() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = glowing_sphere("", "0 2 3", "0 2 0");
+    std::fs::write(dir.path().join("s.xml"), scene).expect("scene");
+    std::fs::write(
+        dir.path().join("glow.lua"),
+        "local x = require '../secret'\nfunction emission(s) return 1, 1, 1 end",
+    )
+    .expect("shader");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_luster"))
+        .args(["render", "-q", "-o"])
+        .arg(dir.path().join("out"))
+        .arg(dir.path().join("s.xml"))
+        .output()
+        .expect("luster runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("glow.lua:1") && err.contains("'../secret' is not a module name"), "{err}");
+    // A --shader-lib that is not a folder is refused before anything runs.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_luster"))
+        .args(["render", "-q", "--shader-lib"])
+        .arg(dir.path().join("nope"))
+        .arg(dir.path().join("s.xml"))
+        .output()
+        .expect("luster runs");
+    assert_eq!(out.status.code(), Some(2));
+}
