@@ -130,20 +130,33 @@ impl Gamma {
 
 /// Clamping, gamma and truncation to 8 bits as tables, instead of a `powf`
 /// per channel: `edges[k - 1]` is the smallest linear value whose code is at
-/// least `k`, and `start[i]` the code of `i / BINS`, from which a value in
-/// that bin steps up past at most a few edges.
+/// least `k` (`edges[255]` is infinite, a sentinel), and `start[i]` the code
+/// at the lower end of bin `i`. The bins split each octave of (2⁻²⁴, 1) into
+/// 1024 (the top bits of the `f32`), each 0.1% wide: narrower than the gap
+/// between two codes' edges for any gamma above 0.3 (≥ 0.4% even for code
+/// 254 to 255 at gamma 1), so a value steps past at most one edge and the
+/// step is taken without a branch.
 struct Quantizer {
-    edges: [f32; 255],
+    edges: [f32; 256],
     start: Vec<u8>,
+    /// The code of 1 and above.
+    white: u8,
+    /// Whether no bin holds two edges (true for every gamma above about 0.3).
+    one_step: bool,
 }
 
-/// Bins of [`Quantizer::start`] over [0, 1].
-const BINS: usize = 1 << 16;
+/// The smallest value with a bin of its own, as bits (2⁻²⁴); values below it
+/// start from code 0.
+const LOW_BITS: u32 = 0x3380_0000;
+/// Mantissa bits below a bin: 2¹⁰ bins an octave.
+const BIN_SHIFT: u32 = 13;
+/// Bins over [2⁻²⁴, 1).
+const BINS: usize = ((0x3F80_0000 - LOW_BITS) >> BIN_SHIFT) as usize;
 
 impl Quantizer {
     fn new(gamma: Gamma) -> Quantizer {
-        let mut edges = [0.0f32; 255];
-        for (k, e) in edges.iter_mut().enumerate() {
+        let mut edges = [f32::INFINITY; 256];
+        for (k, e) in edges[..255].iter_mut().enumerate() {
             // Bisect on the linear value, so the table agrees with
             // `to_byte(encode(clamp(c)))` up to the last bit of the bisection.
             let code = (k + 1) as u8;
@@ -159,16 +172,23 @@ impl Quantizer {
             *e = hi;
         }
         // The edges rise with the code, so one sweep finds every bin's code.
+        let count = |k: &mut usize, v: f32| {
+            while *k < 255 && edges[*k] <= v {
+                *k += 1;
+            }
+            *k as u8
+        };
         let mut k = 0usize;
-        let start = (0..=BINS)
-            .map(|i| {
-                while k < 255 && edges[k] <= i as f32 / BINS as f32 {
-                    k += 1;
-                }
-                k as u8
-            })
-            .collect();
-        Quantizer { edges, start }
+        let start =
+            (0..BINS).map(|i| count(&mut k, f32::from_bits(LOW_BITS + ((i as u32) << BIN_SHIFT)))).collect();
+        let white = count(&mut k, 1.0);
+        // One step is enough when no two edges share a bin (nor both lie
+        // below the bins, where the count starts at 0).
+        let bin = |v: f32| v.to_bits().saturating_sub(LOW_BITS) >> BIN_SHIFT;
+        let one_step = edges[..255]
+            .windows(2)
+            .all(|e| e[1] >= 1.0 || (e[0] < e[1] && e[1].to_bits() >= LOW_BITS && bin(e[0]) != bin(e[1])));
+        Quantizer { edges, start, white, one_step }
     }
 
     #[inline]
@@ -177,13 +197,17 @@ impl Quantizer {
             return 0;
         }
         if c >= 1.0 {
-            return self.start[BINS];
+            return self.white;
         }
-        let mut k = self.start[(c * BINS as f32) as usize];
-        while k < 255 && c >= self.edges[k as usize] {
-            k += 1;
+        let bin = (c.to_bits().saturating_sub(LOW_BITS) >> BIN_SHIFT) as usize;
+        let mut k = if c.to_bits() < LOW_BITS { 0 } else { self.start[bin] as usize };
+        k += usize::from(c >= self.edges[k]);
+        if !self.one_step {
+            while c >= self.edges[k] {
+                k += 1;
+            }
         }
-        k
+        k as u8
     }
 }
 

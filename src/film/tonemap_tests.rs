@@ -89,7 +89,7 @@ fn black_and_non_finite_pixels_stay_black() {
 
 #[test]
 fn the_quantizer_table_agrees_with_the_formula() {
-    for gamma in [Gamma::Power(2.2), Gamma::Power(1.0), Gamma::Srgb] {
+    for gamma in [Gamma::Power(2.2), Gamma::Power(1.0), Gamma::Power(0.1), Gamma::Srgb] {
         let q = Quantizer::new(gamma);
         // Below 1: at exactly 1 the sRGB formula gives 0.99999994 in f32 and
         // so code 254; the table gives white its 255.
@@ -97,7 +97,14 @@ fn the_quantizer_table_agrees_with_the_formula() {
             let c = i as f32 / 200_000.0;
             assert_eq!(q.code(c), to_byte(gamma.encode(c)), "{gamma:?} at {c}");
         }
+        // Spread over every octave, where the bins are.
+        for i in 0..200_000u32 {
+            let c = f32::from_bits(0x3000_0000 + i * ((0x3F80_0000 - 0x3000_0000) / 200_000));
+            assert_eq!(q.code(c), to_byte(gamma.encode(c)), "{gamma:?} at {c}");
+        }
         assert_eq!((q.code(-1.0), q.code(1.0), q.code(7.0), q.code(f32::NAN)), (0, 255, 255, 0));
+        // Both ways of stepping past the edges are covered.
+        assert_eq!(q.one_step, gamma != Gamma::Power(0.1), "{gamma:?}");
     }
 }
 
