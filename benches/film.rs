@@ -33,7 +33,14 @@ fn main() {
     let ldr = plan_outputs("film.png", &[]).expect("a .png plan");
     let dir = tempfile::tempdir().expect("a temporary folder");
     // One render unmeasured, so both sides start warm.
-    let _ = render::render(&scene, 0, &|_| {});
+    let warm = render::render(&scene, 0, &|_| {});
+    if args.iter().any(|a| a == "--outputs-only") {
+        // For a profiler: only B's output stage, over and over.
+        for _ in 0..reps {
+            write_outputs(&warm.film, dir.path(), &hdr).expect("the outputs are written");
+        }
+        return;
+    }
     let (mut a, mut b) = (Vec::new(), Vec::new());
     let (mut a_out, mut b_out) = (Vec::new(), Vec::new());
     for _ in 0..reps {
@@ -57,7 +64,7 @@ fn main() {
         maps.push(t.elapsed().as_secs_f64());
         let t = Instant::now();
         let exr = dir.path().join("parts.exr");
-        luster::image::output::write_rgb32f(&exr, 800, 800, &img.film.rgb32f()).expect("EXR written");
+        luster::image::output::write_rgb32f(&exr, 800, 800, &img.film.pixels).expect("EXR written");
         exrs.push(t.elapsed().as_secs_f64());
         let t = Instant::now();
         luster::image::output::write_rgb8(&dir.path().join("parts.png"), 800, 800, &tm).expect("PNG written");

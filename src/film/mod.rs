@@ -20,7 +20,6 @@ pub use outputs::{plan_outputs, Output, OutputKind};
 pub use tonemap::{Gamma, Operator, Tonemap};
 
 use crate::math::Vec3;
-use rayon::prelude::*;
 
 /// How a pixel's samples are combined.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -125,17 +124,6 @@ impl Film {
     /// mapped: see [`tonemap::course_rgb8`].
     pub fn to_rgb8(&self) -> Vec<u8> {
         tonemap::course_rgb8(&self.pixels)
-    }
-
-    /// The pixels as `f32` RGB triples (for the HDR writers and comparisons).
-    pub fn rgb32f(&self) -> Vec<f32> {
-        let mut out = vec![0.0f32; 3 * self.pixels.len()];
-        out.par_chunks_mut(3 * 4096).zip(self.pixels.par_chunks(4096)).for_each(|(o, px)| {
-            for (o, p) in o.chunks_exact_mut(3).zip(px) {
-                o.copy_from_slice(&p.to_array());
-            }
-        });
-        out
     }
 }
 

@@ -109,7 +109,7 @@ pub fn write_outputs(film: &Film, outdir: &Path, outputs: &[Output]) -> Result<V
         .map(|o| {
             let path = outdir.join(&o.name);
             match rgb8(film, &o.kind) {
-                None => write_rgb32f(&path, film.width, film.height, &film.rgb32f())?,
+                None => write_rgb32f(&path, film.width, film.height, &film.pixels)?,
                 Some(rgb) => write_rgb8(&path, film.width, film.height, &rgb)?,
             }
             Ok(path)

@@ -130,20 +130,33 @@ impl Gamma {
 
 /// Clamping, gamma and truncation to 8 bits as tables, instead of a `powf`
 /// per channel: `edges[k - 1]` is the smallest linear value whose code is at
-/// least `k`, and `start[i]` the code of `i / BINS`, from which a value in
-/// that bin steps up past at most a few edges.
+/// least `k` (`edges[255]` is infinite, a sentinel), and `start[i]` the code
+/// at the lower end of bin `i`. The bins split each octave of (2⁻²⁴, 1) into
+/// 1024 (the top bits of the `f32`), each 0.1% wide: narrower than the gap
+/// between two codes' edges for any gamma above 0.3 (≥ 0.4% even for code
+/// 254 to 255 at gamma 1), so a value steps past at most one edge and the
+/// step is taken without a branch.
 struct Quantizer {
-    edges: [f32; 255],
+    edges: [f32; 256],
     start: Vec<u8>,
+    /// The code of 1 and above.
+    white: u8,
+    /// Whether no bin holds two edges (true for every gamma above about 0.3).
+    one_step: bool,
 }
 
-/// Bins of [`Quantizer::start`] over [0, 1].
-const BINS: usize = 1 << 16;
+/// The smallest value with a bin of its own, as bits (2⁻²⁴); values below it
+/// start from code 0.
+const LOW_BITS: u32 = 0x3380_0000;
+/// Mantissa bits below a bin: 2¹⁰ bins an octave.
+const BIN_SHIFT: u32 = 13;
+/// Bins over [2⁻²⁴, 1).
+const BINS: usize = ((0x3F80_0000 - LOW_BITS) >> BIN_SHIFT) as usize;
 
 impl Quantizer {
     fn new(gamma: Gamma) -> Quantizer {
-        let mut edges = [0.0f32; 255];
-        for (k, e) in edges.iter_mut().enumerate() {
+        let mut edges = [f32::INFINITY; 256];
+        for (k, e) in edges[..255].iter_mut().enumerate() {
             // Bisect on the linear value, so the table agrees with
             // `to_byte(encode(clamp(c)))` up to the last bit of the bisection.
             let code = (k + 1) as u8;
@@ -158,9 +171,24 @@ impl Quantizer {
             }
             *e = hi;
         }
+        // The edges rise with the code, so one sweep finds every bin's code.
+        let count = |k: &mut usize, v: f32| {
+            while *k < 255 && edges[*k] <= v {
+                *k += 1;
+            }
+            *k as u8
+        };
+        let mut k = 0usize;
         let start =
-            (0..=BINS).map(|i| edges.partition_point(|&e| e <= i as f32 / BINS as f32) as u8).collect();
-        Quantizer { edges, start }
+            (0..BINS).map(|i| count(&mut k, f32::from_bits(LOW_BITS + ((i as u32) << BIN_SHIFT)))).collect();
+        let white = count(&mut k, 1.0);
+        // One step is enough when no two edges share a bin (nor both lie
+        // below the bins, where the count starts at 0).
+        let bin = |v: f32| v.to_bits().saturating_sub(LOW_BITS) >> BIN_SHIFT;
+        let one_step = edges[..255]
+            .windows(2)
+            .all(|e| e[1] >= 1.0 || (e[0] < e[1] && e[1].to_bits() >= LOW_BITS && bin(e[0]) != bin(e[1])));
+        Quantizer { edges, start, white, one_step }
     }
 
     #[inline]
@@ -169,13 +197,17 @@ impl Quantizer {
             return 0;
         }
         if c >= 1.0 {
-            return self.start[BINS];
+            return self.white;
         }
-        let mut k = self.start[(c * BINS as f32) as usize];
-        while k < 255 && c >= self.edges[k as usize] {
-            k += 1;
+        let bin = (c.to_bits().saturating_sub(LOW_BITS) >> BIN_SHIFT) as usize;
+        let mut k = if c.to_bits() < LOW_BITS { 0 } else { self.start[bin] as usize };
+        k += usize::from(c >= self.edges[k]);
+        if !self.one_step {
+            while c >= self.edges[k] {
+                k += 1;
+            }
         }
-        k
+        k as u8
     }
 }
 
@@ -216,65 +248,112 @@ impl Tonemap {
 
     /// 8-bit RGB of `pixels` (linear radiance), row-major.
     pub fn apply(&self, pixels: &[Vec3]) -> Vec<u8> {
-        let lum: Vec<f32> = pixels.par_iter().map(|&p| luminance(p)).collect();
-        let log_sum: f64 = lum
-            .par_chunks(4096)
-            .map(|c| c.iter().map(|&y| f64::from((LOG_DELTA as f32 + y).ln())).sum::<f64>())
-            .sum();
-        let log_avg = if lum.is_empty() { 1.0 } else { (log_sum / lum.len() as f64).exp() };
-        let scale = (f64::from(self.key) / log_avg) as f32;
-        let l_white = (self.burn_percent > 0.0 && !lum.is_empty()).then(|| {
-            let n = lum.len();
-            let at = (((1.0 - f64::from(self.burn_percent) / 100.0) * n as f64) as usize).min(n - 1);
-            nth_scaled(&lum, scale, at).max(f32::MIN_POSITIVE)
-        });
-        let t = *self;
-        let q = Quantizer::new(t.gamma);
         let mut out = vec![0u8; 3 * pixels.len()];
-        let blocks = pixels.par_chunks(1024).zip(lum.par_chunks(1024));
-        out.par_chunks_mut(3 * 1024).zip(blocks).for_each(|(out, (px, lum))| {
-            for ((o, &p), &y) in out.chunks_exact_mut(3).zip(px).zip(lum) {
+        self.apply_into(pixels, &mut out);
+        out
+    }
+
+    /// [`Tonemap::apply`] into `out` (`3 · pixels.len()` bytes). Two passes
+    /// over the pixels, each on every core: the statistics (log-average and,
+    /// for a burn-out, a luminance histogram), then the mapping straight into
+    /// the 8-bit buffer. Luminance is recomputed in the second pass rather
+    /// than kept: that is cheaper than writing and reading it back.
+    pub fn apply_into(&self, pixels: &[Vec3], out: &mut [u8]) {
+        assert_eq!(out.len(), 3 * pixels.len(), "the 8-bit buffer holds three bytes a pixel");
+        if pixels.is_empty() {
+            return;
+        }
+        let t = *self;
+        let burn = t.burn_percent > 0.0;
+        let (q, stats) = rayon::join(|| Quantizer::new(t.gamma), || Stats::of(pixels, burn));
+        let log_avg = (stats.log_sum / pixels.len() as f64).exp();
+        let scale = (f64::from(t.key) / log_avg) as f32;
+        let l_white = burn.then(|| {
+            let n = pixels.len();
+            let at = (((1.0 - f64::from(t.burn_percent) / 100.0) * n as f64) as usize).min(n - 1);
+            // Multiplying by a positive scale keeps the order (rounding is
+            // monotone), so the rank-`at` scaled luminance is the rank-`at`
+            // luminance scaled: exactly what sorting `L` would give.
+            (nth_luminance(pixels, &stats.hist, at) * scale).max(f32::MIN_POSITIVE)
+        });
+        const ROWS: usize = 1024;
+        out.par_chunks_mut(3 * ROWS).zip(pixels.par_chunks(ROWS)).for_each(|(out, px)| {
+            for (o, &p) in out.chunks_exact_mut(3).zip(px) {
+                let y = luminance(p);
                 if y > 0.0 {
                     let yo = t.operator.curve(y * scale, l_white);
                     let ratio = (p * (1.0 / y)).max(Vec3::ZERO);
                     let c = if t.saturation == 1.0 { ratio } else { ratio.powf(t.saturation) } * yo;
-                    o.copy_from_slice(&c.to_array().map(|c| q.code(c)));
+                    o[0] = q.code(c.x);
+                    o[1] = q.code(c.y);
+                    o[2] = q.code(c.z);
+                } else {
+                    o.fill(0);
                 }
             }
         });
-        out
     }
 }
 
-/// The `at`-th smallest of `y * scale` over `lum` (in `f32::total_cmp`
-/// order), as a full sort would give it, without sorting on one thread: the
-/// values' bit patterns order them like the numbers (all are non-negative:
-/// [`luminance`] makes them so), so a parallel histogram of the top 16 bits
-/// finds the bucket holding rank `at`, and only that bucket is selected in.
-fn nth_scaled(lum: &[f32], scale: f32, at: usize) -> f32 {
-    const BUCKETS: usize = 1 << 16;
-    let key = |y: f32| (y * scale).to_bits();
-    if lum.iter().any(|&y| key(y) >> 31 != 0) {
-        // A negative scale or NaN sign: bits no longer order the values.
-        let mut v: Vec<f32> = lum.iter().map(|&y| y * scale).collect();
-        return *v.select_nth_unstable_by(at, f32::total_cmp).1;
+/// Pixels per block of the log-average's partial sums. The blocks are fixed
+/// and summed in order, so the result does not depend on the thread count.
+const LOG_BLOCK: usize = 4096;
+
+/// Buckets of the luminance histogram: the top 16 bits of an `f32`. For
+/// non-negative numbers the bit patterns order like the values, so a bucket
+/// holds a contiguous range of luminance.
+const BUCKETS: usize = 1 << 16;
+
+/// What the mapping needs from the whole image, gathered in one pass.
+struct Stats {
+    /// `Σ ln(δ + Y)` over all pixels.
+    log_sum: f64,
+    /// Pixels per [`BUCKETS`] bucket of `Y` (empty without a burn-out).
+    hist: Vec<u32>,
+}
+
+impl Stats {
+    fn of(pixels: &[Vec3], with_hist: bool) -> Stats {
+        type Part = (Vec<(usize, f64)>, Vec<u32>);
+        let (mut sums, hist) = pixels
+            .par_chunks(LOG_BLOCK)
+            .enumerate()
+            .fold(
+                || -> Part { (Vec::new(), if with_hist { vec![0u32; BUCKETS] } else { Vec::new() }) },
+                |(mut sums, mut hist), (i, block)| {
+                    let mut s = 0.0f64;
+                    for &p in block {
+                        let y = luminance(p);
+                        s += f64::from((LOG_DELTA as f32 + y).ln());
+                        if with_hist {
+                            hist[(y.to_bits() >> 16) as usize] += 1;
+                        }
+                    }
+                    sums.push((i, s));
+                    (sums, hist)
+                },
+            )
+            .reduce(
+                || (Vec::new(), Vec::new()),
+                |(mut sa, mut ha), (sb, hb)| {
+                    sa.extend(sb);
+                    if ha.is_empty() {
+                        ha = hb;
+                    } else if !hb.is_empty() {
+                        ha.iter_mut().zip(&hb).for_each(|(a, b)| *a += b);
+                    }
+                    (sa, ha)
+                },
+            );
+        sums.sort_unstable_by_key(|&(i, _)| i);
+        Stats { log_sum: sums.iter().map(|&(_, s)| s).sum(), hist }
     }
-    let hist = lum
-        .par_chunks(1 << 15)
-        .map(|c| {
-            let mut h = vec![0u32; BUCKETS];
-            for &y in c {
-                h[(key(y) >> 16) as usize] += 1;
-            }
-            h
-        })
-        .reduce(
-            || vec![0u32; BUCKETS],
-            |mut a, b| {
-                a.iter_mut().zip(&b).for_each(|(a, b)| *a += b);
-                a
-            },
-        );
+}
+
+/// The `at`-th smallest [`luminance`] of `pixels` (in `f32::total_cmp`
+/// order), as a full sort would give it: `hist` (see [`Stats`]) finds the
+/// bucket holding rank `at`, and only that bucket's values are selected in.
+fn nth_luminance(pixels: &[Vec3], hist: &[u32], at: usize) -> f32 {
     let (mut below, mut bucket) = (0usize, 0usize);
     for (i, &c) in hist.iter().enumerate() {
         if below + c as usize > at {
@@ -284,7 +363,7 @@ fn nth_scaled(lum: &[f32], scale: f32, at: usize) -> f32 {
         below += c as usize;
     }
     let mut inside: Vec<f32> =
-        lum.par_iter().map(|&y| y * scale).filter(|v| (v.to_bits() >> 16) as usize == bucket).collect();
+        pixels.par_iter().map(|&p| luminance(p)).filter(|y| (y.to_bits() >> 16) as usize == bucket).collect();
     *inside.select_nth_unstable_by(at - below, f32::total_cmp).1
 }
 

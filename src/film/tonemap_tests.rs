@@ -89,7 +89,7 @@ fn black_and_non_finite_pixels_stay_black() {
 
 #[test]
 fn the_quantizer_table_agrees_with_the_formula() {
-    for gamma in [Gamma::Power(2.2), Gamma::Power(1.0), Gamma::Srgb] {
+    for gamma in [Gamma::Power(2.2), Gamma::Power(1.0), Gamma::Power(0.1), Gamma::Srgb] {
         let q = Quantizer::new(gamma);
         // Below 1: at exactly 1 the sRGB formula gives 0.99999994 in f32 and
         // so code 254; the table gives white its 255.
@@ -97,7 +97,14 @@ fn the_quantizer_table_agrees_with_the_formula() {
             let c = i as f32 / 200_000.0;
             assert_eq!(q.code(c), to_byte(gamma.encode(c)), "{gamma:?} at {c}");
         }
+        // Spread over every octave, where the bins are.
+        for i in 0..200_000u32 {
+            let c = f32::from_bits(0x3000_0000 + i * ((0x3F80_0000 - 0x3000_0000) / 200_000));
+            assert_eq!(q.code(c), to_byte(gamma.encode(c)), "{gamma:?} at {c}");
+        }
         assert_eq!((q.code(-1.0), q.code(1.0), q.code(7.0), q.code(f32::NAN)), (0, 255, 255, 0));
+        // Both ways of stepping past the edges are covered.
+        assert_eq!(q.one_step, gamma != Gamma::Power(0.1), "{gamma:?}");
     }
 }
 
@@ -111,23 +118,39 @@ fn percentile_by_histogram_matches_a_full_sort() {
         x ^= x << 5;
         x
     };
-    let lum: Vec<f32> = (0..100_000)
+    let px: Vec<Vec3> = (0..100_000)
         .map(|i| match i % 5 {
-            0 => 0.0,
-            1 => 1.5,
-            2 => 1.5 + (next() % 1000) as f32 * 1e-7,
-            _ => (next() % 1_000_000) as f32 * 10f32.powi((next() % 9) as i32 - 4),
+            0 => Vec3::ZERO,
+            1 => grey(1.5),
+            2 => Vec3::new(1.5 + (next() % 1000) as f32 * 1e-7, 1.5, 1.5),
+            _ => Vec3::new(1.0, 0.5, 2.0) * (next() % 1_000_000) as f32 * 10f32.powi((next() % 9) as i32 - 4),
         })
         .collect();
-    for scale in [1.0f32, 0.37, 1e-3] {
-        let mut sorted: Vec<f32> = lum.iter().map(|&y| y * scale).collect();
-        sorted.sort_by(f32::total_cmp);
-        for at in [0, 1, 19_999, 20_000, 50_000, 98_999, 99_999] {
-            assert_eq!(
-                super::nth_scaled(&lum, scale, at).to_bits(),
-                sorted[at].to_bits(),
-                "scale {scale} at {at}"
-            );
+    let stats = Stats::of(&px, true);
+    let mut sorted: Vec<f32> = px.iter().map(|&p| luminance(p)).collect();
+    sorted.sort_by(f32::total_cmp);
+    for at in [0, 1, 19_999, 20_000, 50_000, 98_999, 99_999] {
+        assert_eq!(super::nth_luminance(&px, &stats.hist, at).to_bits(), sorted[at].to_bits(), "at {at}");
+    }
+    // Scaling after selecting gives the scaled values' own rank.
+    for scale in [0.37f32, 1e-3, 3.7e4] {
+        let mut scaled: Vec<f32> = sorted.iter().map(|&y| y * scale).collect();
+        scaled.sort_by(f32::total_cmp);
+        for at in [20_000, 50_000, 98_999] {
+            assert_eq!((sorted[at] * scale).to_bits(), scaled[at].to_bits(), "scale {scale} at {at}");
         }
     }
+}
+
+#[test]
+fn the_log_average_does_not_depend_on_the_thread_count() {
+    let px: Vec<Vec3> = (0..50_000).map(|i| grey(((i * 7919) % 1013) as f32 * 0.37 + 1e-3)).collect();
+    let with = |n| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
+        pool.install(|| Stats::of(&px, true))
+    };
+    let (one, three) = (with(1), with(3));
+    assert_eq!(one.log_sum.to_bits(), three.log_sum.to_bits());
+    assert_eq!(one.hist, three.hist);
+    assert_eq!(one.hist.iter().map(|&c| c as usize).sum::<usize>(), px.len());
 }

@@ -4,6 +4,7 @@
 //! half-written image under the real name; and [`remove_temporaries_on_signal`]
 //! makes Ctrl-C or SIGTERM during a write remove the temporary too.
 
+use crate::math::Vec3;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
@@ -66,59 +67,116 @@ pub fn write_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()
     })
 }
 
-/// Writes linear RGB (`3 · width · height` floats) to `path` as 32-bit float
-/// OpenEXR (`.exr`) or Radiance RGBE (`.hdr`), atomically.
-pub fn write_rgb32f(path: &Path, width: u32, height: u32, rgb: &[f32]) -> Result<(), WriteError> {
+/// Writes linear RGB pixels (row-major, top row first) to `path` as 32-bit
+/// float OpenEXR (`.exr`) or Radiance RGBE (`.hdr`), atomically.
+pub fn write_rgb32f(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Result<(), WriteError> {
     let format = format_of(path)
         .filter(|f| matches!(f, image::ImageFormat::OpenExr | image::ImageFormat::Hdr))
         .ok_or_else(|| WriteError {
             path: path.to_path_buf(),
             reason: "only .exr and .hdr outputs are supported for HDR images".into(),
         })?;
-    if rgb.len() != 3 * width as usize * height as usize {
+    if pixels.len() != width as usize * height as usize {
         return Err(WriteError {
             path: path.to_path_buf(),
             reason: "the pixel buffer does not match the size".into(),
         });
     }
-    // Neither format holds a NaN or an infinity usefully: the course's EXRs
-    // have none, and RGBE cannot encode them.
-    let clean = |c: f32| if c.is_finite() { c.max(0.0) } else { 0.0 };
     if format == image::ImageFormat::OpenExr {
-        return write_atomic(path, |w| write_exr(w, width as usize, height as usize, rgb, clean));
+        return write_atomic(path, |w| write_exr(w, width as usize, height as usize, pixels));
     }
-    let bytes: Vec<u8> = rgb.iter().flat_map(|&c| clean(c).to_ne_bytes()).collect();
+    let bytes: Vec<u8> =
+        pixels.iter().flat_map(|p| p.to_array()).flat_map(|c| clean(c).to_ne_bytes()).collect();
     write_atomic(path, |w| {
         image::write_buffer_with_format(w, &bytes, width, height, image::ExtendedColorType::Rgb32F, format)
             .map_err(|e| e.to_string())
     })
 }
 
-/// 32-bit float RGB, uncompressed scan lines, from planar channels. The
-/// `image` crate's encoder (RLE on 64×64 tiles, pixel by pixel through a
-/// closure) and ZIP compression each cost a fifth of a simple 800×800
-/// render; planar uncompressed data is close to a copy
-/// (`cargo bench --bench film`). The files are larger (12 bytes a pixel).
+/// Neither format holds a NaN or an infinity usefully (the course's EXRs have
+/// none, RGBE cannot encode them), nor a negative value: they become 0.
+#[inline]
+fn clean(c: f32) -> f32 {
+    if c.is_finite() {
+        c.max(0.0)
+    } else {
+        0.0
+    }
+}
+
+/// 32-bit float RGB, uncompressed scan lines. The `exr` crate writes the
+/// header and offset table; [`ExrPixels`] lays each scan line's samples out
+/// straight from the film, so the image is read once and never copied into
+/// planes first. Compression does not pay: RLE and ZIP each cost a fifth of
+/// a simple 800×800 render (`cargo bench --bench film`), for 12 bytes a
+/// pixel written.
 fn write_exr(
-    w: &mut std::io::BufWriter<&std::fs::File>,
+    w: impl std::io::Write + std::io::Seek,
     width: usize,
     height: usize,
-    rgb: &[f32],
-    clean: impl Fn(f32) -> f32 + Sync,
+    pixels: &[Vec3],
 ) -> Result<(), String> {
-    use exr::prelude::{
-        AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, SmallVec,
-        WritableImage,
-    };
-    let plane = |c: usize| FlatSamples::F32(rgb.chunks_exact(3).map(|p| clean(p[c])).collect());
-    let (r, (g, b)) = rayon::join(|| plane(0), || rayon::join(|| plane(1), || plane(2)));
-    let channels = AnyChannels::sort(SmallVec::from_vec(vec![
-        AnyChannel::new("R", r),
-        AnyChannel::new("G", g),
-        AnyChannel::new("B", b),
-    ]));
-    let layer = Layer::new((width, height), LayerAttributes::default(), Encoding::UNCOMPRESSED, channels);
+    use exr::prelude::{Encoding, Image, Layer, LayerAttributes, WritableImage};
+    let layer = Layer::new(
+        (width, height),
+        LayerAttributes::default(),
+        Encoding::UNCOMPRESSED,
+        ExrPixels { pixels, width },
+    );
     Image::from_layer(layer).write().non_parallel().to_buffered(w).map_err(|e| e.to_string())
+}
+
+/// A film's pixels as the channels `B`, `G`, `R` (an EXR's channels are
+/// stored in name order) of `f32` samples.
+struct ExrPixels<'a> {
+    pixels: &'a [Vec3],
+    width: usize,
+}
+
+/// The channels in the order the file stores them, and the RGB component each holds.
+const EXR_CHANNELS: [(&str, usize); 3] = [("B", 2), ("G", 1), ("R", 0)];
+
+impl<'a> exr::image::write::channels::WritableChannels<'a> for ExrPixels<'a> {
+    type Writer = &'a ExrPixels<'a>;
+
+    fn infer_channel_list(&self) -> exr::meta::attribute::ChannelList {
+        use exr::prelude::{ChannelDescription, SampleType};
+        exr::meta::attribute::ChannelList::new(
+            EXR_CHANNELS.iter().map(|(name, _)| ChannelDescription::named(*name, SampleType::F32)).collect(),
+        )
+    }
+
+    fn infer_level_modes(&self) -> (exr::meta::attribute::LevelMode, exr::math::RoundingMode) {
+        (exr::meta::attribute::LevelMode::Singular, exr::math::RoundingMode::Down)
+    }
+
+    fn create_writer(&'a self, _: &exr::meta::header::Header) -> Self::Writer {
+        self
+    }
+}
+
+impl exr::image::write::channels::ChannelsWriter for &ExrPixels<'_> {
+    /// The block's lines top to bottom, each holding its `B`, then `G`, then
+    /// `R` samples left to right, in native byte order (the crate converts).
+    fn extract_uncompressed_block(
+        &self,
+        _: &exr::meta::header::Header,
+        block: exr::block::BlockIndex,
+    ) -> Vec<u8> {
+        let (x0, y0) = (block.pixel_position.x(), block.pixel_position.y());
+        let (w, h) = (block.pixel_size.width(), block.pixel_size.height());
+        let mut out = vec![0u8; 4 * 3 * w * h];
+        let lines = out.chunks_exact_mut(4 * 3 * w);
+        for (y, line) in (y0..y0 + h).zip(lines) {
+            let row = &self.pixels[y * self.width + x0..][..w];
+            for ((_, c), samples) in EXR_CHANNELS.iter().zip(line.chunks_exact_mut(4 * w)) {
+                for (s, p) in samples.chunks_exact_mut(4).zip(row) {
+                    s.copy_from_slice(&clean(p[*c]).to_ne_bytes());
+                }
+            }
+        }
+        out
+    }
 }
 
 fn format_of(path: &Path) -> Option<image::ImageFormat> {
@@ -158,7 +216,8 @@ pub(crate) fn write_atomic(
     track(&tmp_path, true);
     let written = (|| {
         {
-            let mut w = std::io::BufWriter::new(tmp.as_file());
+            // Large writes: an EXR's scan lines are bigger than the default 8 KiB.
+            let mut w = std::io::BufWriter::with_capacity(256 << 10, tmp.as_file());
             encode(&mut w)?;
             std::io::Write::flush(&mut w).map_err(|e| crate::scene::io_reason(&e))?;
         }
@@ -198,12 +257,13 @@ mod tests {
     fn exr_and_hdr_keep_values_above_one() {
         let dir = tempfile::tempdir().unwrap();
         let px = [1000.0, 0.5, 0.0, 0.25, 3.0, 70000.0];
+        let v = [Vec3::new(1000.0, 0.5, 0.0), Vec3::new(0.25, 3.0, 70000.0)];
         let p = dir.path().join("a.exr");
-        write_rgb32f(&p, 2, 1, &px).unwrap();
+        write_rgb32f(&p, 2, 1, &v).unwrap();
         let back = image::open(&p).unwrap().to_rgb32f();
         assert_eq!(back.as_raw().as_slice(), &px, "EXR is lossless 32-bit float");
         let h = dir.path().join("a.hdr");
-        write_rgb32f(&h, 2, 1, &px).unwrap();
+        write_rgb32f(&h, 2, 1, &v).unwrap();
         let back = image::open(&h).unwrap().to_rgb32f();
         for (a, b) in back.as_raw().iter().zip(px) {
             // RGBE keeps 8 bits of mantissa per channel relative to the largest channel.
@@ -218,7 +278,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let e = write_rgb8(&dir.path().join("a.xyz"), 1, 1, &[0, 0, 0]).unwrap_err();
         assert!(e.to_string().contains("a.xyz"));
-        let e = write_rgb32f(&dir.path().join("a.png"), 1, 1, &[0.0; 3]).unwrap_err();
+        let e = write_rgb32f(&dir.path().join("a.png"), 1, 1, &[Vec3::ZERO]).unwrap_err();
         assert!(e.to_string().contains("a.png"));
     }
 
@@ -231,5 +291,36 @@ mod tests {
         let e = write_rgb8(&link.join("a.png"), 1, 1, &[0, 0, 0]).unwrap_err().to_string();
         assert!(e.contains("is not a folder"), "{e}");
         assert!(!e.contains("File exists"), "{e}");
+    }
+
+    #[test]
+    fn exr_lines_are_laid_out_as_the_crates_own_flat_sample_writer_does() {
+        use exr::prelude::{
+            AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, SmallVec,
+            WritableImage,
+        };
+        // Odd sizes, values to clean, more lines than one block.
+        let (w, h) = (37usize, 23usize);
+        let px: Vec<Vec3> = (0..w * h)
+            .map(|i| match i % 11 {
+                0 => Vec3::new(f32::NAN, -1.0, f32::INFINITY),
+                k => Vec3::new(i as f32 * 0.25, k as f32 * 1e3, 1.0 / (i as f32 + 1.0)),
+            })
+            .collect();
+        let mut ours = std::io::Cursor::new(Vec::new());
+        write_exr(&mut ours, w, h, &px).unwrap();
+        let ours = ours.into_inner();
+        let plane = |c: usize| FlatSamples::F32(px.iter().map(|p| clean(p[c])).collect());
+        let channels = AnyChannels::sort(SmallVec::from_vec(vec![
+            AnyChannel::new("R", plane(0)),
+            AnyChannel::new("G", plane(1)),
+            AnyChannel::new("B", plane(2)),
+        ]));
+        let layer = Layer::new((w, h), LayerAttributes::default(), Encoding::UNCOMPRESSED, channels);
+        let mut theirs = std::io::Cursor::new(Vec::new());
+        Image::from_layer(layer).write().non_parallel().to_buffered(&mut theirs).unwrap();
+        let theirs = theirs.into_inner();
+        assert!(ours.len() > 12 * w * h, "{} bytes", ours.len());
+        assert!(ours == theirs, "the EXR bytes differ from the exr crate's generic writer");
     }
 }
