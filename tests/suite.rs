@@ -184,7 +184,8 @@ fn suite_shows_hdr_rows_with_tone_mapped_thumbnails_and_hdr_metrics() {
     assert!(out.status.success(), "render failed: {}", String::from_utf8_lossy(&out.stderr));
     let exr = expected.join("h.exr");
     let ours = Rgb32Image::load(&exr).unwrap();
-    let brighter: Vec<f32> = ours.pixels.iter().flat_map(|p| p.map(|c| c * 1.1)).collect();
+    let brighter: Vec<luster::math::Vec3> =
+        ours.pixels.iter().map(|p| luster::math::Vec3::from(*p) * 1.1).collect();
     luster::image::output::write_rgb32f(&exr, ours.width, ours.height, &brighter).unwrap();
 
     let report = dir.path().join("report");

@@ -278,3 +278,20 @@ fn passes_are_shown_as_they_end_and_a_cancel_stops_the_render() {
             .expect("no shader fails");
     assert_eq!((passes, img.spp), (1, 1), "a cancel stops the render before the next pass");
 }
+
+#[test]
+fn saving_a_required_module_rerenders() {
+    let user = "local lib = require \"lib\"\nfunction color(s)\n  return vec3(lib.r, lib.g, lib.b)\nend\n";
+    let lib = |r: u8, g: u8| format!("return {{ r = {r}, g = {g}, b = 0 }}\n");
+    let dir = folder(&[("s.xml", &scene("c.lua")), ("c.lua", user), ("lib.lua", &lib(1, 0))]);
+    let w = start(dir.path(), "s.xml");
+    let rx = events(&w.addr);
+    until(&rx, "a first frame", finished);
+    let (n1, red, _) = frame(&w.addr);
+    assert!(dominant(red, 0), "red from the module: {red:?}");
+
+    save(&dir.path().join("lib.lua"), &lib(0, 1));
+    until(&rx, "a frame after the module's save", |s| finished(s) && s["frame"].as_u64() > Some(n1));
+    let (_, green, _) = frame(&w.addr);
+    assert!(dominant(green, 1), "green after saving the module: {green:?}");
+}

@@ -482,7 +482,7 @@ fn run_case_into(
 
 /// Writes our linear image to `exr` and measures it against the course's.
 fn hdr_result(film: &Film, reference: &Rgb32Image, exr: &Path, expected: &Path) -> Result<HdrResult, String> {
-    crate::image::output::write_rgb32f(exr, film.width, film.height, &film.rgb32f())
+    crate::image::output::write_rgb32f(exr, film.width, film.height, &film.pixels)
         .map_err(|e| e.to_string())?;
     let ours = linear_image(film);
     let rel = crate::image::relative_error(reference, &ours).map_err(|e| e.to_string())?;

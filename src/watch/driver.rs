@@ -170,7 +170,11 @@ impl Driver {
                     return Err(e);
                 }
             };
-            self.preview(&desc, &mut scene, &mut labels)?;
+            let previewed = self.preview(&desc, &mut scene, &mut labels);
+            // Modules are required as shaders first run: watch those the preview met.
+            loose.extend(scene.textures.shader_modules());
+            self.files.set_files(&loose, true);
+            previewed?;
             if coarse.is_none() {
                 built = Some(scene);
             }
@@ -186,9 +190,13 @@ impl Driver {
             }
         };
         *known = scene_files(&desc);
+        known.extend(loose.iter().filter(|p| is_module(p)).cloned());
         self.files.set_files(known, false);
         labels.preview = false;
-        self.refine(&mut scene, &mut labels)
+        let refined = self.refine(&mut scene, &mut labels);
+        known.extend(scene.textures.shader_modules());
+        self.files.set_files(known, false);
+        refined
     }
 
     /// The scene's description after `--size`, `--scale` and `--crop`.
@@ -316,4 +324,10 @@ fn encode(film: &Film, kind: &OutputKind) -> Option<Vec<u8>> {
         .write_image(&rgb, film.width, film.height, image::ExtendedColorType::Rgb8)
         .ok()?;
     Some(png)
+}
+
+/// Whether `path` is a Lua module (kept watched across reloads, since the
+/// scene description does not name what its shaders `require`).
+fn is_module(path: &std::path::Path) -> bool {
+    path.extension().is_some_and(|e| e == "lua")
 }
