@@ -52,16 +52,17 @@ fn direct_preview(path: &Path) -> f64 {
     t.elapsed().as_secs_f64()
 }
 
-/// Waits for the first frame of `generation`; returns when it was seen.
-fn first_frame(session: &Session, generation: u64) -> Instant {
+/// Waits for the first frame of `generation`; returns when it was seen, and
+/// its size.
+fn first_frame(session: &Session, generation: u64) -> (Instant, (u32, u32)) {
     let hub = session.hub();
     let mut seq = 0;
     loop {
         let s =
             hub.wait_newer(seq, Duration::from_secs(120)).expect("the session answers within two minutes");
         assert!(s.error.is_none() || s.generation < generation, "the scene failed: {:?}", s.error);
-        if s.frame.as_ref().is_some_and(|f| f.generation == generation) {
-            return Instant::now();
+        if let Some(f) = s.frame.as_ref().filter(|f| f.generation == generation) {
+            return (Instant::now(), (f.width, f.height));
         }
         seq = s.seq;
     }
@@ -81,7 +82,10 @@ fn main() {
         .filter(|p| only.as_ref().is_none_or(|o| p.to_string_lossy().contains(o.as_str())))
         .collect();
     scenes.sort();
-    println!("save-to-first-pixels, median of {saves} saves (preview: 1 spp, a quarter of each side)");
+    println!(
+        "save-to-first-pixels, median of {saves} saves (preview: 1 spp, a quarter of each side, \
+         coarser when the last preview was slow; direct: the quarter-size preview)"
+    );
     println!(
         "{:<18} {:>9} {:>10} {:>10} {:>10} {:>7}",
         "scene", "preview", "watch ms", "max ms", "direct ms", "ratio"
@@ -89,8 +93,6 @@ fn main() {
     let mut all = Vec::new();
     for path in &scenes {
         let text = std::fs::read_to_string(path).expect("the scene text");
-        let desc = luster::scene::load(path).expect("the gallery scene loads");
-        let (w, h) = desc.cameras[0].resolution;
         let opts = Options {
             scene: path.clone(),
             camera: 0,
@@ -103,13 +105,15 @@ fn main() {
         let session = Session::start(opts, 0).expect("a watch session starts");
         first_frame(&session, 0);
         let mut lat = Vec::new();
+        let mut size = (0, 0);
         for i in 1..=saves as u64 {
             // Let the previous render refine a while: the save must cancel it.
             std::thread::sleep(Duration::from_millis(300));
             let t0 = Instant::now();
             std::fs::write(path, format!("{text}\n<!-- save {i} -->\n")).expect("the scene is saved");
-            let t1 = first_frame(&session, i);
+            let (t1, seen) = first_frame(&session, i);
             lat.push((t1 - t0).as_secs_f64() * 1e3);
+            size = seen;
         }
         session.stop();
         let mut direct: Vec<f64> = (0..saves).map(|_| direct_preview(path) * 1e3).collect();
@@ -118,7 +122,7 @@ fn main() {
         let name = path.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
         println!(
             "{name:<18} {:>9} {m:>10.1} {max:>10.1} {d:>10.1} {:>7.2}",
-            format!("{}x{}", w.div_ceil(4), h.div_ceil(4)),
+            format!("{}x{}", size.0, size.1),
             m / d
         );
         all.push(m);

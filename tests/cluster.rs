@@ -118,6 +118,8 @@ fn parts_merge_to_the_bytes_of_a_single_render() {
         .arg("-o")
         .arg(d.join("slurm"))
         .args(["--tasks", "3", "--spp", "2", "--shader-timeout", "1.5"])
+        .arg("--shader-lib")
+        .arg(&d)
         .args(&both);
     ok(c);
     let array = std::fs::read_to_string(d.join("slurm/luster.sbatch")).unwrap();
@@ -131,6 +133,8 @@ fn parts_merge_to_the_bytes_of_a_single_render() {
         assert!(array.contains(want), "{want} missing from\n{array}");
     }
     assert!(array.contains(&format!("'{}'", d.join("b.xml").display())), "{array}");
+    let lib = d.canonicalize().unwrap();
+    assert!(array.contains(&format!("'--shader-lib' '{}'", lib.display())), "{array}");
     let merge = std::fs::read_to_string(d.join("slurm/luster-merge.sbatch")).unwrap();
     assert!(merge.contains(&format!("merge '{}'", d.join("slurm").display())), "{merge}");
 }

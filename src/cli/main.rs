@@ -126,6 +126,9 @@ enum Command {
         #[arg(long, value_name = "SECONDS", value_parser = parse_timeout,
               default_value_t = luster::shader::DEFAULT_TIMEOUT.as_secs_f64())]
         shader_timeout: f64,
+        /// A folder shaders' `require "name"` searches (repeatable).
+        #[arg(long = "shader-lib", value_name = "DIR", value_parser = parse_shader_lib)]
+        shader_lib: Vec<PathBuf>,
         #[command(flatten)]
         model: ModelArgs,
         #[command(flatten)]
@@ -312,7 +315,19 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Watch { scene, port, camera, threads, spp, seed, shader_timeout, model, frame } => {
+        Command::Watch {
+            scene,
+            port,
+            camera,
+            threads,
+            spp,
+            seed,
+            shader_timeout,
+            shader_lib,
+            model,
+            frame,
+        } => {
+            luster::shader::set_library_dirs(shader_lib);
             watch::run(watch::Args {
                 scene,
                 port,

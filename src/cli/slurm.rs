@@ -57,6 +57,10 @@ struct JobArgs {
     /// Time limit of one shader call, in seconds (passed on to every task).
     #[arg(long, value_name = "SECONDS", value_parser = super::parse_timeout)]
     shader_timeout: Option<f64>,
+    /// A folder shaders' `require` searches (repeatable; passed on to every
+    /// task as an absolute path).
+    #[arg(long = "shader-lib", value_name = "DIR", value_parser = super::parse_shader_lib)]
+    shader_lib: Vec<PathBuf>,
     /// Least time between two checkpoints of a task, in seconds.
     #[arg(long, value_name = "SECONDS", default_value_t = 60)]
     checkpoint: u64,
@@ -119,6 +123,10 @@ fn write(a: &JobArgs) -> anyhow::Result<()> {
     }
     if let Some(t) = a.shader_timeout {
         render_args.extend(["--shader-timeout".to_string(), t.to_string()]);
+    }
+    for dir in &a.shader_lib {
+        let dir = dir.canonicalize().unwrap_or_else(|_| dir.clone());
+        render_args.extend(["--shader-lib".to_string(), dir.to_string_lossy().into_owned()]);
     }
     render_args.extend(["--checkpoint".to_string(), a.checkpoint.to_string()]);
     let job = SlurmJob {

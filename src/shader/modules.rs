@@ -41,8 +41,11 @@ pub fn search_path(scene_dirs: &[PathBuf]) -> Vec<PathBuf> {
     let cli = LIBRARY_DIRS.lock().map(|d| d.clone()).unwrap_or_default();
     let mut all: Vec<PathBuf> = Vec::new();
     for d in scene_dirs.iter().chain(&cli) {
-        if !all.contains(d) {
-            all.push(d.clone());
+        // A scene named without a folder ("s.xml") has an empty base folder,
+        // which cannot be canonicalized: it is the working directory.
+        let d = if d.as_os_str().is_empty() { PathBuf::from(".") } else { d.clone() };
+        if !all.contains(&d) {
+            all.push(d);
         }
     }
     all

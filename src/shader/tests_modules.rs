@@ -152,3 +152,9 @@ fn modules_run_in_the_sandbox_under_the_time_limit() {
     .expect("loads");
     assert_eq!(color_of(&set, 0), [0.0, 0.0, 0.0]);
 }
+
+#[test]
+fn a_scene_without_a_folder_searches_the_working_directory() {
+    let path = crate::shader::search_path(&[std::path::PathBuf::new()]);
+    assert_eq!(path.first().map(|p| p.as_path()), Some(std::path::Path::new(".")));
+}

@@ -17,7 +17,7 @@ use crate::render::{render_progressive, Progress, RenderOptions, Scene};
 use crate::scene::Description;
 use std::collections::BTreeSet;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -45,9 +45,20 @@ fn coarse_grids(desc: &Description) -> Option<Description> {
     Some(coarse)
 }
 
-/// The preview's size: a quarter of each side, at least one pixel.
-fn preview_size(w: u32, h: u32) -> (u32, u32) {
-    (w.div_ceil(4).max(1), h.div_ceil(4).max(1))
+/// What the preview pass may cost, going by the last one's time per pixel.
+const PREVIEW_BUDGET: f64 = 0.12;
+
+/// The preview's size: a quarter of each side, or an eighth or a sixteenth
+/// when the last preview's `cost` per pixel (seconds; 0 when unknown) says a
+/// quarter would take longer than [`PREVIEW_BUDGET`], as viewport renderers
+/// start coarser on heavy scenes; at least one pixel.
+fn preview_size(w: u32, h: u32, cost: f64) -> (u32, u32) {
+    let at = |d: u32| (w.div_ceil(d).max(1), h.div_ceil(d).max(1));
+    let mut d = 4;
+    while d < 16 && cost * f64::from(at(d).0) * f64::from(at(d).1) > PREVIEW_BUDGET {
+        d *= 2;
+    }
+    at(d)
 }
 
 /// The driver's side of a session.
@@ -62,6 +73,8 @@ pub struct Driver {
     pub changes: Receiver<Instant>,
     /// The watch over the scene's files (reset at every load).
     pub files: FileWatch,
+    /// Seconds per pixel of the last whole preview pass (f64 bits; 0 at first).
+    pub preview_cost: AtomicU64,
 }
 
 impl Driver {
@@ -238,10 +251,16 @@ impl Driver {
         labels.target = self.opts.render.spp.unwrap_or(full.num_samples).max(1);
         labels.kind = first_ldr(&full.image_name, &full.tonemaps).map_or(OutputKind::Course, |o| o.kind);
         let mut small = desc.cameras[cam].clone();
-        small.resolution = preview_size(full.width, full.height);
+        let cost = f64::from_bits(self.preview_cost.load(Ordering::Relaxed));
+        small.resolution = preview_size(full.width, full.height, cost);
         scene.cameras[cam] = Camera::from_desc(&small);
         let opts = RenderOptions { spp: Some(1), ..self.opts.render };
+        let start = Instant::now();
         let r = self.progressive(scene, &opts, labels);
+        if r.is_ok() && !self.cancel.load(Ordering::SeqCst) {
+            let pixels = f64::from(small.resolution.0) * f64::from(small.resolution.1);
+            self.preview_cost.store((start.elapsed().as_secs_f64() / pixels).to_bits(), Ordering::Relaxed);
+        }
         scene.cameras[cam] = full;
         r.map_err(|e| self.fail(e))
     }
@@ -330,4 +349,21 @@ fn encode(film: &Film, kind: &OutputKind) -> Option<Vec<u8>> {
 /// scene description does not name what its shaders `require`).
 fn is_module(path: &std::path::Path) -> bool {
     path.extension().is_some_and(|e| e == "lua")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_preview_gets_coarser_when_the_last_one_was_slow() {
+        assert_eq!(preview_size(800, 600, 0.0), (200, 150), "a quarter when the cost is unknown");
+        // 1 µs a pixel: 30,000 pixels cost 30 ms, within the budget.
+        assert_eq!(preview_size(800, 600, 1e-6), (200, 150));
+        // 10 µs a pixel: a quarter would take 0.3 s, an eighth 75 ms.
+        assert_eq!(preview_size(800, 600, 1e-5), (100, 75));
+        // Never below a sixteenth, however slow.
+        assert_eq!(preview_size(800, 600, 1.0), (50, 38));
+        assert_eq!(preview_size(3, 2, 1.0), (1, 1));
+    }
 }

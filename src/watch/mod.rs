@@ -83,8 +83,14 @@ impl Session {
             .thread_name(|i| format!("watch-render-{i}"))
             .build()
             .map_err(|e| format!("cannot start worker threads: {e}"))?;
-        let driver =
-            driver::Driver { opts, hub: Arc::clone(&hub), cancel: Arc::clone(&cancel), changes, files };
+        let driver = driver::Driver {
+            opts,
+            hub: Arc::clone(&hub),
+            cancel: Arc::clone(&cancel),
+            changes,
+            files,
+            preview_cost: std::sync::atomic::AtomicU64::new(0),
+        };
         let spawn = |name: &str, f: Box<dyn FnOnce() + Send>| {
             std::thread::Builder::new()
                 .name(name.into())
