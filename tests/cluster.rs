@@ -119,7 +119,7 @@ fn parts_merge_to_the_bytes_of_a_single_render() {
         .arg(d.join("slurm"))
         .args(["--tasks", "3", "--spp", "2", "--shader-timeout", "1.5"])
         .arg("--shader-lib")
-        .arg(&d)
+        .arg(d)
         .args(&both);
     ok(c);
     let array = std::fs::read_to_string(d.join("slurm/luster.sbatch")).unwrap();
