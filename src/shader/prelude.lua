@@ -797,21 +797,22 @@ local function bad(shader_name, entry, what)
   out.bad = 1
   error(format("shader '%s': %s() returned %s", shader_name, entry, what), 0)
 end
+local channel_names = { "red", "green", "blue" }
+-- A colour entry's result (r, g, b numbers or a vec3) as three numbers; a
+-- value that is not finite is an error naming its channel.
+local function finite_rgb(shader_name, entry, r, g, b)
+  if isvec(r) and g == nil then r, g, b = r.x, r.y, r.z end
+  if finite(r) and finite(g) and finite(b) then return r, g, b end
+  for i = 1, 3 do
+    local v = select(i, r, g, b)
+    if not finite(v) then
+      bad(shader_name, entry, format("%s as its %s value (expected finite r, g, b numbers or a vec3)", describe(v), channel_names[i]))
+    end
+  end
+end
 local function color_entry(f, shader_name, entry)
   return function()
-    local r, g, b = f(shade)
-    if isvec(r) and g == nil then r, g, b = r.x, r.y, r.z end
-    if finite(r) and finite(g) and finite(b) then
-      out.r, out.g, out.b = r, g, b
-      return
-    end
-    local names = { "red", "green", "blue" }
-    for i = 1, 3 do
-      local v = select(i, r, g, b)
-      if not finite(v) then
-        bad(shader_name, entry, format("%s as its %s value (expected finite r, g, b numbers or a vec3)", describe(v), names[i]))
-      end
-    end
+    out.r, out.g, out.b = finite_rgb(shader_name, entry, f(shade))
   end
 end
 -- Entry points that return one number: height, density.
@@ -859,17 +860,12 @@ end
 -- from Rust, checked against its range (docs/shaders.md, "Material outputs").
 -- hi == nil: no upper bound (emitted radiance).
 local function material_color(f, shader_name, entry, dst, hi)
-  local r, g, b = f(shade)
-  if isvec(r) and g == nil then r, g, b = r.x, r.y, r.z end
-  local names = { "red", "green", "blue" }
+  local r, g, b = finite_rgb(shader_name, entry, f(shade))
   for i = 1, 3 do
     local v = select(i, r, g, b)
-    if not finite(v) then
-      bad(shader_name, entry, format("%s as its %s value (expected finite r, g, b numbers or a vec3)", describe(v), names[i]))
-    end
     if v < 0 or (hi and v > hi) then
       local range = hi and "0 to 1: a reflectance" or "0 or more: a radiance"
-      bad(shader_name, entry, format("%s as its %s value (expected %s)", describe(v), names[i], range))
+      bad(shader_name, entry, format("%s as its %s value (expected %s)", describe(v), channel_names[i], range))
     end
   end
   dst[0], dst[1], dst[2] = r, g, b
