@@ -140,8 +140,52 @@ pub fn noise2(x: f32, y: f32) -> f32 {
 /// Improved Perlin noise in 3D, in about [-1.04, 1.04] (see the module table).
 #[inline]
 pub fn noise3(x: f32, y: f32, z: f32) -> f32 {
-    // The gradient terms are dead code here once inlined, and LLVM drops them.
-    noise3_grad(x, y, z).0
+    let (xi, fx) = lattice(x);
+    let (yi, fy) = lattice(y);
+    let (zi, fz) = lattice(z);
+    let xs = [xi, (xi + 1) & 255];
+    let (ys, zs) = ([yi, (yi + 1) & 255], [zi, (zi + 1) & 255]);
+    // Its own body rather than `noise3_grad(..).0`: fractal sums call this in
+    // a loop, where LLVM keeps `noise3_grad` out of line and the gradient,
+    // half the arithmetic, was computed and thrown away.
+    let corner = |a: usize, b: usize, c: usize| {
+        let g = GRAD3[(hash3(xs, ys, zs, a, b, c) & 15) as usize];
+        g[0] * (fx - a as f32) + g[1] * (fy - b as f32) + g[2] * (fz - c as f32)
+    };
+    let n = [
+        corner(0, 0, 0),
+        corner(1, 0, 0),
+        corner(0, 1, 0),
+        corner(1, 1, 0),
+        corner(0, 0, 1),
+        corner(1, 0, 1),
+        corner(0, 1, 1),
+        corner(1, 1, 1),
+    ];
+    blend3(n, fade(fx), fade(fy), fade(fz))
+}
+
+/// The lattice hash of corner (a, b, c) of the cell spanned by `xs`, `ys`, `zs`.
+#[inline(always)]
+fn hash3(xs: [usize; 2], ys: [usize; 2], zs: [usize; 2], a: usize, b: usize, c: usize) -> u8 {
+    // The masks change nothing (no index exceeds 510) but let LLVM drop bounds checks.
+    P[(P[(P[xs[a] & 255] as usize + ys[b]) & 511] as usize + zs[c]) & 511]
+}
+
+/// Trilinear blend of the eight corner ramps (`n[a + 2b + 4c]`) over the faded
+/// offsets, in one fixed order so that [`noise3`] and [`noise3_grad`] give the
+/// same bits.
+#[inline(always)]
+fn blend3(n: [f32; 8], u: f32, v: f32, w: f32) -> f32 {
+    let [n000, n100, n010, n110, n001, n101, n011, n111] = n;
+    let k1 = n100 - n000;
+    let k2 = n010 - n000;
+    let k3 = n001 - n000;
+    let k4 = n000 - n100 - n010 + n110;
+    let k5 = n000 - n010 - n001 + n011;
+    let k6 = n000 - n100 - n001 + n101;
+    let k7 = -n000 + n100 + n010 - n110 + n001 - n101 - n011 + n111;
+    n000 + k1 * u + k2 * v + k3 * w + k4 * u * v + k5 * v * w + k6 * w * u + k7 * u * v * w
 }
 
 /// [`noise3`] and its exact analytic gradient ∂n/∂(x, y, z).
@@ -178,11 +222,8 @@ pub fn pnoise3(x: f32, y: f32, z: f32, px: i32, py: i32, pz: i32) -> f32 {
 /// gradient vectors themselves (the ramps' own slopes).
 #[inline(always)]
 fn core3(xs: [usize; 2], ys: [usize; 2], zs: [usize; 2], fx: f32, fy: f32, fz: f32) -> (f32, [f32; 3]) {
-    // The masks change nothing (no index exceeds 510) but let LLVM drop bounds checks.
-    let hash =
-        |a: usize, b: usize, c: usize| P[(P[(P[xs[a] & 255] as usize + ys[b]) & 511] as usize + zs[c]) & 511];
     let corner = |a: usize, b: usize, c: usize| {
-        let g = GRAD3[(hash(a, b, c) & 15) as usize];
+        let g = GRAD3[(hash3(xs, ys, zs, a, b, c) & 15) as usize];
         let d = [fx - a as f32, fy - b as f32, fz - c as f32];
         (g[0] * d[0] + g[1] * d[1] + g[2] * d[2], g)
     };
@@ -204,7 +245,7 @@ fn core3(xs: [usize; 2], ys: [usize; 2], zs: [usize; 2], fx: f32, fy: f32, fz: f
     let k5 = n000 - n010 - n001 + n011;
     let k6 = n000 - n100 - n001 + n101;
     let k7 = -n000 + n100 + n010 - n110 + n001 - n101 - n011 + n111;
-    let value = n000 + k1 * u + k2 * v + k3 * w + k4 * u * v + k5 * v * w + k6 * w * u + k7 * u * v * w;
+    let value = blend3([n000, n100, n010, n110, n001, n101, n011, n111], u, v, w);
 
     let mut grad = [0.0f32; 3];
     for (axis, g) in grad.iter_mut().enumerate() {
