@@ -405,11 +405,15 @@ impl IoBlock {
         Some(block)
     }
 
-    /// Writes the shading point and arms the clock for one call.
-    pub(crate) fn begin(&self, shade: &Shade) {
-        // SAFETY: see the module doc; no Lua code runs during these writes.
+    /// Writes the shading point (`fill` writes it in place: a copy of the
+    /// record was a visible part of a call's cost) and arms the clock for one
+    /// call.
+    #[inline]
+    pub(crate) fn begin(&self, fill: impl FnOnce(&mut Shade)) {
+        // SAFETY: see the module doc; no Lua code runs during these writes,
+        // and no other reference to the record exists while `fill` runs.
         unsafe {
-            *self.shade = *shade;
+            fill(&mut *self.shade);
             *self.out = Out::default();
             (*self.clock).start_ns = 0;
             (*self.clock).expired = 0;
@@ -418,8 +422,9 @@ impl IoBlock {
 
     /// Writes the shading point, clears the material outputs and arms the
     /// clock for one `DecalMode material` call.
-    pub(crate) fn begin_material(&self, shade: &Shade) {
-        self.begin(shade);
+    #[inline]
+    pub(crate) fn begin_material(&self, fill: impl FnOnce(&mut Shade)) {
+        self.begin(fill);
         // SAFETY: see the module doc; no Lua code runs during this write.
         unsafe { *self.material = MaterialOut::default() }
     }
@@ -432,10 +437,12 @@ impl IoBlock {
 
     /// Writes the three points of a bump evaluation and arms the clock: the
     /// time limit covers the three `height` calls together.
-    pub(crate) fn begin3(&self, shades: &[Shade; 3]) {
-        // SAFETY: see the module doc; no Lua code runs during these writes.
+    #[inline]
+    pub(crate) fn begin3(&self, fill: impl FnOnce(&mut [Shade; 3])) {
+        // SAFETY: see the module doc; no Lua code runs during these writes,
+        // and no other reference to the records exists while `fill` runs.
         unsafe {
-            *self.shade3 = *shades;
+            fill(&mut *self.shade3);
             *self.out = Out::default();
             (*self.clock).start_ns = 0;
             (*self.clock).expired = 0;

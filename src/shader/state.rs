@@ -211,7 +211,7 @@ impl ThreadState {
             .set_environment(env.clone())
             .into_function()
             .map_err(lua_err)?;
-        self.io.begin(&Shade { pixel_x: -1, pixel_y: -1, ..Shade::default() });
+        self.io.begin(|s| *s = Shade { pixel_x: -1, pixel_y: -1, ..Shade::default() });
         chunk.call::<()>(tick.clone()).map_err(lua_err)?;
         self.check_deadline(name)?;
         if !declared.call::<bool>(()).map_err(lua_err)? {
@@ -296,7 +296,7 @@ impl ThreadState {
                 format!("the script defines no {}() function", entry.name()),
             ));
         };
-        self.io.begin(&shade_of(input));
+        self.io.begin(|s| write_shade(s, input));
         let result = match f.call::<()>(()) {
             Ok(()) => {
                 self.check_deadline(&shader.name)?;
@@ -356,7 +356,7 @@ impl ThreadState {
                  emission, reflect)",
             ));
         };
-        self.io.begin_material(&shade_of(input));
+        self.io.begin_material(|s| write_shade(s, input));
         let result = match f.call::<()>(()) {
             Ok(()) => self.check_deadline(&shader.name).map(|()| self.io.material()),
             Err(e) => Err(self.error(&shader.name, &e)),
@@ -387,7 +387,11 @@ impl ThreadState {
                 "the script defines no height() function",
             ));
         };
-        self.io.begin3(&[shade_of(&inputs[0]), shade_of(&inputs[1]), shade_of(&inputs[2])]);
+        self.io.begin3(|s| {
+            for (dst, input) in s.iter_mut().zip(inputs) {
+                write_shade(dst, input);
+            }
+        });
         match f.call::<()>(()) {
             Ok(()) => {
                 self.check_deadline(&shader.name)?;
@@ -399,32 +403,57 @@ impl ThreadState {
     }
 }
 
-fn shade_of(i: &ShadeInput) -> Shade {
+/// Writes one shading point into the record the prelude reads, in place.
+/// The record is destructured whole so that a field added to it cannot be
+/// left unwritten.
+#[inline(always)]
+fn write_shade(s: &mut Shade, i: &ShadeInput) {
     let v = |a: [f32; 3]| ffi::Vec3 { x: a[0].into(), y: a[1].into(), z: a[2].into() };
     let int = |x: u32| i32::try_from(x).unwrap_or(i32::MAX);
-    Shade {
-        p: v(i.p),
-        pw: v(i.pw),
-        pc: v(i.pc),
-        n: v(i.n),
-        ng: v(i.ng),
-        i: v(i.i),
-        v: v(i.i.map(|c| -c)),
-        dpdu: v(i.dpdu),
-        dpdv: v(i.dpdv),
-        dpdx: v(i.dpdx),
-        dpdy: v(i.dpdy),
-        uv: ffi::Vec2 { u: i.uv[0].into(), v: i.uv[1].into() },
-        time: i.time.into(),
-        filterwidth: i.filterwidth.into(),
-        random: object_random(i.instance_id),
-        object_id: int(i.object_id),
-        instance_id: int(i.instance_id),
-        depth: int(i.depth),
-        pixel_x: int(i.pixel[0]),
-        pixel_y: int(i.pixel[1]),
-        pad: 0,
-    }
+    let Shade {
+        p,
+        pw,
+        pc,
+        n,
+        ng,
+        i: incident,
+        v: view,
+        dpdu,
+        dpdv,
+        dpdx,
+        dpdy,
+        uv,
+        time,
+        filterwidth,
+        random,
+        object_id,
+        instance_id,
+        depth,
+        pixel_x,
+        pixel_y,
+        pad,
+    } = s;
+    *p = v(i.p);
+    *pw = v(i.pw);
+    *pc = v(i.pc);
+    *n = v(i.n);
+    *ng = v(i.ng);
+    *incident = v(i.i);
+    *view = v(i.i.map(|c| -c));
+    *dpdu = v(i.dpdu);
+    *dpdv = v(i.dpdv);
+    *dpdx = v(i.dpdx);
+    *dpdy = v(i.dpdy);
+    *uv = ffi::Vec2 { u: i.uv[0].into(), v: i.uv[1].into() };
+    *time = i.time.into();
+    *filterwidth = i.filterwidth.into();
+    *random = object_random(i.instance_id);
+    *object_id = int(i.object_id);
+    *instance_id = int(i.instance_id);
+    *depth = int(i.depth);
+    *pixel_x = int(i.pixel[0]);
+    *pixel_y = int(i.pixel[1]);
+    *pad = 0;
 }
 
 /// The shading point as `--debug-pixel` prints it.
