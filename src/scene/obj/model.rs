@@ -51,6 +51,9 @@ pub struct ModelView {
     pub distance: Option<f32>,
     /// Put a ground plane under the model.
     pub ground: bool,
+    /// The display transform (`--display`), overriding the scene's or, for a
+    /// model, `srgb`. Applies to scene files too (see [`crate::scene::load_viewed`]).
+    pub display: Option<crate::film::Display>,
 }
 
 impl Default for ModelView {
@@ -64,6 +67,7 @@ impl Default for ModelView {
             fov_y: 40.0,
             distance: None,
             ground: true,
+            display: None,
         }
     }
 }
@@ -111,8 +115,8 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         near_distance: 1.0,
         resolution: (view.width, view.height),
         image_name: format!("{stem}.png"),
-        // The course's clamp, like the example scenes: the framing lights and
-        // the shaders' colours are tuned as display values (see docs/hdr.md).
+        // The display transform (`view.display`, sRGB by default) makes the
+        // PNG: MTL colours are linear reflectances, as in other renderers.
         tonemaps: Vec::new(),
         num_samples: view.samples,
         aperture_size: 0.0,
@@ -195,6 +199,7 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         background_texture: None,
         objects,
         volumes: Vec::new(),
+        display: view.display.unwrap_or(crate::film::Display::Srgb),
         warnings,
     })
 }
