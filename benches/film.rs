@@ -7,6 +7,7 @@
 //! `cargo bench --bench film` (`-- --reps N` for more repetitions).
 
 use luster::film::outputs::{plan_outputs, write_outputs};
+use luster::film::Display;
 use luster::render::{self, Scene};
 use std::path::Path;
 use std::time::Instant;
@@ -29,8 +30,8 @@ fn main() {
     let desc = luster::scene::load(&path).expect("the bench scene loads");
     let scene = Scene::build(&desc).expect("the bench scene builds");
     let cam = &scene.cameras[0];
-    let hdr = plan_outputs(&cam.image_name, &cam.tonemaps).expect("an .exr plan");
-    let ldr = plan_outputs("film.png", &[]).expect("a .png plan");
+    let hdr = plan_outputs(&cam.image_name, &cam.tonemaps, cam.display).expect("an .exr plan");
+    let ldr = plan_outputs("film.png", &[], Display::Course).expect("a .png plan");
     let dir = tempfile::tempdir().expect("a temporary folder");
     // One render unmeasured, so both sides start warm.
     let warm = render::render(&scene, 0, &|_| {});

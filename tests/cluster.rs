@@ -5,6 +5,9 @@
 //! bad parts and bad `--part` values are one sentence and exit code 2, with
 //! no image written.
 //!
+//! One split runs under `--display srgb`, and one scene has a `<Display>`: the
+//! display transform travels with the parts.
+//!
 //! The scenes are multi-sample with a lens, so every pixel takes random
 //! samples: only a render that is truly deterministic per pixel can merge to
 //! the same bytes.
@@ -19,9 +22,14 @@ use std::time::{Duration, Instant};
 const LIMIT: Duration = Duration::from_secs(120);
 
 fn scene(name: &str, size: (u32, u32), samples: u32, light: f32) -> String {
+    scene_shown(name, size, samples, light, "")
+}
+
+fn scene_shown(name: &str, size: (u32, u32), samples: u32, light: f32, display: &str) -> String {
     let (w, h) = size;
     format!(
         r#"<Scene>
+  {display}
   <BackgroundColor>10 20 30</BackgroundColor>
   <Cameras>
     <Camera id="1"><Position>0 0 5</Position><Gaze>0 0 -1</Gaze><Up>0 1 0</Up>
@@ -94,19 +102,21 @@ fn assert_same_images(single: &Path, merged: &Path) {
 
 #[test]
 fn parts_merge_to_the_bytes_of_a_single_render() {
-    let dir =
-        common::folder(&[("a.xml", &scene("a", (70, 45), 4, 4e5)), ("b.xml", &scene("b", (37, 50), 3, 6e5))]);
+    let filmic = scene_shown("b", (37, 50), 3, 6e5, "<Display>filmic</Display>");
+    let dir = common::folder(&[("a.xml", &scene("a", (70, 45), 4, 4e5)), ("b.xml", &filmic)]);
     let d = dir.path();
     let one = vec![d.join("a.xml")];
     let both = vec![d.join("a.xml"), d.join("b.xml")];
     // 2 images in 3 parts: every image split by tiles. 4 images in 2 parts:
     // whole images per part.
-    for (scenes, n, tag) in [(&one, 3, "tiles"), (&both, 2, "images")] {
+    for (scenes, n, tag, extra) in [(&one, 3, "tiles", &["--display", "srgb"][..]), (&both, 2, "images", &[])]
+    {
         let single = d.join(format!("single-{tag}"));
         let parts = d.join(format!("parts-{tag}"));
-        ok(render(scenes, &single, &[]));
+        ok(render(scenes, &single, extra));
         for k in 1..=n {
-            ok(render(scenes, &parts, &["--part", &format!("{k}/{n}")]));
+            let part = format!("{k}/{n}");
+            ok(render(scenes, &parts, &[&["--part", part.as_str()][..], extra].concat()));
         }
         let m = merge(&parts);
         assert_eq!(m.code, Some(0), "{}", m.stderr);
@@ -117,7 +127,7 @@ fn parts_merge_to_the_bytes_of_a_single_render() {
     c.arg("slurm")
         .arg("-o")
         .arg(d.join("slurm"))
-        .args(["--tasks", "3", "--spp", "2", "--shader-timeout", "1.5"])
+        .args(["--tasks", "3", "--spp", "2", "--shader-timeout", "1.5", "--display", "aces"])
         .arg("--shader-lib")
         .arg(d)
         .args(&both);
@@ -129,6 +139,7 @@ fn parts_merge_to_the_bytes_of_a_single_render() {
         "--part \"$SLURM_ARRAY_TASK_ID/3\" --resume",
         "'--spp' '2'",
         "'--shader-timeout' '1.5'",
+        "'--display' 'aces'",
     ] {
         assert!(array.contains(want), "{want} missing from\n{array}");
     }

@@ -8,8 +8,9 @@ params {
   mortar = 0.025,
 }
 local bw, bh, mw = param.width, param.height, param.mortar
-local mortar_c = vec3(0.62, 0.60, 0.56)
-local tones = ramp({ 0, 0.5, 1 }, { { 0.45, 0.16, 0.10 }, { 0.60, 0.25, 0.15 }, { 0.70, 0.38, 0.24 } })
+-- Colours are picked on a display; srgb() makes them linear (docs/shaders.md).
+local mortar_c = srgb(0.62, 0.60, 0.56)
+local tones = ramp({ 0, 0.5, 1 }, { srgb(0.45, 0.16, 0.10), srgb(0.60, 0.25, 0.15), srgb(0.70, 0.38, 0.24) })
 
 function height(s)
   local x, y = s.P.x, s.P.y

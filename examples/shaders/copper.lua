@@ -8,8 +8,9 @@ params {
   tint = rgb(0.85, 0.45, 0.28),
 }
 local sc = param.scale
-local copper = param.tint
-local patina = ramp({ 0, 0.5, 1 }, { { 0.30, 0.55, 0.45 }, { 0.35, 0.70, 0.58 }, { 0.55, 0.80, 0.70 } })
+-- Colours (tint too) are display values; srgb() makes them linear.
+local copper = srgb(param.tint)
+local patina = ramp({ 0, 0.5, 1 }, { srgb(0.30, 0.55, 0.45), srgb(0.35, 0.70, 0.58), srgb(0.55, 0.80, 0.70) })
 
 function height(s)
   local x, y, z = s.P.x * sc, s.P.y * sc, s.P.z * sc

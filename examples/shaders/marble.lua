@@ -11,8 +11,9 @@ params {
 }
 local f = param.frequency
 local warp = param.warp
-local stone = param.stone
-local vein = param.vein
+-- The colours are display values; srgb() makes them linear.
+local stone = srgb(param.stone)
+local vein = srgb(param.vein)
 local body = ramp({ 0, 0.25, 1 }, { vein, mix(vein, stone, 0.7), stone })
 
 function color(s)

@@ -16,14 +16,15 @@ local f = param.scale
 function color(s)
   if param.mode == "instances" then
     local a = 6.2832 * s.random
-    return 0.55 + 0.35 * cos(a), 0.55 + 0.35 * cos(a + 2.1), 0.55 + 0.35 * cos(a + 4.2)
+    return srgb(0.55 + 0.35 * cos(a), 0.55 + 0.35 * cos(a + 2.1), 0.55 + 0.35 * cos(a + 4.2))
   end
   local p = s.P * f
   -- A 2D checker on the floor: y is held mid-cell, away from the cell
   -- boundary the floor lies on (where rounding would flip cells at random).
   local c = checker(vec3(p.x, 0.5, p.z), filterwidth_xyz(s, f))
   local shade = 0.85 + 0.3 * hash(floor(p.x), floor(p.z))
-  return mix(param.dark, param.light, c) * shade
+  -- The colours are display values; srgb() makes them linear.
+  return mix(srgb(param.dark), srgb(param.light), c) * shade
 end
 
 function reflect(s)

@@ -9,8 +9,9 @@ params {
   dark = rgb(0.45, 0.26, 0.12),
 }
 local rings = param.rings
-local light = param.light
-local dark = param.dark
+-- The colours are display values; srgb() makes them linear.
+local light = srgb(param.light)
+local dark = srgb(param.dark)
 
 function color(s)
   local x, y, z = s.P.x, s.P.y, s.P.z

@@ -423,6 +423,12 @@ struct ModelArgs {
     /// Leave out the ground plane under the model.
     #[arg(long)]
     no_ground: bool,
+    /// Display transform of the 8-bit images, replacing the scene's
+    /// <Display> (a model's default is srgb; a course scene's, course): course
+    /// (linear values clamped, as the course's images), or a linear workflow
+    /// (8-bit colour textures sRGB-decoded) ending in srgb, aces or filmic.
+    #[arg(long, value_name = "MODE", value_parser = parse_display, help_heading = "Output")]
+    display: Option<luster::film::Display>,
 }
 
 impl ModelArgs {
@@ -435,9 +441,17 @@ impl ModelArgs {
             fov_y: self.fov,
             distance: self.distance,
             ground: !self.no_ground,
+            display: self.display,
             ..Default::default()
         }
     }
+}
+
+/// A `--display` mode.
+fn parse_display(s: &str) -> Result<luster::film::Display, String> {
+    luster::film::Display::parse(s).ok_or_else(|| {
+        format!("\"{s}\" is not a display transform (expected {})", luster::film::Display::NAMES)
+    })
 }
 
 /// A `--size`: `WIDTHxHEIGHT`, 1 to 16384 pixels a side.

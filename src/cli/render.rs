@@ -70,7 +70,7 @@ fn render_scene(
     let plans = scene
         .cameras
         .iter()
-        .map(|c| plan_outputs(&c.image_name, &c.tonemaps))
+        .map(|c| plan_outputs(&c.image_name, &c.tonemaps, c.display))
         .collect::<Result<Vec<_>, _>>()
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     if let Some(clash) = first_clash(plans.iter().flatten().map(|o| o.name.as_path())) {

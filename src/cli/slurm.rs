@@ -54,6 +54,9 @@ struct JobArgs {
     /// Reconstruction filter.
     #[arg(long, value_enum, default_value_t = super::FilterArg::Box)]
     filter: super::FilterArg,
+    /// Display transform of the 8-bit images (see `luster render --help`).
+    #[arg(long, value_name = "MODE", value_parser = super::parse_display)]
+    display: Option<luster::film::Display>,
     /// Time limit of one shader call, in seconds (passed on to every task).
     #[arg(long, value_name = "SECONDS", value_parser = super::parse_timeout)]
     shader_timeout: Option<f64>,
@@ -120,6 +123,9 @@ fn write(a: &JobArgs) -> anyhow::Result<()> {
     }
     if matches!(a.filter, super::FilterArg::Gaussian) {
         render_args.extend(["--filter".to_string(), "gaussian".to_string()]);
+    }
+    if let Some(d) = a.display {
+        render_args.extend(["--display".to_string(), d.name().to_string()]);
     }
     if let Some(t) = a.shader_timeout {
         render_args.extend(["--shader-timeout".to_string(), t.to_string()]);

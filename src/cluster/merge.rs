@@ -119,7 +119,7 @@ pub fn merge(outdir: &Path) -> Result<Merged, ClusterError> {
         let plan = match images.get_mut(&p.image) {
             Some(plan) => plan,
             None => {
-                let outputs = plan_outputs(&p.image_name, &p.tonemaps)
+                let outputs = plan_outputs(&p.image_name, &p.tonemaps, p.display)
                     .map_err(|e| ClusterError(format!("{here}: {e}")))?;
                 images.entry(p.image).or_insert(ImagePlan {
                     name: p.image_name.clone(),

@@ -81,6 +81,7 @@ pub fn render_part(
         height: h,
         image_name: camera.image_name.clone(),
         tonemaps: camera.tonemaps.clone(),
+        display: camera.display,
         tiles: Vec::new(),
         pixels: Vec::new(),
     };

@@ -7,7 +7,7 @@
 //! | bytes | field |
 //! |---|---|
 //! | 8 | magic `LUSTPART` |
-//! | 4 | format version (1) |
+//! | 4 | format version (2) |
 //! | 4 | state: 1 a finished part, 0 a checkpoint of an unfinished one |
 //! | 32 | job id: SHA-256 of the luster version, the scene files' bytes and the options that change pixels ([`super::JobId`]) |
 //! | 4 + 4 | N, K: this is part K of N |
@@ -16,6 +16,7 @@
 //! | 4 | tile edge in pixels (16) |
 //! | 4 + L | L, then the image's `ImageName` (UTF-8) |
 //! | 4 + 18·t | t, then the camera's tone mappings: operator (u8: 0 photographic, 1 ACES, 2 filmic), key, burn-out, saturation (f32), gamma (u8: 0 power, 1 sRGB; f32 exponent) |
+//! | 1 | the scene's display transform (u8: 0 course, 1 sRGB, 2 ACES, 3 filmic) |
 //! | 4 + 4·T | T, then the indices of the tiles held, ascending (tiles are numbered row by row) |
 //! | 12·P | the tiles' pixels, tile after tile, each row by row: linear RGB as three f32 |
 //! | 4 | CRC-32 (IEEE) of every byte before it |
@@ -24,14 +25,14 @@
 //! image border).
 
 use super::ClusterError;
-use crate::film::{Gamma, Operator, Tonemap};
+use crate::film::{Display, Gamma, Operator, Tonemap};
 use crate::math::Vec3;
 use crate::render::{tile_origins, TILE};
 use crate::scene::ceng795::camera::{MAX_PIXELS, MAX_SIDE};
 use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"LUSTPART";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 
 /// The contents of a part file (or of a checkpoint).
 #[derive(Clone, Debug, PartialEq)]
@@ -56,6 +57,8 @@ pub struct PartFile {
     pub image_name: String,
     /// The camera's tone mappings.
     pub tonemaps: Vec<Tonemap>,
+    /// The scene's display transform.
+    pub display: Display,
     /// The tiles held, ascending.
     pub tiles: Vec<u32>,
     /// Their pixels, tile after tile.
@@ -111,6 +114,12 @@ impl PartFile {
             b.push(tag);
             b.extend_from_slice(&g.to_le_bytes());
         }
+        b.push(match self.display {
+            Display::Course => 0,
+            Display::Srgb => 1,
+            Display::Aces => 2,
+            Display::Filmic => 3,
+        });
         u(&mut b, self.tiles.len() as u32);
         for &t in &self.tiles {
             u(&mut b, t);
@@ -184,6 +193,13 @@ impl PartFile {
                 };
                 tonemaps.push(Tonemap { operator, key, burn_percent, saturation, gamma });
             }
+            let display = match r.u8()? {
+                0 => Display::Course,
+                1 => Display::Srgb,
+                2 => Display::Aces,
+                3 => Display::Filmic,
+                _ => return None,
+            };
             let count = tile_origins(width, height).len();
             let t = r.u32()? as usize;
             if t > count {
@@ -216,6 +232,7 @@ impl PartFile {
                 height,
                 image_name,
                 tonemaps,
+                display,
                 tiles,
                 pixels,
             })
@@ -288,6 +305,7 @@ mod tests {
             height,
             image_name: "sub/a.exr".into(),
             tonemaps: vec![Tonemap::COURSE_DEFAULT, Tonemap::DISPLAY],
+            display: Display::Filmic,
             tiles,
             pixels: (0..p).map(|i| Vec3::new(i as f32, 0.5, -1.0)).collect(),
         }

@@ -236,10 +236,11 @@ fn run_case_into(
             }
         };
         // An .exr camera is judged by its tone-mapped .png, as the course's is.
-        let (ldr, ldr_name) = match crate::film::outputs::first_ldr(&cam.image_name, &cam.tonemaps) {
-            Some(o) => (o.kind, o.name.display().to_string()),
-            None => (crate::film::OutputKind::Course, cam.image_name.clone()),
-        };
+        let (ldr, ldr_name) =
+            match crate::film::outputs::first_ldr(&cam.image_name, &cam.tonemaps, cam.display) {
+                Some(o) => (o.kind, o.name.display().to_string()),
+                None => (crate::film::OutputKind::Course, cam.image_name.clone()),
+            };
         let threshold = threshold(case, &ldr_name, cam.num_samples);
         let expected = case.expected_image(&ldr_name);
         let expected_hdr = case.expected_hdr(&cam.image_name);

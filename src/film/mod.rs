@@ -6,16 +6,21 @@
 //!   and are merged when done, so the render loop never sees 8 bits.
 //! - [`tonemap`]: the course's photographic operator (hw5), ACES and Filmic,
 //!   saturation and gamma; and the course's plain clamp for LDR scenes.
+//! - [`display`]: the display transform of scenes that opt out of the
+//!   course's 8-bit semantics (`<Display>`, `--display`).
 //! - [`outputs`]: which files a camera's `ImageName` and `Tonemap`s ask for
 //!   (an `.exr`/`.hdr` and its tone-mapped `.png`, or a single PNG/JPEG), and
 //!   writing them.
 //!
 //! Scene parameters read here (through the camera's description):
-//! `ImageName` (its extension picks the format) and `Tonemap`.
+//! `ImageName` (its extension picks the format) and `Tonemap`; the scene's
+//! `Display`.
 
+pub mod display;
 pub mod outputs;
 pub mod tonemap;
 
+pub use display::Display;
 pub use outputs::{plan_outputs, Output, OutputKind};
 pub use tonemap::{Gamma, Operator, Tonemap};
 

@@ -7,6 +7,11 @@
 //! | `x.exr`, `x.hdr` | none | `x.exr` (32-bit float) and `x.png` tone-mapped by hw5's example operator |
 //! | `x.exr`, `x.hdr` | one or more | `x.exr`, `x.png` by the first, `x_<tmo>.png` by each further one |
 //!
+//! Under a scene's display transform ([`Display`] other than `course`), the
+//! rows without a `Tonemap` write their 8-bit image through that transform
+//! instead of the course's clamp or hw5's example operator; an explicit
+//! `Tonemap` still wins.
+//!
 //! `<tmo>` is the operator's lower-case name (`photographic`, `aces`,
 //! `filmic`); a name used twice gets `_2`, `_3`, ... The course writes
 //! `x.exr` beside `x.png` (hw5 `cube_point_hdr`, every hw7 image); its 2025
@@ -14,7 +19,7 @@
 //! in any course file, hence the rule above.
 
 use super::tonemap::Tonemap;
-use super::Film;
+use super::{Display, Film};
 use crate::image::output::{write_rgb32f, write_rgb8, WriteError, HDR_EXTENSIONS, LDR_EXTENSIONS};
 use std::path::{Path, PathBuf};
 
@@ -27,6 +32,8 @@ pub enum OutputKind {
     Course,
     /// 8-bit tone-mapped.
     Tonemapped(Tonemap),
+    /// 8-bit through the scene's display transform (never `course`).
+    Display(Display),
 }
 
 /// One file a camera writes.
@@ -38,9 +45,10 @@ pub struct Output {
     pub kind: OutputKind,
 }
 
-/// The files for `image_name` and the camera's `tonemaps`, or a sentence
-/// saying why the name cannot be written.
-pub fn plan_outputs(image_name: &str, tonemaps: &[Tonemap]) -> Result<Vec<Output>, String> {
+/// The files for `image_name` and the camera's `tonemaps` under the scene's
+/// `display`, or a sentence saying why the name cannot be written. The names
+/// do not depend on `display`.
+pub fn plan_outputs(image_name: &str, tonemaps: &[Tonemap], display: Display) -> Result<Vec<Output>, String> {
     let path = Path::new(image_name);
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
     let hdr = HDR_EXTENSIONS.contains(&ext.as_str());
@@ -56,11 +64,16 @@ pub fn plan_outputs(image_name: &str, tonemaps: &[Tonemap]) -> Result<Vec<Output
     if hdr {
         out.push(Output { name: path.to_path_buf(), kind: OutputKind::Hdr });
     }
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("image");
+    if tonemaps.is_empty() && display.is_linear_workflow() {
+        let name = if hdr { path.with_file_name(format!("{stem}.png")) } else { path.to_path_buf() };
+        out.push(Output { name, kind: OutputKind::Display(display) });
+        return Ok(out);
+    }
     let maps: &[Tonemap] = if hdr && tonemaps.is_empty() { &[Tonemap::COURSE_DEFAULT] } else { tonemaps };
     if maps.is_empty() {
         out.push(Output { name: path.to_path_buf(), kind: OutputKind::Course });
     }
-    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("image");
     let mut used: Vec<String> = Vec::new();
     for (i, t) in maps.iter().enumerate() {
         let file = if i == 0 {
@@ -87,14 +100,15 @@ pub fn rgb8(film: &Film, kind: &OutputKind) -> Option<Vec<u8>> {
         OutputKind::Hdr => None,
         OutputKind::Course => Some(film.to_rgb8()),
         OutputKind::Tonemapped(t) => Some(t.apply(&film.pixels)),
+        OutputKind::Display(d) => Some(d.apply(&film.pixels)),
     }
 }
 
 /// The first 8-bit output of a camera: the image a person (or the
 /// conformance suite, against the course's `.png`) looks at. `None` when the
 /// name cannot be written.
-pub fn first_ldr(image_name: &str, tonemaps: &[Tonemap]) -> Option<Output> {
-    plan_outputs(image_name, tonemaps).ok()?.into_iter().find(|o| o.kind != OutputKind::Hdr)
+pub fn first_ldr(image_name: &str, tonemaps: &[Tonemap], display: Display) -> Option<Output> {
+    plan_outputs(image_name, tonemaps, display).ok()?.into_iter().find(|o| o.kind != OutputKind::Hdr)
 }
 
 /// Writes every output of `film` under `outdir`; returns the paths written.
@@ -144,7 +158,7 @@ mod tests {
 
     #[test]
     fn exr_writes_itself_and_a_png_beside_it() {
-        let o = plan_outputs("sub/cube_point_hdr.exr", &[]).unwrap();
+        let o = plan_outputs("sub/cube_point_hdr.exr", &[], Display::Course).unwrap();
         assert_eq!(names(&o), ["sub/cube_point_hdr.exr", "sub/cube_point_hdr.png"]);
         assert_eq!(o[0].kind, OutputKind::Hdr);
         assert_eq!(o[1].kind, OutputKind::Tonemapped(Tonemap::COURSE_DEFAULT));
@@ -154,30 +168,42 @@ mod tests {
     fn several_tonemaps_get_their_operator_in_the_name() {
         let t = |operator| Tonemap { operator, ..Tonemap::COURSE_DEFAULT };
         let maps = [t(Operator::Photographic), t(Operator::Aces), t(Operator::Filmic), t(Operator::Aces)];
-        let o = plan_outputs("a.hdr", &maps).unwrap();
+        let o = plan_outputs("a.hdr", &maps, Display::Course).unwrap();
         assert_eq!(names(&o), ["a.hdr", "a.png", "a_aces.png", "a_filmic.png", "a_aces_2.png"]);
     }
 
     #[test]
     fn png_without_tonemap_keeps_the_course_clamp() {
-        assert_eq!(plan_outputs("x.PNG", &[]).unwrap()[0].kind, OutputKind::Course);
+        assert_eq!(plan_outputs("x.PNG", &[], Display::Course).unwrap()[0].kind, OutputKind::Course);
         let srgb = Tonemap { gamma: Gamma::Srgb, ..Tonemap::DISPLAY };
-        let o = plan_outputs("x.jpg", &[srgb]).unwrap();
+        let o = plan_outputs("x.jpg", &[srgb], Display::Aces).unwrap();
         assert_eq!(names(&o), ["x.jpg"]);
         assert_eq!(o[0].kind, OutputKind::Tonemapped(srgb));
     }
 
     #[test]
+    fn a_display_transform_replaces_the_clamp_and_hw5s_default_only() {
+        let o = plan_outputs("x.png", &[], Display::Srgb).unwrap();
+        assert_eq!(names(&o), ["x.png"]);
+        assert_eq!(o[0].kind, OutputKind::Display(Display::Srgb));
+        let o = plan_outputs("d/x.exr", &[], Display::Filmic).unwrap();
+        assert_eq!(names(&o), ["d/x.exr", "d/x.png"]);
+        assert_eq!(o[1].kind, OutputKind::Display(Display::Filmic));
+        let o = plan_outputs("x.exr", &[Tonemap::DISPLAY], Display::Filmic).unwrap();
+        assert_eq!(o[1].kind, OutputKind::Tonemapped(Tonemap::DISPLAY), "an explicit Tonemap wins");
+    }
+
+    #[test]
     fn other_extensions_are_refused() {
-        let e = plan_outputs("x.bmp", &[]).unwrap_err();
+        let e = plan_outputs("x.bmp", &[], Display::Srgb).unwrap_err();
         assert!(e.contains("x.bmp") && e.contains(".exr"), "{e}");
-        assert!(plan_outputs("noext", &[]).is_err());
+        assert!(plan_outputs("noext", &[], Display::Course).is_err());
     }
 
     #[test]
     fn clashes_are_found_after_normalising() {
-        let a = plan_outputs("a.exr", &[]).unwrap();
-        let b = plan_outputs("./a.png", &[]).unwrap();
+        let a = plan_outputs("a.exr", &[], Display::Course).unwrap();
+        let b = plan_outputs("./a.png", &[], Display::Course).unwrap();
         let all: Vec<&Path> = a.iter().chain(&b).map(|o| o.name.as_path()).collect();
         assert_eq!(first_clash(all), Some(PathBuf::from("./a.png")));
         assert_eq!(first_clash([Path::new("a.png"), Path::new("b.png")]), None);

@@ -87,16 +87,22 @@ impl Operator {
                 Some(w) => l * (1.0 + l / (w * w)) / (1.0 + l),
                 None => l / (1.0 + l),
             },
-            Operator::Aces => {
-                let x = l_white.map_or(l, |w| l * ACES_WHITE / w);
-                (x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
-            }
-            Operator::Filmic => {
-                let x = l_white.map_or(l, |w| l * (FILMIC_W / FILMIC_BIAS) / w);
-                (hable(FILMIC_BIAS * x) / hable(FILMIC_W)).clamp(0.0, 1.0)
-            }
+            Operator::Aces => aces_fit(l_white.map_or(l, |w| l * ACES_WHITE / w)),
+            Operator::Filmic => hable_filmic(l_white.map_or(l, |w| l * (FILMIC_W / FILMIC_BIAS) / w)),
         }
     }
+}
+
+/// Narkowicz's ACES fit, clamped to [0, 1].
+#[inline]
+pub(super) fn aces_fit(x: f32) -> f32 {
+    (x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
+}
+
+/// Hable's curve with his exposure bias and white point, clamped to [0, 1].
+#[inline]
+pub(super) fn hable_filmic(x: f32) -> f32 {
+    (hable(FILMIC_BIAS * x) / hable(FILMIC_W)).clamp(0.0, 1.0)
 }
 
 fn hable(x: f32) -> f32 {
@@ -135,8 +141,9 @@ impl Gamma {
 /// 1024 (the top bits of the `f32`), each 0.1% wide: narrower than the gap
 /// between two codes' edges for any gamma above 0.3 (≥ 0.4% even for code
 /// 254 to 255 at gamma 1), so a value steps past at most one edge and the
-/// step is taken without a branch.
-struct Quantizer {
+/// step is taken without a branch. The display transform's quantizer rounds
+/// instead ([`Quantizer::rounding`]): the same tables, edges half a code lower.
+pub(super) struct Quantizer {
     edges: [f32; 256],
     start: Vec<u8>,
     /// The code of 1 and above.
@@ -155,6 +162,15 @@ const BINS: usize = ((0x3F80_0000 - LOW_BITS) >> BIN_SHIFT) as usize;
 
 impl Quantizer {
     fn new(gamma: Gamma) -> Quantizer {
+        Quantizer::with(gamma, to_byte)
+    }
+
+    /// Clamping, `gamma` and rounding to the nearest code.
+    pub(super) fn rounding(gamma: Gamma) -> Quantizer {
+        Quantizer::with(gamma, |v| if v.is_nan() { 0 } else { (v * 255.0 + 0.5).clamp(0.0, 255.0) as u8 })
+    }
+
+    fn with(gamma: Gamma, to_byte: fn(f32) -> u8) -> Quantizer {
         let mut edges = [f32::INFINITY; 256];
         for (k, e) in edges[..255].iter_mut().enumerate() {
             // Bisect on the linear value, so the table agrees with
@@ -192,7 +208,7 @@ impl Quantizer {
     }
 
     #[inline]
-    fn code(&self, c: f32) -> u8 {
+    pub(super) fn code(&self, c: f32) -> u8 {
         if c.is_nan() || c <= 0.0 {
             return 0;
         }

@@ -25,6 +25,9 @@ pub struct Camera {
     pub image_name: String,
     /// Tone mappings for the outputs (see [`crate::film::outputs`]).
     pub tonemaps: Vec<crate::film::Tonemap>,
+    /// The scene's display transform (set by the scene build; `course` from
+    /// [`Camera::from_desc`]).
+    pub display: crate::film::Display,
     /// Samples per pixel the scene asks for.
     pub num_samples: u32,
     /// Unit gaze, and the lens's right and up axes scaled by the aperture edge.
@@ -60,6 +63,7 @@ impl Camera {
             height,
             image_name: d.image_name.clone(),
             tonemaps: d.tonemaps.clone(),
+            display: Default::default(),
             num_samples: d.num_samples,
             gaze,
             lens_u: u * d.aperture_size,

@@ -27,12 +27,17 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
     load_viewed(path, &obj::ModelView::default())
 }
 
-/// [`load`], with an OBJ model seen through `view`.
+/// [`load`], with an OBJ model seen through `view`, and `view.display`
+/// (`--display`) replacing any scene's display transform.
 pub fn load_viewed(path: &Path, view: &obj::ModelView) -> Result<Description, SceneError> {
     if is_obj(path) {
         return obj::model_scene(path, view);
     }
-    ceng795::read(path, &element_tree(path)?)
+    let mut desc = ceng795::read(path, &element_tree(path)?)?;
+    if let Some(d) = view.display {
+        desc.display = d;
+    }
+    Ok(desc)
 }
 
 /// A scene file's element tree (XML or JSON, chosen as [`load`] does),

@@ -365,6 +365,17 @@ local function smoothstep(e0, e1, x)
 end
 local function step(edge, x) if x < edge then return 0 end return 1 end
 local function fract(x) return x - floor(x) end
+-- A colour picked on a display (sRGB-encoded, 0 to 1) as the linear value a
+-- scene with a display transform renders with: srgb(r, g, b), srgb(grey) or
+-- srgb(vec3).
+local function srgb_channel(c)
+  if c <= 0.04045 then return c / 12.92 end
+  return ((c + 0.055) / 1.055) ^ 2.4
+end
+local function srgb(r, g, b)
+  if isvec(r) then r, g, b = r.x, r.y, r.z elseif g == nil and b == nil then g, b = r, r end
+  return vec3_t(srgb_channel(r), srgb_channel(g), srgb_channel(b))
+end
 -- The box-filtered square wave, +1 on [0, 1) and -1 on [1, 2), averaged over
 -- [t - w/2, t + w/2]: the difference of its integral, a triangle wave.
 local function square_integral(t)
@@ -554,7 +565,7 @@ local BUILTINS = {
   voronoi = voronoi, voronoi2 = voronoi2, texture = texture, vperlin = vperlin, vfbm = vfbm,
   clamp = clamp, mix = mix, lerp = mix, smoothstep = smoothstep, step = step, fract = fract,
   aastep = aastep, filterwidth = filterwidth, filterwidth_xyz = filterwidth_xyz,
-  checker = checker, brick = brick, ramp = ramp, hash = hash,
+  checker = checker, brick = brick, ramp = ramp, hash = hash, srgb = srgb,
   collectgarbage = safe_collectgarbage,
 }
 

@@ -192,12 +192,23 @@ impl Image {
     /// on the 0–1 scale for 8- and 16-bit images (their values stay 0–255).
     /// Call before [`Image::build_mipmaps`].
     pub fn degamma(&mut self) {
+        self.decode(|c| c.powf(2.2));
+    }
+
+    /// Turns sRGB-encoded texels linear with the sRGB curve (IEC 61966-2-1),
+    /// on the 0–1 scale like [`Image::degamma`]: what a scene's display
+    /// transform does to its 8-bit colour images. Call before
+    /// [`Image::build_mipmaps`].
+    pub fn srgb_decode(&mut self) {
+        self.decode(crate::image::buffer::srgb_to_linear);
+    }
+
+    fn decode(&mut self, f: impl Fn(f32) -> f32) {
         let scale = if self.hdr { 1.0 } else { 255.0 };
         for level in &mut self.levels {
             let linear: Vec<[f32; 3]> = (0..level.height)
                 .flat_map(|y| (0..level.width).map(move |x| (x, y)))
-                .map(|(x, y)| (level.fetch(x, y).max(Vec3::ZERO) / scale).powf(2.2) * scale)
-                .map(|c| c.to_array())
+                .map(|(x, y)| (level.fetch(x, y).max(Vec3::ZERO) / scale).to_array().map(|c| f(c) * scale))
                 .collect();
             level.texels = Texels::Hdr(linear);
         }

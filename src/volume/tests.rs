@@ -31,6 +31,7 @@ fn desc(volumes: Vec<VolumeDesc>) -> Description {
         background_texture: None,
         objects: Vec::new(),
         volumes: Vec::new(),
+        display: Default::default(),
         warnings: Vec::new(),
     };
     d.volumes = volumes;

@@ -249,7 +249,8 @@ impl Driver {
         let cam = self.opts.camera;
         let full = scene.cameras[cam].clone();
         labels.target = self.opts.render.spp.unwrap_or(full.num_samples).max(1);
-        labels.kind = first_ldr(&full.image_name, &full.tonemaps).map_or(OutputKind::Course, |o| o.kind);
+        labels.kind =
+            first_ldr(&full.image_name, &full.tonemaps, full.display).map_or(OutputKind::Course, |o| o.kind);
         let mut small = desc.cameras[cam].clone();
         let cost = f64::from_bits(self.preview_cost.load(Ordering::Relaxed));
         small.resolution = preview_size(full.width, full.height, cost);
@@ -269,7 +270,8 @@ impl Driver {
     fn refine(&self, scene: &mut Scene, labels: &mut Labels) -> Result<(), String> {
         let full = &scene.cameras[self.opts.camera];
         labels.target = self.opts.render.spp.unwrap_or(full.num_samples).max(1);
-        labels.kind = first_ldr(&full.image_name, &full.tonemaps).map_or(OutputKind::Course, |o| o.kind);
+        labels.kind =
+            first_ldr(&full.image_name, &full.tonemaps, full.display).map_or(OutputKind::Course, |o| o.kind);
         let opts = RenderOptions { spp: Some(labels.target), ..self.opts.render };
         self.progressive(scene, &opts, labels).map_err(|e| self.fail(e))
     }

@@ -174,7 +174,15 @@ impl Scene {
             shadow_epsilon: desc.shadow_ray_epsilon,
             intersection_epsilon: desc.intersection_test_epsilon,
             max_depth: desc.max_recursion_depth,
-            cameras: desc.cameras.iter().map(Camera::from_desc).collect(),
+            cameras: desc
+                .cameras
+                .iter()
+                .map(|c| {
+                    let mut camera = Camera::from_desc(c);
+                    camera.display = desc.display;
+                    camera
+                })
+                .collect(),
             integrators: desc.cameras.iter().map(|c| Integrator::from_desc(&c.renderer)).collect(),
             warnings,
         })
@@ -221,9 +229,23 @@ fn object_label(path: &str) -> String {
 }
 
 /// Decodes the scene's images (in parallel), compiles its shader scripts and
-/// builds its texture maps. Images a trilinear map reads get mipmaps.
+/// builds its texture maps. Images a trilinear map reads get mipmaps. Under a
+/// display transform's linear workflow, 8-bit images are sRGB-decoded unless
+/// they carry `degamma` or only normal and bump maps read them (those hold
+/// data, not colour).
 fn build_textures(desc: &Description, opts: &BuildOptions) -> Result<Textures, SceneError> {
-    use crate::scene::description::{Interpolation, TextureSource};
+    use crate::scene::description::{DecalMode, Interpolation, TextureSource};
+    let data_only: Vec<bool> = (0..desc.images.len())
+        .map(|i| {
+            let mut readers = desc
+                .texture_maps
+                .iter()
+                .filter(|m| matches!(m.source, TextureSource::Image { image, .. } if image == i))
+                .peekable();
+            readers.peek().is_some()
+                && readers.all(|m| matches!(m.decal, DecalMode::ReplaceNormal | DecalMode::BumpNormal))
+        })
+        .collect();
     let trilinear: Vec<bool> = (0..desc.images.len())
         .map(|i| {
             desc.texture_maps.iter().any(|m| {
@@ -258,6 +280,8 @@ fn build_textures(desc: &Description, opts: &BuildOptions) -> Result<Textures, S
             let mut img = Image::load(&d.path).map_err(|e| SceneError::at(&desc.file, &d.loc, e))?;
             if d.degamma {
                 img.degamma();
+            } else if desc.display.is_linear_workflow() && !img.is_hdr() && !data_only[i] {
+                img.srgb_decode();
             }
             if trilinear[i] {
                 img.build_mipmaps();

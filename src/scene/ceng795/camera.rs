@@ -46,7 +46,8 @@ pub fn read_all(r: &Reader, cams: &Element, w: &mut Warnings) -> Result<Vec<Came
     let mut files = std::collections::HashSet::new();
     for c in cams.children_named("Camera") {
         let desc = read(r, c, w)?;
-        let plan = plan_outputs(&desc.image_name, &desc.tonemaps).map_err(|e| r.err(c, e))?;
+        let plan =
+            plan_outputs(&desc.image_name, &desc.tonemaps, Default::default()).map_err(|e| r.err(c, e))?;
         for o in plan {
             if !files.insert(file_key(&o.name)) {
                 return Err(r.err(

@@ -16,6 +16,7 @@
 //! | `Transformations`, `VertexData`, `Objects` | see [`objects`] (and [`obj_file`] for OBJ meshes) | |
 //! | `Textures`, `TexCoordData` | see [`textures`] | none |
 //! | `Volumes` | media and hypertextures (a luster extension), see [`volumes`] | none |
+//! | `Display` | the display transform of the 8-bit images: `course`, `srgb`, `aces` or `filmic` (a luster extension, see `crate::film::display` and docs/hdr.md) | course |
 //!
 //! Anything else gets a warning naming it, so a scene that relies on a feature
 //! luster lacks says so instead of rendering silently wrong.
@@ -89,8 +90,21 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
             "Objects",
             "Volumes",
             "ShaderLibrary",
+            "Display",
         ],
     );
+    let display = match root.child("Display") {
+        Some(el) => crate::film::Display::parse(&el.text).ok_or_else(|| {
+            r.err(
+                el,
+                format!(
+                    "<Display> names a display transform luster does not know (expected {})",
+                    crate::film::Display::NAMES
+                ),
+            )
+        })?,
+        None => crate::film::Display::Course,
+    };
     let max_recursion_depth = match root.child("MaxRecursionDepth") {
         Some(el) => {
             let d = r.uint(el)?;
@@ -230,6 +244,7 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
         texture_maps,
         objects,
         volumes,
+        display,
         warnings: w.0,
     })
 }

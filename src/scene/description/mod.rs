@@ -78,6 +78,9 @@ pub struct Description {
     pub objects: Vec<ObjectDesc>,
     /// Participating media and hypertextures (`Volumes`, a luster extension).
     pub volumes: Vec<VolumeDesc>,
+    /// The display transform of the 8-bit images (`Display`, a luster
+    /// extension; `course` unless the scene opts in, `srgb` for OBJ models).
+    pub display: crate::film::Display,
     /// What the loader accepted but did not use or had to correct.
     pub warnings: Vec<Warning>,
 }

@@ -18,11 +18,14 @@
 //! key light 45° to the camera's left and 50° up, the fill 60° to its right
 //! and 15° up, both four radii from the centre, with intensities that give
 //! the centre an irradiance of 190 and 60 (in the course's units, where 255
-//! is white), and an ambient light of about 35 with the blue tint of the sky.
+//! is white), and an ambient light of about 13 with the blue tint of the sky.
 //! The ground is lit mostly by the ambient light (its ambient reflectance is
 //! 2.6), so it stays light out to the horizon, where point lights would fade,
 //! and the key light's shadow still shows on it. The background is a soft
-//! grey-blue. The output image is `<stem>.png`.
+//! grey-blue. The output image is `<stem>.png`, through the display transform
+//! `srgb` unless `--display` names another (docs/hdr.md): MTL colours are
+//! linear reflectances and 8-bit `map_Kd` images are sRGB-decoded, as other
+//! renderers read them, and the values above are tuned for that.
 
 use super::{load, Additions, ObjModel};
 use crate::math::{Transform, Vec3};
@@ -51,6 +54,9 @@ pub struct ModelView {
     pub distance: Option<f32>,
     /// Put a ground plane under the model.
     pub ground: bool,
+    /// The display transform (`--display`), overriding the scene's or, for a
+    /// model, `srgb`. Applies to scene files too (see [`crate::scene::load_viewed`]).
+    pub display: Option<crate::film::Display>,
 }
 
 impl Default for ModelView {
@@ -64,6 +70,7 @@ impl Default for ModelView {
             fov_y: 40.0,
             distance: None,
             ground: true,
+            display: None,
         }
     }
 }
@@ -71,8 +78,8 @@ impl Default for ModelView {
 /// Key and fill irradiance at the model's centre, and the ambient light.
 const KEY: f32 = 190.0;
 const FILL: f32 = 60.0;
-const AMBIENT: Vec3 = Vec3::new(32.0, 35.0, 40.0);
-const SKY: Vec3 = Vec3::new(172.0, 190.0, 212.0);
+const AMBIENT: Vec3 = Vec3::new(12.0, 13.0, 15.0);
+const SKY: Vec3 = Vec3::new(105.0, 130.0, 168.0);
 
 /// The bounding sphere of a model: centre and radius (at least a tiny bit).
 pub fn bounding_sphere(model: &ObjModel) -> (Vec3, f32) {
@@ -111,8 +118,8 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         near_distance: 1.0,
         resolution: (view.width, view.height),
         image_name: format!("{stem}.png"),
-        // The course's clamp, like the example scenes: the framing lights and
-        // the shaders' colours are tuned as display values (see docs/hdr.md).
+        // The display transform (`view.display`, sRGB by default) makes the
+        // PNG: MTL colours are linear reflectances, as in other renderers.
         tonemaps: Vec::new(),
         num_samples: view.samples,
         aperture_size: 0.0,
@@ -154,7 +161,7 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
             // Mostly ambient: a light floor all the way to the horizon (point
             // lights fade with distance), where the key light's shadow shows.
             ambient: Vec3::splat(2.6),
-            diffuse: Vec3::splat(0.45),
+            diffuse: Vec3::splat(0.3),
             ..super::mtl::default_material(loc.clone())
         });
         objects.push(ObjectDesc {
@@ -195,6 +202,7 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         background_texture: None,
         objects,
         volumes: Vec::new(),
+        display: view.display.unwrap_or(crate::film::Display::Srgb),
         warnings,
     })
 }
