@@ -5,7 +5,10 @@
 //! A volume is a bound ([`Bound`]: ball, box or ellipsoid, with a transform)
 //! and a density inside it: a constant, a Lua script's `density(s)`, or that
 //! script baked on a [`Grid`]. `s.P` is the point in the bound's own space,
-//! `s.Pw` in the world. Outside its bound a volume has no density.
+//! `s.Pw` in the world; a marched script also sees the ray ([`Probe`]: `s.Pc`,
+//! `s.I`, the pixel, the time), and every script its volume's index and the
+//! march step or grid cell as `s.filterwidth`. Outside its bound a volume has
+//! no density. Baked grids may come from a [`GridCache`] kept across builds.
 //!
 //! This module is the volumes' data and their local queries (density,
 //! emission, isosurface search). How rays gather light through them — ray
