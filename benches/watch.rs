@@ -9,6 +9,12 @@
 //! and rendering the same preview directly (no watch, no PNG), whose ratio
 //! shows what the watch machinery adds. Run: `cargo bench --bench watch`
 //! (`-- --saves N` for more saves, `-- --only NAME` for one scene).
+//!
+//! `-- --touch WHAT` picks the file saved: `scene` (the default: the scene
+//! file), `shader` (the first surface shader script) or `volume` (the first
+//! volume script); a save appends a comment to it, which changes the script
+//! text, so a volume script's grids must be baked again. Scenes without such a
+//! file are left out.
 
 use luster::render::{camera::Camera, render_with, RenderOptions, Scene};
 use luster::watch::{Options, Session};
@@ -52,6 +58,24 @@ fn direct_preview(path: &Path) -> f64 {
     t.elapsed().as_secs_f64()
 }
 
+/// The file of `scene` that a `touch` save writes to, and the comment syntax.
+fn touched(scene: &Path, touch: &str) -> Option<(PathBuf, &'static str)> {
+    use luster::scene::description::TextureSource;
+    if touch == "scene" {
+        return Some((scene.to_path_buf(), "<!-- save {} -->"));
+    }
+    let desc = luster::scene::load(scene).expect("the gallery scene loads");
+    let path = match touch {
+        "shader" => desc.texture_maps.iter().find_map(|t| match &t.source {
+            TextureSource::Shader { path, .. } => Some(path.clone()),
+            _ => None,
+        }),
+        "volume" => desc.volumes.iter().find_map(|v| v.script.as_ref().map(|s| s.path.clone())),
+        other => panic!("--touch takes scene, shader or volume, not {other}"),
+    }?;
+    Some((path, "-- save {}"))
+}
+
 /// Waits for the first frame of `generation`; returns when it was seen, and
 /// its size.
 fn first_frame(session: &Session, generation: u64) -> (Instant, (u32, u32)) {
@@ -71,6 +95,7 @@ fn first_frame(session: &Session, generation: u64) -> (Instant, (u32, u32)) {
 fn main() {
     let saves: usize = arg("--saves").and_then(|s| s.parse().ok()).unwrap_or(5).max(1);
     let only = arg("--only");
+    let touch = arg("--touch").unwrap_or_else(|| "scene".into());
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
     let tmp = tempfile::tempdir().expect("a temporary folder");
     copy_tree(&root, tmp.path());
@@ -83,7 +108,7 @@ fn main() {
         .collect();
     scenes.sort();
     println!(
-        "save-to-first-pixels, median of {saves} saves (preview: 1 spp, a quarter of each side, \
+        "save-to-first-pixels, median of {saves} saves of the {touch} file (preview: 1 spp, a quarter of each side, \
          coarser when the last preview was slow; direct: the quarter-size preview)"
     );
     println!(
@@ -92,7 +117,8 @@ fn main() {
     );
     let mut all = Vec::new();
     for path in &scenes {
-        let text = std::fs::read_to_string(path).expect("the scene text");
+        let Some((file, comment)) = touched(path, &touch) else { continue };
+        let text = std::fs::read_to_string(&file).expect("the saved file's text");
         let opts = Options {
             scene: path.clone(),
             camera: 0,
@@ -101,6 +127,7 @@ fn main() {
             view: Default::default(),
             reframe: Box::new(|_| Ok(())),
             threads: None,
+            tev: None,
         };
         let session = Session::start(opts, 0).expect("a watch session starts");
         first_frame(&session, 0);
@@ -110,12 +137,14 @@ fn main() {
             // Let the previous render refine a while: the save must cancel it.
             std::thread::sleep(Duration::from_millis(300));
             let t0 = Instant::now();
-            std::fs::write(path, format!("{text}\n<!-- save {i} -->\n")).expect("the scene is saved");
+            let note = comment.replace("{}", &i.to_string());
+            std::fs::write(&file, format!("{text}\n{note}\n")).expect("the file is saved");
             let (t1, seen) = first_frame(&session, i);
             lat.push((t1 - t0).as_secs_f64() * 1e3);
             size = seen;
         }
         session.stop();
+        std::fs::write(&file, &text).expect("the file is restored");
         let mut direct: Vec<f64> = (0..saves).map(|_| direct_preview(path) * 1e3).collect();
         let (m, d) = (median(&mut lat.clone()), median(&mut direct));
         let max = lat.iter().copied().fold(0.0, f64::max);

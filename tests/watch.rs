@@ -73,8 +73,13 @@ impl Drop for Watch {
 }
 
 fn start(dir: &std::path::Path, scene: &str) -> Watch {
+    start_with(dir, scene, &[])
+}
+
+fn start_with(dir: &std::path::Path, scene: &str, more: &[&str]) -> Watch {
     let mut child = Command::new(env!("CARGO_BIN_EXE_luster"))
         .args(["watch", scene, "--port", "0", "--threads", "2"])
+        .args(more)
         .current_dir(dir)
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
@@ -294,4 +299,85 @@ fn saving_a_required_module_rerenders() {
     until(&rx, "a frame after the module's save", |s| finished(s) && s["frame"].as_u64() > Some(n1));
     let (_, green, _) = frame(&w.addr);
     assert!(dominant(green, 1), "green after saving the module: {green:?}");
+}
+
+/// A glowing ball (a volume whose script takes its colour from module
+/// `glow`), baked on a grid, in front of a black background.
+fn volume_scene() -> String {
+    r#"<Scene>
+    <BackgroundColor>0 0 0</BackgroundColor>
+    <Cameras>
+        <Camera id="1" type="lookAt">
+            <Position>0 0 4</Position><GazePoint>0 0 0</GazePoint><Up>0 1 0</Up>
+            <FovY>45</FovY><NearDistance>1</NearDistance>
+            <ImageResolution>24 24</ImageResolution><ImageName>out.png</ImageName>
+        </Camera>
+    </Cameras>
+    <Volumes>
+        <Volume id="ball">
+            <Sphere><Center>0 0 0</Center><Radius>1</Radius></Sphere>
+            <Shader>v.lua</Shader>
+            <GridResolution>6</GridResolution>
+            <Absorption>0.01 0.01 0.01</Absorption>
+            <Scattering>0 0 0</Scattering>
+        </Volume>
+    </Volumes>
+</Scene>"#
+        .to_string()
+}
+
+#[test]
+fn saving_a_module_a_volume_script_requires_rerenders() {
+    let script = "local g = require \"glow\"\nfunction density(s) return 1 end\n\
+                  function emission(s) return g.r, g.g, 0 end\n";
+    let glow = |r: u32, g: u32| format!("return {{ r = {r}, g = {g} }}\n");
+    let dir = folder(&[("s.xml", &volume_scene()), ("v.lua", script), ("glow.lua", &glow(400, 0))]);
+    let w = start(dir.path(), "s.xml");
+    let rx = events(&w.addr);
+    until(&rx, "a first frame", finished);
+    let (n1, red, _) = frame(&w.addr);
+    assert!(dominant(red, 0), "a red glow from the module: {red:?}");
+
+    // The grid baked from the old module must not be reused.
+    save(&dir.path().join("glow.lua"), &glow(0, 400));
+    until(&rx, "a frame after the module's save", |s| finished(s) && s["frame"].as_u64() > Some(n1));
+    let (_, green, _) = frame(&w.addr);
+    assert!(dominant(green, 1), "a green glow after saving the module: {green:?}");
+}
+
+/// Reads one tev packet: (type, body after the type byte).
+fn tev_packet(s: &mut TcpStream) -> (u8, Vec<u8>) {
+    let mut len = [0u8; 4];
+    s.read_exact(&mut len).expect("a packet's length");
+    let mut body = vec![0u8; u32::from_le_bytes(len) as usize - 4];
+    s.read_exact(&mut body).expect("a whole packet");
+    (body[0], body[1..].to_vec())
+}
+
+#[test]
+fn tev_gets_each_pass_as_create_and_update_packets() {
+    let viewer = std::net::TcpListener::bind("127.0.0.1:0").expect("a fake tev");
+    let addr = viewer.local_addr().unwrap().to_string();
+    let dir = folder(&[("s.xml", &scene("c.lua")), ("c.lua", &shader(1.0, 0.0, 0.0))]);
+    let _w = start_with(dir.path(), "s.xml", &["--tev", &addr]);
+    let (mut s, _) = viewer.accept().expect("luster connects to tev");
+    s.set_read_timeout(Some(WAIT)).unwrap();
+    let (kind, create) = tev_packet(&mut s);
+    assert_eq!(kind, 4, "the first packet creates the image");
+    // grab_focus, "out.png\0", width, height, channel count, "R\0G\0B\0".
+    let name_end = 1 + create[1..].iter().position(|&c| c == 0).unwrap();
+    assert_eq!(&create[1..name_end], b"out.png");
+    let word = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().unwrap());
+    let at = name_end + 1;
+    assert_eq!((word(&create, at), word(&create, at + 4), word(&create, at + 8)), (48, 48, 3));
+    assert_eq!(&create[at + 12..], b"R\0G\0B\0");
+    let (kind, update) = tev_packet(&mut s);
+    assert_eq!(kind, 6, "then the pass's pixels");
+    // The floats fill the rest: 48 × 48 pixels of 3 channels after the header.
+    let header = 1 + 8 + 4 + 6 + 16 + 48;
+    assert_eq!(update.len() - header, 48 * 48 * 3 * 4, "a whole 48×48 RGB image");
+    let floats: Vec<f32> =
+        update[header..].chunks(4).map(|c| f32::from_le_bytes(c.try_into().unwrap())).collect();
+    let centre = &floats[(24 * 48 + 24) * 3..][..3];
+    assert!(centre[0] > centre[1] + 100.0, "the red sphere's linear radiance: {centre:?}");
 }

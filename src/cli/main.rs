@@ -133,6 +133,9 @@ enum Command {
         model: ModelArgs,
         #[command(flatten)]
         frame: reframe::FrameArgs,
+        /// Also stream every pass to the tev image viewer listening at HOST:PORT (tev's default: 127.0.0.1:14158).
+        #[arg(long, value_name = "HOST:PORT")]
+        tev: Option<String>,
     },
     /// Join the part files of a split render (`render --part`) into its images.
     ///
@@ -326,6 +329,7 @@ fn main() -> ExitCode {
             shader_lib,
             model,
             frame,
+            tev,
         } => {
             luster::shader::set_library_dirs(shader_lib);
             watch::run(watch::Args {
@@ -339,6 +343,7 @@ fn main() -> ExitCode {
                 },
                 view: model.view(),
                 frame: (model.size, frame),
+                tev,
             })
         }
         Command::Merge { outdir } => merge::run(&outdir),

@@ -16,6 +16,7 @@ pub struct Args {
     pub build: BuildOptions,
     pub view: ModelView,
     pub frame: (Option<(u32, u32)>, super::reframe::FrameArgs),
+    pub tev: Option<String>,
 }
 
 pub fn run(args: Args) -> ExitCode {
@@ -33,6 +34,7 @@ pub fn run(args: Args) -> ExitCode {
         view: args.view,
         reframe,
         threads: args.threads,
+        tev: args.tev,
     };
     match luster::watch::Session::start(opts, args.port) {
         Ok(session) => {

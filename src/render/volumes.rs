@@ -40,7 +40,7 @@
 use super::scene::{Hit, HitGeom, Scene};
 use crate::integrator::PathState;
 use crate::math::{Ray, Vec3};
-use crate::volume::{steps, Kind, Volume};
+use crate::volume::{steps, Kind, Probe, Volume};
 use std::f32::consts::PI;
 
 /// Transmittance below which a ray is considered absorbed (its remaining
@@ -56,7 +56,7 @@ pub fn trace(scene: &Scene, ray: &Ray, cull_back_faces: bool, st: &mut PathState
         return hit;
     }
     let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-    match vols.surface_hit(ray, scene.intersection_epsilon, t_max, st.time) {
+    match vols.surface_hit(ray, scene.intersection_epsilon, t_max, &probe(ray, st)) {
         Ok(Some(c)) => {
             let v = &vols.surfaces[c.index];
             let Kind::Surface { material, textures, .. } = v.kind else { return hit };
@@ -88,7 +88,7 @@ pub fn shadow(scene: &Scene, ray: &Ray, t_max: f32, st: &mut PathState) -> Vec3 
     }
     let vols = &scene.volumes;
     if !vols.surfaces.is_empty() {
-        match vols.surface_blocks(ray, scene.intersection_epsilon, t_max, st.time) {
+        match vols.surface_blocks(ray, scene.intersection_epsilon, t_max, &probe(ray, st)) {
             Ok(true) => return Vec3::ZERO,
             Ok(false) => {}
             Err(e) => {
@@ -122,8 +122,9 @@ fn transmittance(scene: &Scene, v: &Volume, ray: &Ray, t_lo: f32, t_hi: f32, st:
     let n = steps(b - a, 2.0 * v.step);
     let dt = (b - a) / n as f32;
     let mut depth = 0.0;
+    let pr = probe(ray, st);
     for k in 0..n {
-        match v.density(&scene.volumes, ray.at(a + (k as f32 + 0.5) * dt), st.time) {
+        match v.density(&scene.volumes, ray.at(a + (k as f32 + 0.5) * dt), &pr) {
             Ok(rho) => depth += rho * dt,
             Err(e) => {
                 st.fail(e.with_object(&v.label));
@@ -163,6 +164,7 @@ pub fn through_media(scene: &Scene, ray: &Ray, t_end: f32, behind: Vec3, st: &mu
     cuts.sort_by(f32::total_cmp);
     cuts.dedup();
     let jitter = st.sampler.next_1d();
+    let pr = probe(ray, st);
     let mut radiance = Vec3::ZERO;
     let mut tr = Vec3::ONE;
     let mut active: Vec<usize> = Vec::with_capacity(spans.len());
@@ -180,7 +182,7 @@ pub fn through_media(scene: &Scene, ray: &Ray, t_end: f32, behind: Vec3, st: &mu
         let dt = (b - a) / n as f32;
         for k in 0..n {
             let p = ray.at(a + (k as f32 + jitter) * dt);
-            let (sigma_t, source) = match point(scene, &active, &mut scatter, p, ray.d, st) {
+            let (sigma_t, source) = match point(scene, &active, &mut scatter, p, &pr, st) {
                 Some(x) => x,
                 None => return Vec3::ZERO,
             };
@@ -209,9 +211,10 @@ fn point(
     active: &[usize],
     scatter: &mut Vec<(Vec3, f32, u32)>,
     p: Vec3,
-    d: Vec3,
+    pr: &Probe,
     st: &mut PathState,
 ) -> Option<(Vec3, Vec3)> {
+    let d = pr.dir;
     let vols = &scene.volumes;
     let mut sigma_t = Vec3::ZERO;
     let mut emitted = Vec3::ZERO;
@@ -219,17 +222,16 @@ fn point(
     for &i in active {
         let v = &vols.media[i];
         let Kind::Medium { absorption, scattering, anisotropy, octaves, .. } = v.kind else { continue };
-        let rho =
-            match v.density(vols, p, st.time).and_then(|rho| Ok((rho, v.emission(vols, p, st.time, rho)?))) {
-                Ok((rho, e)) => {
-                    emitted += e;
-                    rho
-                }
-                Err(e) => {
-                    st.fail(e.with_object(&v.label));
-                    return None;
-                }
-            };
+        let rho = match v.density(vols, p, pr).and_then(|rho| Ok((rho, v.emission(vols, p, pr, rho)?))) {
+            Ok((rho, e)) => {
+                emitted += e;
+                rho
+            }
+            Err(e) => {
+                st.fail(e.with_object(&v.label));
+                return None;
+            }
+        };
         if rho <= 0.0 {
             continue;
         }
@@ -275,6 +277,13 @@ fn point(
         return None;
     }
     Some((sigma_t, inscatter + emitted))
+}
+
+/// What the volume scripts see of `ray`, marched for the camera sample of `st`.
+#[inline]
+fn probe(ray: &Ray, st: &PathState) -> Probe {
+    // Rays are unit length here (camera, reflected, refracted and shadow rays are made so).
+    Probe { time: st.time, dir: ray.d, view: st.view, pixel: st.pixel }
 }
 
 /// The Henyey–Greenstein phase function of the scattering angle θ, normalized

@@ -5,7 +5,10 @@
 //! A volume is a bound ([`Bound`]: ball, box or ellipsoid, with a transform)
 //! and a density inside it: a constant, a Lua script's `density(s)`, or that
 //! script baked on a [`Grid`]. `s.P` is the point in the bound's own space,
-//! `s.Pw` in the world. Outside its bound a volume has no density.
+//! `s.Pw` in the world; a marched script also sees the ray ([`Probe`]: `s.Pc`,
+//! `s.I`, the pixel, the time), and every script its volume's index and the
+//! march step or grid cell as `s.filterwidth`. Outside its bound a volume has
+//! no density. Baked grids may come from a [`GridCache`] kept across builds.
 //!
 //! This module is the volumes' data and their local queries (density,
 //! emission, isosurface search). How rays gather light through them — ray
@@ -14,12 +17,16 @@
 //! listed in `scene::ceng795::volumes`.
 
 pub mod bound;
+pub mod cache;
 pub mod grid;
 mod surface;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_cache;
 
 pub use bound::Bound;
+pub use cache::{Baking, GridCache};
 pub use grid::Grid;
 
 use crate::math::{Aabb, Vec3};
@@ -27,7 +34,8 @@ use crate::scene::description::{Description, VolumeDesc, VolumeKind};
 use crate::scene::SceneError;
 use crate::shader::{ShadeInput, ShaderError, ShaderErrorKind, ShaderImages, ShaderSet, ShaderSource};
 use crate::texture::shader::shader_name;
-use crate::texture::{TexList, Textures};
+use crate::texture::{TexList, Textures, View};
+use std::sync::Arc;
 use std::time::Duration;
 
 /// Default ray-marching steps across a medium's bound (its world diagonal over this).
@@ -61,7 +69,7 @@ pub const MAX_GRID_BYTES: u64 = 1 << 30;
 enum Field {
     Constant,
     Script(usize),
-    Grid(Grid<f32>),
+    Grid(Arc<Grid<f32>>),
 }
 
 /// Where a medium's emission comes from.
@@ -72,7 +80,7 @@ pub enum Glow {
     /// The script's `emission(s)`.
     Script(usize),
     /// The script's `emission(s)`, baked.
-    Grid(Grid<Vec3>),
+    Grid(Arc<Grid<Vec3>>),
 }
 
 /// What a volume does.
@@ -116,6 +124,33 @@ pub struct Volume {
     pub kind: Kind,
     /// How messages name it: `Volume[id=cloud]`.
     pub label: String,
+    /// Its index among the scene's volumes (`s.object_id`, `s.instance_id`).
+    index: u32,
+    /// The march step in the bound's own space (`s.filterwidth` of a script
+    /// that is not baked).
+    march_width: f32,
+}
+
+/// What a volume script sees of the ray along which it is asked, beyond the
+/// point: the render's context for `s.Pc`, `s.I`, `s.pixel_x`, `s.time`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Probe {
+    /// The ray's time within the shutter.
+    pub time: f32,
+    /// The unit direction of the ray being marched, world space (a shadow
+    /// ray's points to the light).
+    pub dir: Vec3,
+    /// The camera's frame.
+    pub view: View,
+    /// The pixel being rendered.
+    pub pixel: [u32; 2],
+}
+
+impl Probe {
+    /// A probe at `time` with no ray, camera or pixel (tests, baking).
+    pub fn at(time: f32) -> Probe {
+        Probe { time, ..Probe::default() }
+    }
 }
 
 /// The scene's volumes and their scripts.
@@ -132,10 +167,10 @@ impl Volume {
     /// The density at world point `p` (0 outside is the caller's business:
     /// this is only asked inside the bound).
     #[inline]
-    pub fn density(&self, v: &Volumes, p: Vec3, time: f32) -> Result<f32, ShaderError> {
+    pub fn density(&self, v: &Volumes, p: Vec3, probe: &Probe) -> Result<f32, ShaderError> {
         let d = match &self.field {
             Field::Constant => 1.0,
-            Field::Script(id) => v.call(*id, self, p, time, ShaderSet::density)?,
+            Field::Script(id) => v.call(*id, self, p, probe, ShaderSet::density)?,
             Field::Grid(g) => g.at(self.bound.to_local(p)),
         };
         Ok(d.max(0.0) * self.scale)
@@ -144,12 +179,12 @@ impl Volume {
     /// A medium's emitted radiance per unit length at world point `p`, where
     /// its density is `density`.
     #[inline]
-    pub fn emission(&self, v: &Volumes, p: Vec3, time: f32, density: f32) -> Result<Vec3, ShaderError> {
+    pub fn emission(&self, v: &Volumes, p: Vec3, probe: &Probe, density: f32) -> Result<Vec3, ShaderError> {
         let Kind::Medium { glow, .. } = &self.kind else { return Ok(Vec3::ZERO) };
         Ok(match glow {
             Glow::Constant(c) => *c * density,
             Glow::Script(id) => {
-                Vec3::from_array(v.call(*id, self, p, time, ShaderSet::emission)?).max(Vec3::ZERO)
+                Vec3::from_array(v.call(*id, self, p, probe, ShaderSet::emission)?).max(Vec3::ZERO)
             }
             Glow::Grid(g) => g.at(self.bound.to_local(p)).max(Vec3::ZERO),
         })
@@ -173,17 +208,28 @@ impl Volumes {
         id: usize,
         vol: &Volume,
         p: Vec3,
-        time: f32,
+        probe: &Probe,
         f: impl FnOnce(&ShaderSet, usize, &ShadeInput) -> Result<R, ShaderError>,
     ) -> Result<R, ShaderError> {
         let set = self.shaders.as_ref().ok_or_else(|| missing_set(&vol.label))?;
         let input = ShadeInput {
             p: vol.bound.to_local(p).to_array(),
             pw: p.to_array(),
-            time,
+            pc: probe.view.to_camera(p).to_array(),
+            i: probe.dir.to_array(),
+            time: probe.time,
+            filterwidth: vol.march_width,
+            object_id: vol.index,
+            instance_id: vol.index,
+            pixel: probe.pixel,
             ..ShadeInput::default()
         };
         f(set, id, &input)
+    }
+
+    /// The module files the volume scripts have required so far.
+    pub fn shader_modules(&self) -> Vec<std::path::PathBuf> {
+        self.shaders.as_ref().map(ShaderSet::required_files).unwrap_or_default()
     }
 
     /// Builds the volumes of `desc`: compiles their scripts (sampling
@@ -194,6 +240,19 @@ impl Volumes {
         textures: &mut Textures,
         images: Option<ShaderImages>,
         timeout: Duration,
+    ) -> Result<Volumes, SceneError> {
+        Volumes::build_baking(desc, textures, images, timeout, &Baking::default())
+    }
+
+    /// Like [`Volumes::build`], taking grids from `baking`'s cache where it
+    /// has them (and keeping those it bakes there), and giving up with
+    /// [`cache::CANCELLED`] once its flag is set.
+    pub fn build_baking(
+        desc: &Description,
+        textures: &mut Textures,
+        images: Option<ShaderImages>,
+        timeout: Duration,
+        baking: &Baking,
     ) -> Result<Volumes, SceneError> {
         let err = |v: &VolumeDesc, msg: String| SceneError::at(&desc.file, &v.loc, msg);
         // Script k of the set belongs to the k-th volume with a script.
@@ -222,7 +281,7 @@ impl Volumes {
         };
         let mut out = Volumes { media: Vec::new(), surfaces: Vec::new(), shaders: None };
         let mut next_script = 0;
-        for v in &desc.volumes {
+        for (index, v) in desc.volumes.iter().enumerate() {
             let bound = Bound::new(&v.bound, &v.transform);
             let label = format!(
                 "{}[id={}]",
@@ -291,9 +350,33 @@ impl Volumes {
                 Some(id) => Field::Script(id),
                 None => Field::Constant,
             };
-            let mut vol = Volume { bound, field, scale: v.density, step, kind, label };
+            // The step in the bound's space: its box's diagonal there over the world's.
+            let march_width = step * bound.local_box().extent().length() / bound.diagonal();
+            let mut vol = Volume {
+                bound,
+                field,
+                scale: v.density,
+                step,
+                kind,
+                label,
+                index: index as u32,
+                march_width,
+            };
             if let (Some(n), Some(id)) = (v.grid, script) {
-                vol.bake(shaders.as_ref(), id, n).map_err(|e| err(v, e))?;
+                let key = baking.cache.and_then(|_| cache::key(desc, index, n));
+                match (baking.cache, key) {
+                    (Some(c), Some(key)) => match c.get(&key) {
+                        Some(grids) => vol.use_grids(grids),
+                        None => {
+                            let grids = vol.bake(shaders.as_ref(), id, n, baking).map_err(|e| err(v, e))?;
+                            let modules = shaders.as_ref().map(ShaderSet::required_files).unwrap_or_default();
+                            c.put(key, &modules, grids);
+                        }
+                    },
+                    _ => {
+                        vol.bake(shaders.as_ref(), id, n, baking).map_err(|e| err(v, e))?;
+                    }
+                }
             }
             match vol.kind {
                 Kind::Medium { .. } => out.media.push(vol),
@@ -306,9 +389,25 @@ impl Volumes {
 }
 
 impl Volume {
+    /// Replaces the script's density (and emission) by `grids`.
+    fn use_grids(&mut self, grids: cache::Baked) {
+        if let Kind::Medium { glow, .. } = &mut self.kind {
+            if let (Glow::Script(_), Some(g)) = (&glow, grids.emission) {
+                *glow = Glow::Grid(g);
+            }
+        }
+        self.field = Field::Grid(grids.density);
+    }
+
     /// Replaces the script's density (and emission) by grids of `n³` samples
-    /// over the bound's own box.
-    fn bake(&mut self, set: Option<&ShaderSet>, id: usize, n: u32) -> Result<(), String> {
+    /// over the bound's own box; returns them.
+    fn bake(
+        &mut self,
+        set: Option<&ShaderSet>,
+        id: usize,
+        n: u32,
+        baking: &Baking,
+    ) -> Result<cache::Baked, String> {
         let set = set.ok_or_else(|| missing_set(&self.label).to_string())?;
         let glows = matches!(self.kind, Kind::Medium { glow: Glow::Script(_), .. });
         let per_point = if glows { 16 } else { 4 };
@@ -323,20 +422,33 @@ impl Volume {
         }
         let b: Aabb = self.bound.local_box();
         let bound = &self.bound;
+        // Baked once for every ray: no camera, ray or pixel; the footprint is a cell.
+        let cell = (b.extent() / (n.max(2) - 1) as f32).max_element();
         let input = |q: Vec3| ShadeInput {
             p: q.to_array(),
             pw: bound.to_world(q).to_array(),
+            filterwidth: cell,
+            object_id: self.index,
+            instance_id: self.index,
             ..ShadeInput::default()
         };
-        let density = Grid::bake(b, n, |q| set.density(id, &input(q))).map_err(|e| e.to_string())?;
-        if let Kind::Medium { glow, .. } = &mut self.kind {
-            if matches!(glow, Glow::Script(_)) {
-                let g = Grid::bake(b, n, |q| set.emission(id, &input(q)).map(Vec3::from_array));
-                *glow = Glow::Grid(g.map_err(|e| e.to_string())?);
-            }
-        }
-        self.field = Field::Grid(density);
-        Ok(())
+        // A cancelled bake stops at the next sample any thread takes.
+        let check = || if baking.cancelled() { Err(cache::CANCELLED.to_string()) } else { Ok(()) };
+        let density = Grid::bake(b, n, |q| {
+            check()?;
+            set.density(id, &input(q)).map_err(|e| e.to_string())
+        })?;
+        let emission = if matches!(self.kind, Kind::Medium { glow: Glow::Script(_), .. }) {
+            Some(Arc::new(Grid::bake(b, n, |q| {
+                check()?;
+                set.emission(id, &input(q)).map(Vec3::from_array).map_err(|e| e.to_string())
+            })?))
+        } else {
+            None
+        };
+        let grids = cache::Baked { density: Arc::new(density), emission };
+        self.use_grids(grids.clone());
+        Ok(grids)
     }
 }
 

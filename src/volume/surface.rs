@@ -13,7 +13,7 @@
 //!
 //! A feature thinner than a step can be stepped over; `StepSize` is the knob.
 
-use super::{steps, Kind, Volume, Volumes};
+use super::{steps, Kind, Probe, Volume, Volumes};
 use crate::math::{Ray, Vec3};
 use crate::shader::ShaderError;
 
@@ -39,13 +39,13 @@ impl Volumes {
         ray: &Ray,
         t_min: f32,
         t_max: f32,
-        time: f32,
+        probe: &Probe,
     ) -> Result<Option<Crossing>, ShaderError> {
         let mut best: Option<Crossing> = None;
         for (index, v) in self.surfaces.iter().enumerate() {
             let limit = best.map_or(t_max, |b| b.t);
             if let Some((t, normal)) =
-                v.crossing(self, ray, t_min, limit, time).map_err(|e| e.with_object(&v.label))?
+                v.crossing(self, ray, t_min, limit, probe).map_err(|e| e.with_object(&v.label))?
             {
                 best = Some(Crossing { index, t, normal });
             }
@@ -57,9 +57,15 @@ impl Volumes {
     /// the same answer as [`Volumes::surface_hit`] `.is_some()`, without
     /// narrowing the crossing down or computing its normal (16 density
     /// evaluations per blocked shadow ray).
-    pub fn surface_blocks(&self, ray: &Ray, t_min: f32, t_max: f32, time: f32) -> Result<bool, ShaderError> {
+    pub fn surface_blocks(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        probe: &Probe,
+    ) -> Result<bool, ShaderError> {
         for v in &self.surfaces {
-            if v.bracket(self, ray, t_min, t_max, time).map_err(|e| e.with_object(&v.label))?.is_some() {
+            if v.bracket(self, ray, t_min, t_max, probe).map_err(|e| e.with_object(&v.label))?.is_some() {
                 return Ok(true);
             }
         }
@@ -90,12 +96,12 @@ impl Volume {
         ray: &Ray,
         t_min: f32,
         t_max: f32,
-        time: f32,
+        probe: &Probe,
     ) -> Result<Option<(f32, Vec3)>, ShaderError> {
         let threshold = self.threshold();
         let dense =
-            |t: f32| -> Result<bool, ShaderError> { Ok(self.density(v, ray.at(t), time)? >= threshold) };
-        Ok(match self.bracket(v, ray, t_min, t_max, time)? {
+            |t: f32| -> Result<bool, ShaderError> { Ok(self.density(v, ray.at(t), probe)? >= threshold) };
+        Ok(match self.bracket(v, ray, t_min, t_max, probe)? {
             None => None,
             Some(Bracket::Bound(t)) => Some((t, self.bound.normal(ray.at(t)))),
             Some(Bracket::Between { mut lo, mut hi, inside }) => {
@@ -108,7 +114,7 @@ impl Volume {
                     }
                 }
                 let t_hit = if inside { lo } else { hi };
-                Some((t_hit, self.normal_at(v, ray.at(t_hit), time)?))
+                Some((t_hit, self.normal_at(v, ray.at(t_hit), probe)?))
             }
         })
     }
@@ -122,7 +128,7 @@ impl Volume {
         ray: &Ray,
         t_min: f32,
         t_max: f32,
-        time: f32,
+        probe: &Probe,
     ) -> Result<Option<Bracket>, ShaderError> {
         let Some((t0, t1)) = self.bound.interval(ray) else { return Ok(None) };
         let threshold = self.threshold();
@@ -132,7 +138,7 @@ impl Volume {
             return Ok(None);
         }
         let dense =
-            |t: f32| -> Result<bool, ShaderError> { Ok(self.density(v, ray.at(t), time)? >= threshold) };
+            |t: f32| -> Result<bool, ShaderError> { Ok(self.density(v, ray.at(t), probe)? >= threshold) };
         let from_outside = t0 >= t_min;
         let inside = dense(start)?;
         if from_outside && inside {
@@ -157,9 +163,9 @@ impl Volume {
     }
 
     /// The outward normal at world point `p` on the surface.
-    fn normal_at(&self, v: &Volumes, p: Vec3, time: f32) -> Result<Vec3, ShaderError> {
+    fn normal_at(&self, v: &Volumes, p: Vec3, probe: &Probe) -> Result<Vec3, ShaderError> {
         let h = self.step * 0.1;
-        let d = |q: Vec3| self.density(v, q, time);
+        let d = |q: Vec3| self.density(v, q, probe);
         let g = Vec3::new(
             d(p + Vec3::X * h)? - d(p - Vec3::X * h)?,
             d(p + Vec3::Y * h)? - d(p - Vec3::Y * h)?,

@@ -6,7 +6,7 @@ use crate::math::{Ray, Transform};
 use crate::scene::description::{BoundDesc, ScriptDesc, VolumeDesc, VolumeKind};
 use crate::scene::Loc;
 
-fn desc(volumes: Vec<VolumeDesc>) -> Description {
+pub(super) fn desc(volumes: Vec<VolumeDesc>) -> Description {
     let mut d = crate::scene::description::Description {
         file: "v.xml".into(),
         base_dir: ".".into(),
@@ -38,7 +38,7 @@ fn desc(volumes: Vec<VolumeDesc>) -> Description {
     d
 }
 
-fn surface(code: &str, radius: f32, grid: Option<u32>) -> VolumeDesc {
+pub(super) fn surface(code: &str, radius: f32, grid: Option<u32>) -> VolumeDesc {
     VolumeDesc {
         id: "h".into(),
         bound: BoundDesc::Sphere { center: Vec3::ZERO, radius },
@@ -56,26 +56,30 @@ fn build(v: Vec<VolumeDesc>) -> Result<Volumes, SceneError> {
     Volumes::build(&desc(v), &mut Textures::default(), None, crate::shader::DEFAULT_TIMEOUT)
 }
 
+pub(super) fn build_with(d: &Description, baking: &Baking) -> Result<Volumes, SceneError> {
+    Volumes::build_baking(d, &mut Textures::default(), None, crate::shader::DEFAULT_TIMEOUT, baking)
+}
+
 #[test]
 fn crossings_of_a_falloff_ball() {
     // Density 1 − |P|/2 is 0.5 at radius 1, inside a bound of radius 1.5.
     let v = build(vec![surface("function density(s) return 1 - length(s.P) / 2 end", 1.5, None)]).unwrap();
     let ray = Ray::new(Vec3::new(0.3, 0.0, -5.0), Vec3::Z);
-    let c = v.surface_hit(&ray, 1e-4, f32::INFINITY, 0.0).unwrap().expect("a hit");
+    let c = v.surface_hit(&ray, 1e-4, f32::INFINITY, &Probe::at(0.0)).unwrap().expect("a hit");
     let want = 5.0 - (1.0f32 - 0.09).sqrt();
     assert!((c.t - want).abs() < 1e-3, "{} vs {want}", c.t);
     let n_want = ray.at(c.t).normalize();
     assert!((c.normal - n_want).length() < 1e-2, "{} vs {n_want}", c.normal);
     // From inside, the ray leaves the surface where it crosses back.
     let inside = Ray::new(Vec3::ZERO, Vec3::X);
-    let c = v.surface_hit(&inside, 1e-4, f32::INFINITY, 0.0).unwrap().expect("an exit");
+    let c = v.surface_hit(&inside, 1e-4, f32::INFINITY, &Probe::at(0.0)).unwrap().expect("an exit");
     assert!((c.t - 1.0).abs() < 1e-3 && c.normal.x > 0.99, "{c:?}");
     // A ray that passes the ball by meets nothing; a limit before it, neither.
     assert!(v
-        .surface_hit(&Ray::new(Vec3::new(1.2, 0.0, -5.0), Vec3::Z), 1e-4, f32::INFINITY, 0.0)
+        .surface_hit(&Ray::new(Vec3::new(1.2, 0.0, -5.0), Vec3::Z), 1e-4, f32::INFINITY, &Probe::at(0.0))
         .unwrap()
         .is_none());
-    assert!(v.surface_hit(&ray, 1e-4, 3.0, 0.0).unwrap().is_none());
+    assert!(v.surface_hit(&ray, 1e-4, 3.0, &Probe::at(0.0)).unwrap().is_none());
 }
 
 #[test]
@@ -83,7 +87,7 @@ fn a_grid_keeps_the_surface_where_it_was() {
     let v =
         build(vec![surface("function density(s) return 1 - length(s.P) / 2 end", 1.5, Some(48))]).unwrap();
     let ray = Ray::new(Vec3::new(0.0, 0.2, -5.0), Vec3::Z);
-    let c = v.surface_hit(&ray, 1e-4, f32::INFINITY, 0.0).unwrap().expect("a hit");
+    let c = v.surface_hit(&ray, 1e-4, f32::INFINITY, &Probe::at(0.0)).unwrap().expect("a hit");
     let want = 5.0 - (1.0f32 - 0.04).sqrt();
     assert!((c.t - want).abs() < 0.01, "{} vs {want}", c.t);
 }
@@ -109,8 +113,8 @@ fn negative_densities_count_as_empty_and_scale_applies() {
     };
     let v = build(vec![d]).unwrap();
     let m = &v.media[0];
-    assert_eq!(m.density(&v, Vec3::new(-0.5, 0.0, 0.0), 0.0).unwrap(), 0.0);
-    assert_eq!(m.density(&v, Vec3::new(0.5, 0.0, 0.0), 0.0).unwrap(), 1.5);
+    assert_eq!(m.density(&v, Vec3::new(-0.5, 0.0, 0.0), &Probe::at(0.0)).unwrap(), 0.0);
+    assert_eq!(m.density(&v, Vec3::new(0.5, 0.0, 0.0), &Probe::at(0.0)).unwrap(), 1.5);
     // Without emission(s), emission is the constant times the density.
-    assert_eq!(m.emission(&v, Vec3::ZERO, 0.0, 1.5).unwrap(), Vec3::splat(1.5));
+    assert_eq!(m.emission(&v, Vec3::ZERO, &Probe::at(0.0), 1.5).unwrap(), Vec3::splat(1.5));
 }

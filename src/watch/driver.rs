@@ -6,6 +6,12 @@
 //! A burst of file events (an editor's write-then-rename, a flood of saves)
 //! is one change: the render stops at the first event, and the reload waits
 //! until the files have been quiet for [`QUIET`].
+//!
+//! Volume grids are the slow part of a build (a shader call per cell), so
+//! the session keeps them across reloads ([`GridCache`]): a save that leaves
+//! a volume's inputs alone reuses its grids. Where a grid must be baked, the
+//! preview gets a coarse one and the refining passes the full one, and a
+//! save abandons a bake in flight.
 
 use super::files::{scene_files, FileWatch};
 use super::hub::{Frame, Hub};
@@ -15,6 +21,7 @@ use crate::film::Film;
 use crate::render::camera::Camera;
 use crate::render::{render_progressive, Progress, RenderOptions, Scene};
 use crate::scene::Description;
+use crate::volume::{Baking, GridCache};
 use std::collections::BTreeSet;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -75,6 +82,10 @@ pub struct Driver {
     pub files: FileWatch,
     /// Seconds per pixel of the last whole preview pass (f64 bits; 0 at first).
     pub preview_cost: AtomicU64,
+    /// Volume grids baked by earlier loads.
+    pub grids: GridCache,
+    /// The tev viewer the passes go to as well.
+    pub tev: std::sync::Mutex<Option<super::tev::Tev>>,
 }
 
 impl Driver {
@@ -172,12 +183,15 @@ impl Driver {
             pass: 0,
             generation,
         };
-        // A density grid costs one shader call per cell: the preview gets a coarse one.
-        let coarse = coarse_grids(&desc);
+        // A density grid costs one shader call per cell: unless the full ones
+        // are kept from an earlier load, the preview gets coarse ones.
+        let coarse = if self.grids.covers(&desc) { None } else { coarse_grids(&desc) };
         let mut built = None;
         if full.is_some_and(|c| c.resolution.0 * c.resolution.1 > PREVIEW_ABOVE) {
             let mut scene = match self.build(coarse.as_ref().unwrap_or(&desc)) {
                 Ok(s) => s,
+                // A save abandoned the bake: the next load follows at once.
+                Err(_) if self.cancel.load(Ordering::SeqCst) => return Ok(()),
                 Err(e) => {
                     self.files.set_files(&loose, true);
                     return Err(e);
@@ -186,6 +200,7 @@ impl Driver {
             let previewed = self.preview(&desc, &mut scene, &mut labels);
             // Modules are required as shaders first run: watch those the preview met.
             loose.extend(scene.textures.shader_modules());
+            loose.extend(scene.volumes.shader_modules());
             self.files.set_files(&loose, true);
             previewed?;
             if coarse.is_none() {
@@ -197,6 +212,7 @@ impl Driver {
         }
         let mut scene = match built.map_or_else(|| self.build(&desc), Ok) {
             Ok(s) => s,
+            Err(_) if self.cancel.load(Ordering::SeqCst) => return Ok(()),
             Err(e) => {
                 self.files.set_files(&loose, true);
                 return Err(e);
@@ -208,6 +224,7 @@ impl Driver {
         labels.preview = false;
         let refined = self.refine(&mut scene, &mut labels);
         known.extend(scene.textures.shader_modules());
+        known.extend(scene.volumes.shader_modules());
         self.files.set_files(known, false);
         refined
     }
@@ -227,8 +244,9 @@ impl Driver {
     /// The render scene of `desc`, which has the session's camera.
     fn build(&self, desc: &Description) -> Result<Scene, String> {
         let path = &self.opts.scene;
-        let scene =
-            Scene::build_with(desc, &self.opts.build).map_err(|e| format!("{:#}", anyhow::Error::from(e)))?;
+        let baking = Baking { cache: Some(&self.grids), cancel: Some(&self.cancel) };
+        let scene = Scene::build_baking(desc, &self.opts.build, &baking)
+            .map_err(|e| format!("{:#}", anyhow::Error::from(e)))?;
         let n = scene.cameras.len();
         if self.opts.camera >= n {
             let cam = self.opts.camera;
@@ -284,8 +302,12 @@ impl Driver {
         labels: &mut Labels,
     ) -> Result<(), Box<crate::shader::ShaderError>> {
         let hub = &self.hub;
+        let image_name = scene.cameras[self.opts.camera].image_name.clone();
         let mut on_pass = |film: &Film, spp: u32| {
             labels.pass += 1;
+            if let Some(tev) = self.tev.lock().unwrap_or_else(|p| p.into_inner()).as_mut() {
+                tev.show(&image_name, film);
+            }
             let Some(png) = encode(film, &labels.kind) else { return };
             let ms = labels.since.elapsed().as_millis() as u64;
             let (width, height) = (film.width, film.height);

@@ -19,6 +19,7 @@ pub mod driver;
 pub mod files;
 pub mod hub;
 pub mod server;
+pub mod tev;
 
 use crate::render::{BuildOptions, RenderOptions};
 use crate::scene::obj::ModelView;
@@ -51,6 +52,8 @@ pub struct Options {
     pub reframe: Reframe,
     /// Render threads (`None`: all cores).
     pub threads: Option<usize>,
+    /// A tev viewer (`HOST:PORT`) that every pass is streamed to as well.
+    pub tev: Option<String>,
 }
 
 /// A running session: its render loop, file watch and page server.
@@ -66,6 +69,7 @@ impl Session {
     /// Starts a session serving on 127.0.0.1:`port` (0: any free port). A
     /// scene that fails to load still starts one, showing the error.
     pub fn start(opts: Options, port: u16) -> Result<Session, String> {
+        let tev = opts.tev.as_deref().map(tev::Tev::connect).transpose()?;
         let server = Arc::new(server::bind(port)?);
         let addr =
             server.server_addr().to_ip().ok_or_else(|| "the page server has no IP address".to_string())?;
@@ -90,6 +94,8 @@ impl Session {
             changes,
             files,
             preview_cost: std::sync::atomic::AtomicU64::new(0),
+            grids: Default::default(),
+            tev: std::sync::Mutex::new(tev),
         };
         let spawn = |name: &str, f: Box<dyn FnOnce() + Send>| {
             std::thread::Builder::new()

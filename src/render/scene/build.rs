@@ -15,7 +15,7 @@ use crate::scene::ply::read_ply;
 use crate::scene::{SceneError, Warning};
 use crate::shader::ShaderImages;
 use crate::texture::{shader, Image, Textures};
-use crate::volume::Volumes;
+use crate::volume::{Baking, Volumes};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -43,6 +43,16 @@ impl Scene {
     /// Builds the render scene: loads PLY files and builds every BVH, meshes
     /// in parallel, and compiles the shader scripts.
     pub fn build_with(desc: &Description, opts: &BuildOptions) -> Result<Scene, SceneError> {
+        Scene::build_baking(desc, opts, &Baking::default())
+    }
+
+    /// Like [`Scene::build_with`], baking volume grids as `baking` says
+    /// (from a cache kept across builds, cancellably: `luster watch`).
+    pub fn build_baking(
+        desc: &Description,
+        opts: &BuildOptions,
+        baking: &Baking,
+    ) -> Result<Scene, SceneError> {
         // Meshes: one per Mesh or Triangle object; instances share their base's.
         let mesh_objects: Vec<usize> = desc
             .objects
@@ -93,7 +103,7 @@ impl Scene {
         let emitters = lights.len() - first_emitter;
         lights.extend(environment.as_ref().map(|e| Light::Environment(Arc::clone(e))));
         let images = shader_images(desc, &textures.images);
-        let volumes = Volumes::build(desc, &mut textures, Some(images), opts.shader_timeout)?;
+        let volumes = Volumes::build_baking(desc, &mut textures, Some(images), opts.shader_timeout, baking)?;
         let mut prims = Vec::new();
         let mut planes = Vec::new();
         let mut ellipsoids = Vec::new();
