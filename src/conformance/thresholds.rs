@@ -341,17 +341,6 @@ const EXCEPTIONS: &[(&str, &str, &str, Threshold)] = &[
         ),
     ),
     (
-        "hw4",
-        "xml",
-        "bump_mapping_transformed.png",
-        Threshold {
-            rule: Rule::Fixed { min_psnr: 33.0, max_flip: 0.025 },
-            reason: "34.5 dB, below the 35 dB target: the floor matches; the difference is confined to \
-                     bump-mapped highlights on the mirrored, stretched sphere (scale -2 1 1), cause not \
-                     pinned down",
-        },
-    ),
-    (
         "hw3",
         "*",
         "wine_glass.png",

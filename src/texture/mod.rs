@@ -113,7 +113,9 @@ pub struct TexFrame {
     /// references' noise is 1.25 times finer than world-space noise).
     pub p_rest: Vec3,
     /// Whether [`p_rest`](Self::p_rest) is in object space (meshes) rather
-    /// than world space: a Perlin bump then tilts the object-space normal.
+    /// than world space: a Perlin bump then tilts the object-space normal,
+    /// and an image bump displaces the object-space surface (otherwise the
+    /// world-space one, see `bump.rs`).
     pub rest_in_object: bool,
     /// Object-space ∂p/∂u.
     pub dpdu: Vec3,

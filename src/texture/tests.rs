@@ -163,6 +163,42 @@ fn zero_bump_factor_leaves_the_normal_unchanged() {
     }
 }
 
+/// An image bump under a non-uniform, mirroring scale: spheres displace
+/// their world-space surface, meshes their object-space one (as the course's
+/// hw4 `bump_mapping_transformed` shows; see `bump.rs`).
+#[test]
+fn image_bumps_displace_spheres_in_world_space_and_meshes_in_object_space() {
+    let img = Image::from_rgb8(2, 2, vec![[0, 0, 0], [255, 255, 255], [90, 10, 30], [7, 200, 100]]).unwrap();
+    let tex = Textures::new(vec![img], &[], None, None);
+    let texture = Texture::Image { image: 0, interpolation: Interpolation::Nearest, scale: 1.0 / 255.0 };
+    let map = TextureMap { texture, decal: DecalMode::BumpNormal, bump_factor: 0.2 };
+    let s = Sphere { center: Vec3::ZERO, radius: 10.0 };
+    let p = Vec3::new(6.0, 3.0, 7.0).normalize() * 10.0;
+    let (_, dpdu, dpdv) = s.uv_frame(p);
+    // The texel (0, 0), with a step up to the right and down.
+    let uv = Vec2::new(0.1, 0.1);
+    let xf = crate::math::Transform::scaling(Vec3::new(-2.0, 1.0, 1.0)).unwrap();
+    let sphere = TexFrame { to_world: Some(xf), ..frame(s.normal(p), dpdu, dpdv, uv) };
+    let n_world = xf.normal_to_world(s.normal(p)).normalize();
+    let world = frame(n_world, xf.vector(dpdu), xf.vector(dpdv), uv);
+    let got = bump::bump(&tex, &map, &sphere);
+    let want = bump::bump(&tex, &map, &world);
+    assert!((got - want).length() < 1e-5, "sphere: {got} vs world-space {want}");
+    // The object-space answer is another one here (the test can fail).
+    let object = xf.normal_to_world(bump::bump(&tex, &map, &frame(s.normal(p), dpdu, dpdv, uv))).normalize();
+    assert!(got.dot(object) < 0.999, "{got} vs object-space {object}");
+
+    // A mesh under a uniform scale keeps its object-space bump: the same
+    // tilt as unscaled, where world-space tangents would strengthen it 20×.
+    let small = crate::math::Transform::scaling(Vec3::splat(0.05)).unwrap();
+    let n = dpdu.cross(dpdv).normalize();
+    let mesh = TexFrame { rest_in_object: true, to_world: Some(small), ..frame(n, dpdu, dpdv, uv) };
+    let unscaled = bump::bump(&tex, &map, &frame(n, dpdu, dpdv, uv));
+    let got = bump::bump(&tex, &map, &mesh);
+    assert!((got - unscaled).length() < 1e-5, "mesh: {got} vs {unscaled}");
+    assert!(unscaled.dot(n) < 0.999, "the bump tilts the normal: {unscaled} vs {n}");
+}
+
 #[test]
 fn decal_modes_change_the_right_component() {
     let img = Image::from_rgb8(1, 1, vec![[51, 102, 255]]).unwrap();
