@@ -32,7 +32,7 @@ use super::{light_reaching, surface_at, PathState, Surface};
 use crate::bsdf::fresnel;
 use crate::bsdf::sampling::{power_cosine, power_cosine_pdf};
 use crate::bsdf::Frame;
-use crate::light::Light;
+use crate::light::{Light, ShadedLight};
 use crate::material::{Material, Specular};
 use crate::math::{Ray, Vec3};
 use crate::render::scene::{Hit, Scene};
@@ -145,21 +145,20 @@ fn shade(
     let mut color = Vec3::ZERO;
 
     if let Some((li_index, le)) = scene.emitted(hit, ray.d) {
-        let w = match came {
-            Came::Direct => 1.0,
-            Came::Bounce { pdf, .. } if p.mis => {
-                let pick = 1.0 / scene.lights.len() as f32;
-                power_heuristic(pdf, pick * light_pdf(&scene.lights[li_index], ray.o, hit, ray.d, st.time))
-            }
-            Came::Bounce { .. } if p.next_event => 0.0,
-            Came::Bounce { .. } => 1.0,
-        };
-        color += le * w;
+        color += le * hit_weight(scene, li_index, came, ray, hit, p, st.time);
     }
-    // A shader's emission is never sampled as a light, so whatever reaches it
-    // counts in full: no other technique could have found it.
+    // A shader's emission is weighed like an object light's where the object
+    // is a light ([`Light::Shaded`]); where it is not (the probes found no
+    // emission, or the shape cannot be sampled) only bounces find it, so it
+    // counts in full.
     if m.emission != Vec3::ZERO {
-        color += m.emission;
+        let w = match scene.light_of(hit) {
+            Some(li) if matches!(scene.lights[li], Light::Shaded(_)) => {
+                hit_weight(scene, li, came, ray, hit, p, st.time)
+            }
+            _ => 1.0,
+        };
+        color += m.emission * w;
     }
 
     let inside_dielectric = !entering && matches!(m.kind, Specular::Dielectric { .. });
@@ -167,7 +166,7 @@ fn shade(
     let origin = hit.p + ng * eps;
     if reflects && !inside_dielectric {
         if p.next_event || p.mis {
-            color += next_event(scene, &m, hit, n, ray, origin, p, st);
+            color += next_event(scene, &m, hit, n, ray, origin, depth, p, st);
         }
         let more = depth < MAX_BOUNCES && (p.russian_roulette || depth < scene.max_depth);
         if more {
@@ -193,6 +192,7 @@ fn next_event(
     n: Vec3,
     ray: &Ray,
     origin: Vec3,
+    depth: u32,
     p: &PathParams,
     st: &mut PathState,
 ) -> Vec3 {
@@ -207,6 +207,10 @@ fn next_event(
         (&scene.lights[..], 1.0)
     };
     for light in lights {
+        if let Light::Shaded(l) = light {
+            color += shaded_sample(scene, l, m, hit, n, ray, origin, depth, scale, p, st);
+            continue;
+        }
         let Some((ls, cos, tr)) = light_reaching(scene, light, origin, hit.p, n, st) else { continue };
         let w = if p.mis && hittable(light) {
             power_heuristic(ls.pdf / scale, bounce_pdf(m, n, ray.d, ls.wi, p)) * scale
@@ -218,10 +222,79 @@ fn next_event(
     color
 }
 
+/// One sample of an object whose shader emits: a ray towards a point drawn
+/// on it, which counts only where its first hit is that point (for a sphere,
+/// any point of the object), with the shader's emission found there.
+#[allow(clippy::too_many_arguments)]
+fn shaded_sample(
+    scene: &Scene,
+    l: &ShadedLight,
+    m: &Material,
+    hit: &Hit,
+    n: Vec3,
+    ray: &Ray,
+    origin: Vec3,
+    depth: u32,
+    scale: f32,
+    p: &PathParams,
+    st: &mut PathState,
+) -> Vec3 {
+    let u = st.sampler.next_2d();
+    let Some((wi, dist, pdf)) = l.sample(origin, hit.p, st.time, u) else { return Vec3::ZERO };
+    let cos = n.dot(wi);
+    if cos <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let r = Ray::new(origin, wi);
+    st.stats.shadow += 1;
+    let Some(h) = scene.intersect(&r, st.time, false) else { return Vec3::ZERO };
+    let eps = scene.shadow_epsilon;
+    // Another part of the same mesh in front of the sampled point blocks it
+    // (that part is a sample of its own).
+    if scene.prim_of(&h) != Some(l.prim) || (dist.is_finite() && h.t < dist * (1.0 - 1e-3) - eps) {
+        return Vec3::ZERO;
+    }
+    let vols = &scene.volumes;
+    let tr = if vols.surfaces.is_empty() && vols.media.is_empty() {
+        Vec3::ONE
+    } else {
+        volumes::shadow(scene, &r, h.t - eps, st)
+    };
+    if tr == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let before = st.travelled;
+    st.travelled += h.t;
+    let s = surface_at(scene, &r, &h, depth + 1, st);
+    st.travelled = before;
+    let Surface::Lit(e, _) = s else { return Vec3::ZERO };
+    if e.emission == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let w = if p.mis { power_heuristic(pdf / scale, bounce_pdf(m, n, ray.d, wi, p)) * scale } else { scale };
+    reflectance(m, n, wi, ray.d, cos) * (tr * e.emission) * (w / pdf)
+}
+
+/// How much an emitter (light `li`) that a ray hit counts, by how the ray
+/// left its last surface: in full after the camera or a specular bounce;
+/// after a random bounce by the power heuristic under MIS, not at all under
+/// the course's next-event estimation (the light samples counted it).
+fn hit_weight(scene: &Scene, li: usize, came: Came, ray: &Ray, hit: &Hit, p: &PathParams, time: f32) -> f32 {
+    match came {
+        Came::Direct => 1.0,
+        Came::Bounce { pdf, .. } if p.mis => {
+            let pick = 1.0 / scene.lights.len() as f32;
+            power_heuristic(pdf, pick * light_pdf(&scene.lights[li], ray.o, hit, ray.d, time))
+        }
+        Came::Bounce { .. } if p.next_event => 0.0,
+        Came::Bounce { .. } => 1.0,
+    }
+}
+
 /// Whether a bounce can hit the light (then MIS weighs its two samples).
 #[inline]
 fn hittable(light: &Light) -> bool {
-    matches!(light, Light::Mesh(_) | Light::Sphere(_) | Light::Environment(_))
+    matches!(light, Light::Mesh(_) | Light::Sphere(_) | Light::Environment(_) | Light::Shaded(_))
 }
 
 /// The light's density for the direction `d` of a ray from `from` at
@@ -230,6 +303,7 @@ fn light_pdf(light: &Light, from: Vec3, hit: &Hit, d: Vec3, time: f32) -> f32 {
     match light {
         Light::Mesh(l) => l.pdf(from, hit.p, hit.ng),
         Light::Sphere(l) => l.pdf(from - l.motion * time, d.normalize()),
+        Light::Shaded(l) => l.pdf(from, hit.p, hit.ng, d, time),
         _ => 0.0,
     }
 }
