@@ -67,14 +67,15 @@ enum Came {
     Bounce { pdf: f32, n: Vec3 },
 }
 
-/// Sampler calls drawn from stratified patterns per camera sample: the
-/// camera's three and the first hit's light and bounce (see
-/// [`crate::render::sampler`]); deeper bounces draw independent uniforms.
-const STRATIFIED_CALLS: u32 = 8;
+/// Sampler calls of the first hit drawn from stratified patterns, after
+/// the camera's (the light choice, the light sample, the bounce's lobe
+/// choice and direction; see [`crate::render::sampler`]); deeper bounces
+/// draw independent uniforms.
+const STRATIFIED_FIRST_HIT: u32 = 4;
 
 /// Radiance arriving along the camera ray `ray`.
 pub fn radiance(scene: &Scene, ray: &Ray, p: &PathParams, st: &mut PathState) -> Vec3 {
-    st.sampler.stratify_first(STRATIFIED_CALLS);
+    st.sampler.stratify_first(st.sampler.calls() + STRATIFIED_FIRST_HIT);
     li(scene, ray, 0, Vec3::ONE, Came::Direct, p, st)
 }
 
@@ -165,12 +166,14 @@ fn shade(
     let reflects = m.diffuse.max_element() > 0.0 || m.specular.max_element() > 0.0;
     let origin = hit.p + ng * eps;
     if reflects && !inside_dielectric {
+        let frame = Frame::new(n);
+        let at = At { n, wo: frame.to_local(-ray.d), frame, d: ray.d };
         if p.next_event || p.mis {
-            color += next_event(scene, &m, hit, n, ray, origin, depth, p, st);
+            color += next_event(scene, &m, hit, &at, origin, depth, p, st);
         }
         let more = depth < MAX_BOUNCES && (p.russian_roulette || depth < scene.max_depth);
         if more {
-            color += bounce(scene, &m, n, ray, origin, depth, beta, p, st);
+            color += bounce(scene, &m, &at, origin, depth, beta, p, st);
         }
     }
     if depth < scene.max_depth || (p.russian_roulette && depth < MAX_BOUNCES) {
@@ -189,8 +192,7 @@ fn next_event(
     scene: &Scene,
     m: &Material,
     hit: &Hit,
-    n: Vec3,
-    ray: &Ray,
+    at: &At,
     origin: Vec3,
     depth: u32,
     p: &PathParams,
@@ -208,16 +210,14 @@ fn next_event(
     };
     for light in lights {
         if let Light::Shaded(l) = light {
-            color += shaded_sample(scene, l, m, hit, n, ray, origin, depth, scale, p, st);
+            color += shaded_sample(scene, l, m, hit, at, origin, depth, scale, p, st);
             continue;
         }
-        let Some((ls, cos, tr)) = light_reaching(scene, light, origin, hit.p, n, st) else { continue };
-        let w = if p.mis && hittable(light) {
-            power_heuristic(ls.pdf / scale, bounce_pdf(m, n, ray.d, ls.wi, p)) * scale
-        } else {
-            scale
-        };
-        color += reflectance(m, n, ls.wi, ray.d, cos) * (tr * ls.e) * w;
+        let Some((ls, cos, tr)) = light_reaching(scene, light, origin, hit.p, at.n, st) else { continue };
+        let (f, bsdf_pdf) = light_terms(m, at, ls.wi, cos, p);
+        let w =
+            if p.mis && hittable(light) { power_heuristic(ls.pdf / scale, bsdf_pdf) * scale } else { scale };
+        color += f * (tr * ls.e) * w;
     }
     color
 }
@@ -231,8 +231,7 @@ fn shaded_sample(
     l: &ShadedLight,
     m: &Material,
     hit: &Hit,
-    n: Vec3,
-    ray: &Ray,
+    at: &At,
     origin: Vec3,
     depth: u32,
     scale: f32,
@@ -241,7 +240,7 @@ fn shaded_sample(
 ) -> Vec3 {
     let u = st.sampler.next_2d();
     let Some((wi, dist, pdf)) = l.sample(origin, hit.p, st.time, u) else { return Vec3::ZERO };
-    let cos = n.dot(wi);
+    let cos = at.n.dot(wi);
     if cos <= 0.0 {
         return Vec3::ZERO;
     }
@@ -271,8 +270,9 @@ fn shaded_sample(
     if e.emission == Vec3::ZERO {
         return Vec3::ZERO;
     }
-    let w = if p.mis { power_heuristic(pdf / scale, bounce_pdf(m, n, ray.d, wi, p)) * scale } else { scale };
-    reflectance(m, n, wi, ray.d, cos) * (tr * e.emission) * (w / pdf)
+    let (f, bsdf_pdf) = light_terms(m, at, wi, cos, p);
+    let w = if p.mis { power_heuristic(pdf / scale, bsdf_pdf) * scale } else { scale };
+    f * (tr * e.emission) * (w / pdf)
 }
 
 /// How much an emitter (light `li`) that a ray hit counts, by how the ray
@@ -319,21 +319,35 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
     a2 / (a2 + b2)
 }
 
-/// Density over solid angle with which [`bounce`] draws `wi` at a surface of
-/// facing normal `n` seen along `d`.
-fn bounce_pdf(m: &Material, n: Vec3, d: Vec3, wi: Vec3, p: &PathParams) -> f32 {
-    let cos = n.dot(wi);
-    if cos <= 0.0 {
-        return 0.0;
-    }
-    match (&m.brdf, p.mis) {
-        (Some(b), true) => {
-            let f = Frame::new(n);
-            b.pdf(m.diffuse, m.specular, f.to_local(-d), f.to_local(wi))
+/// The shading point's frame, shared by its light samples and its bounce:
+/// the facing shading normal `n`, the frame around it, the direction to the
+/// viewer in that frame, and the incoming ray's direction `d`.
+struct At {
+    n: Vec3,
+    frame: Frame,
+    wo: Vec3,
+    d: Vec3,
+}
+
+/// For a light sample from `wi` (`cos = n·wi > 0`): the reflectance times
+/// the cosine, and the density with which [`bounce`] would draw `wi` (zero
+/// unless MIS needs it), the BRDF's local directions worked out once.
+#[inline]
+fn light_terms(m: &Material, at: &At, wi: Vec3, cos: f32, p: &PathParams) -> (Vec3, f32) {
+    match &m.brdf {
+        Some(b) => {
+            let local = at.frame.to_local(wi);
+            let f = b.eval(m.diffuse, m.specular, local, at.wo) * cos;
+            let pdf = match p.mis {
+                true => b.pdf(m.diffuse, m.specular, at.wo, local),
+                false => 0.0,
+            };
+            (f, pdf)
         }
-        (None, true) => power_cosine_pdf(1.0, cos),
-        _ if p.importance => power_cosine_pdf(1.0, cos),
-        _ => power_cosine_pdf(0.0, cos),
+        None => {
+            let e = if p.importance || p.mis { 1.0 } else { 0.0 };
+            (reflectance(m, at.n, wi, at.d, cos), power_cosine_pdf(e, cos))
+        }
     }
 }
 
@@ -343,35 +357,39 @@ fn bounce_pdf(m: &Material, n: Vec3, d: Vec3, wi: Vec3, p: &PathParams) -> f32 {
 fn bounce(
     scene: &Scene,
     m: &Material,
-    n: Vec3,
-    ray: &Ray,
+    at: &At,
     origin: Vec3,
     depth: u32,
     beta: Vec3,
     p: &PathParams,
     st: &mut PathState,
 ) -> Vec3 {
-    let frame = Frame::new(n);
+    let (n, frame) = (at.n, &at.frame);
     let choice = st.sampler.next_1d();
     let u = st.sampler.next_2d();
-    let (wi, pdf) = match (&m.brdf, p.mis) {
+    // The BRDF's sample carries its value: no second evaluation.
+    let (wi, pdf, f) = match (&m.brdf, p.mis) {
         (Some(b), true) => {
-            let Some(s) = b.sample(m.diffuse, m.specular, frame.to_local(-ray.d), choice, u) else {
+            let Some(s) = b.sample(m.diffuse, m.specular, at.wo, choice, u) else {
                 return Vec3::ZERO;
             };
-            (frame.to_world(s.wi), s.pdf)
+            (frame.to_world(s.wi), s.pdf, Some(s.f))
         }
         _ => {
             let e = if p.importance || p.mis { 1.0 } else { 0.0 };
             let local = power_cosine(e, u);
-            (frame.to_world(local), power_cosine_pdf(e, local.z))
+            (frame.to_world(local), power_cosine_pdf(e, local.z), None)
         }
     };
     let cos = n.dot(wi);
     if cos <= 0.0 || pdf <= 0.0 {
         return Vec3::ZERO;
     }
-    let weight = reflectance(m, n, wi, ray.d, cos) / pdf;
+    let f_cos = match f {
+        Some(f) => f * cos,
+        None => reflectance(m, n, wi, at.d, cos),
+    };
+    let weight = f_cos / pdf;
     let next = beta * weight;
     let mut q = 1.0;
     if p.russian_roulette {
