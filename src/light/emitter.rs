@@ -337,6 +337,49 @@ mod tests {
     }
 
     #[test]
+    fn shaded_samples_have_the_density_their_pdf_gives_and_probes_lie_on_the_surface() {
+        let square = [
+            [Vec3::new(-1.0, 2.0, -1.0), Vec3::new(1.0, 2.0, -1.0), Vec3::new(1.0, 2.0, 1.0)],
+            [Vec3::new(1.0, 2.0, 1.0), Vec3::new(-1.0, 2.0, 1.0), Vec3::new(-1.0, 2.0, -1.0)],
+        ];
+        let mesh = LightMesh::new(square.into_iter(), &Transform::IDENTITY, Vec3::ZERO).expect("has area");
+        let sphere = LightSphere::new(Vec3::new(0.0, 3.0, 0.0), 0.5, &Transform::IDENTITY, Vec3::ZERO);
+        let p = Vec3::ZERO;
+        let mut rng = Rng(5);
+        for shape in [ShadedShape::Mesh(mesh), ShadedShape::Sphere(sphere)] {
+            let l = ShadedLight { shape, prim: 0, probed_max: 0.0 };
+            // The estimate of the solid angle, Σ 1/pdf, against the exact one.
+            let (mut sum, n) = (0.0f64, 20_000);
+            for _ in 0..n {
+                let (wi, dist, pdf) = l.sample(p, p, 0.0, (rng.next(), rng.next())).expect("in view");
+                let q = p + wi * dist.min(1e3);
+                let ng = match &l.shape {
+                    ShadedShape::Mesh(_) => Vec3::Y,
+                    ShadedShape::Sphere(s) => (q - s.center).normalize(),
+                };
+                assert!((l.pdf(p, q, ng, wi, 0.0) - pdf).abs() <= 1e-3 * pdf);
+                sum += 1.0 / pdf as f64;
+            }
+            let want = match &l.shape {
+                // A 2 × 2 square at height 2: 4 asin(a b / sqrt((a² + h²)(b² + h²))), a = b = 1, h = 2.
+                ShadedShape::Mesh(_) => 4.0 * (1.0f64 / 5.0).asin(),
+                ShadedShape::Sphere(_) => 2.0 * std::f64::consts::PI * (1.0 - (1.0f64 - 0.25 / 9.0).sqrt()),
+            };
+            let got = sum / n as f64;
+            assert!((got - want).abs() < 0.02 * want, "solid angle {got} against {want}");
+            for (q, nq) in l.probe_points(64) {
+                let off = match &l.shape {
+                    ShadedShape::Mesh(_) => (q.y - 2.0).abs() + (nq.y.abs() - 1.0).abs(),
+                    ShadedShape::Sphere(s) => {
+                        ((q - s.center).length() - s.radius).abs() + (nq.length() - 1.0).abs()
+                    }
+                };
+                assert!(off < 1e-5, "probe {q:?} off the surface by {off}");
+            }
+        }
+    }
+
+    #[test]
     fn sphere_radius_follows_a_uniform_scale() {
         let xf = Transform::scaling(Vec3::splat(2.0)).expect("invertible");
         let s = LightSphere::new(Vec3::X, 0.5, &xf, Vec3::ONE);
