@@ -24,9 +24,21 @@ fn render(desc: &Description, spp: u32, seed: u32) -> RenderedImage {
 /// A diffuse floor (albedo 0.5, normalized Phong: `ρ/π`) under a sphere of
 /// radius 0.5 centred 2 above the origin whose only light is a shader's
 /// `emission(s)` of 10; a narrow camera looks at the origin. The sphere is
-/// no light of the scene, so only bounces find it; the radiance leaving the
-/// floor there is `ρ/π · π L R²/d² = 0.5 · 10 · 0.25 / 4 = 0.3125`.
+/// a light of the scene (a `Light::Shaded`, sampled by its cone under NEE
+/// and MIS); the radiance leaving the floor there is
+/// `ρ/π · π L R²/d² = 0.5 · 10 · 0.25 / 4 = 0.3125`.
 fn glowing_sphere(renderer: &str, position: &str, gaze: &str) -> String {
+    glowing(
+        renderer,
+        position,
+        gaze,
+        r#"<Sphere id="2"><Material>2</Material><Textures>1</Textures><Center>2</Center><Radius>0.5</Radius></Sphere>"#,
+    )
+}
+
+/// The floor scene of [`glowing_sphere`] with `emitter` (using vertex 2,
+/// `0 2 0`, and vertices 3–6, a unit square at height 2) above it.
+fn glowing(renderer: &str, position: &str, gaze: &str, emitter: &str) -> String {
     format!(
         r#"<Scene>
   <MaxRecursionDepth>1</MaxRecursionDepth>
@@ -39,10 +51,10 @@ fn glowing_sphere(renderer: &str, position: &str, gaze: &str) -> String {
     <Material id="2"><DiffuseReflectance>0 0 0</DiffuseReflectance><SpecularReflectance>0 0 0</SpecularReflectance></Material>
   </Materials>
   <Textures><TextureMap id="1" type="shader"><Shader>glow.lua</Shader><DecalMode>material</DecalMode></TextureMap></Textures>
-  <VertexData>0 0 0  0 2 0</VertexData>
+  <VertexData>0 0 0  0 2 0  -0.5 2 -0.5  0.5 2 -0.5  0.5 2 0.5  -0.5 2 0.5</VertexData>
   <Objects>
     <Plane id="1"><Material>1</Material><Point>1</Point><Normal>0 1 0</Normal></Plane>
-    <Sphere id="2"><Material>2</Material><Textures>1</Textures><Center>2</Center><Radius>0.5</Radius></Sphere>
+    {emitter}
   </Objects>
 </Scene>"#
     )
@@ -54,28 +66,111 @@ fn green(img: &RenderedImage) -> Vec<f64> {
     img.pixels.iter().map(|p| f64::from(p.y)).collect()
 }
 
+/// Mean of two seeds' renders of `desc` at 64 spp, its standard error, and
+/// the variance of one pixel's estimate. The two seeds' pixel-by-pixel
+/// differences give that variance (var(a - b) = 2σ²) without assuming the
+/// pixels share one true value; the mean of both renders then has standard
+/// error σ / sqrt(2n).
+fn two_seeds(desc: &Description) -> (f64, f64, f64) {
+    let (a, b) = (green(&render(desc, 64, 1)), green(&render(desc, 64, 2)));
+    let n = a.len() as f64;
+    let var = a.iter().zip(&b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / (2.0 * n);
+    let mean = (a.iter().sum::<f64>() + b.iter().sum::<f64>()) / (2.0 * n);
+    (mean, (var / (2.0 * n)).sqrt(), var)
+}
+
+fn path_tracer(params: &str) -> String {
+    format!("<Renderer>PathTracing</Renderer><RendererParams>{params}</RendererParams>")
+}
+
 #[test]
 fn an_emissive_shader_lights_a_floor_with_the_analytic_irradiance() {
     let dir = tempfile::tempdir().expect("temp dir");
     let expected = 0.3125;
+    let mut variance = Vec::new();
     for params in ["MIS", "NextEventEstimation ImportanceSampling", "ImportanceSampling"] {
-        let renderer = format!("<Renderer>PathTracing</Renderer><RendererParams>{params}</RendererParams>");
-        let desc = load(dir.path(), &glowing_sphere(&renderer, "0 1 3", "0 0 0"), &[("glow.lua", GLOW)]);
-        let (a, b) = (green(&render(&desc, 64, 1)), green(&render(&desc, 64, 2)));
-        // The two seeds' pixel-by-pixel differences give the variance of
-        // one pixel's estimate (var(a - b) = 2σ²) without assuming the
-        // pixels share one true value; the mean of both renders then has
-        // standard error σ / sqrt(2n).
-        let n = a.len() as f64;
-        let var = a.iter().zip(&b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / (2.0 * n);
-        let mean = (a.iter().sum::<f64>() + b.iter().sum::<f64>()) / (2.0 * n);
-        let se = (var / (2.0 * n)).sqrt();
+        let desc =
+            load(dir.path(), &glowing_sphere(&path_tracer(params), "0 1 3", "0 0 0"), &[("glow.lua", GLOW)]);
+        let (mean, se, var) = two_seeds(&desc);
         let z = (mean - expected) / se;
-        println!("{params:<40} mean {mean:.4} ± {se:.4} (expected {expected}), z = {z:.2}");
+        println!("{params:<40} mean {mean:.4} ± {se:.4} (expected {expected}), z = {z:.2}, pixel variance {var:.3e}");
         // The pixels see points up to 0.03 from the origin, where the
-        // radiance is lower by under 0.1%, far inside the bar.
-        assert!(se > 0.0 && z.abs() < 4.0, "{params}: mean {mean:.4} ± {se:.4}, expected {expected}");
+        // radiance is lower by under 0.1%, far inside the bar. A sampled
+        // cone that the sphere fills has next to no variance, so the bar
+        // has a floor of 0.1% of the value.
+        assert!(
+            (mean - expected).abs() < 4.0 * se + 1e-3 * expected,
+            "{params}: mean {mean:.4} ± {se:.4}, expected {expected}"
+        );
+        variance.push(var);
     }
+    // Bounces alone find the sphere with probability (R/d)² = 1/16, so a
+    // pixel's estimate is mostly 0 or 16 times the mean; sampled as a light
+    // (MIS, NEE) the glowing sphere lights the floor almost without noise.
+    let [mis, nee, bounces] = variance[..] else { unreachable!() };
+    println!("pixel variance, bounces only / MIS: {:.0}, / NEE: {:.0}", bounces / mis, bounces / nee);
+    assert!(
+        mis * 100.0 < bounces && nee * 100.0 < bounces,
+        "variance MIS {mis}, NEE {nee}, bounces {bounces}"
+    );
+}
+
+#[test]
+fn an_emissive_shader_on_a_mesh_is_sampled_like_a_light_mesh() {
+    // A unit square at height 2 over the floor, glowing by a shader or as a
+    // LightMesh of the same radiance: both give the analytic
+    // `ρ L · 4 F`, F the form factor from the origin to a quarter of the
+    // square (a corner-aligned 0.5 × 0.5 rectangle at height 2).
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (a, b) = (0.25f64, 0.25f64);
+    let corner = |a: f64, b: f64| a / (1.0 + a * a).sqrt() * (b / (1.0 + a * a).sqrt()).atan();
+    let form = (corner(a, b) + corner(b, a)) / (2.0 * std::f64::consts::PI);
+    let expected = 0.5 * 10.0 * 4.0 * form;
+    let shaded =
+        r#"<Mesh id="2"><Material>2</Material><Textures>1</Textures><Faces>3 4 5 5 6 3</Faces></Mesh>"#;
+    let light = r#"<LightMesh id="2"><Material>2</Material><Faces>3 4 5 5 6 3</Faces><Radiance>10 10 10</Radiance></LightMesh>"#;
+    for params in ["MIS", "NextEventEstimation ImportanceSampling"] {
+        let mut means = Vec::new();
+        for emitter in [shaded, light] {
+            let text = glowing(&path_tracer(params), "0 1 3", "0 0 0", emitter);
+            let (mean, se, _) = two_seeds(&load(dir.path(), &text, &[("glow.lua", GLOW)]));
+            println!(
+                "{params:<40} {:<9} mean {mean:.5} ± {se:.5} (at the origin {expected:.5})",
+                &emitter[1..10]
+            );
+            // The slanted view spreads the pixels over ±0.09 of the floor
+            // along z, where the irradiance falls by up to 0.4%: the mean
+            // lies about 0.15% below the value at the origin.
+            let rel = mean / expected - 1.0;
+            assert!(
+                (-0.005..0.001).contains(&rel),
+                "{params}, {emitter}: mean {mean:.5} ± {se:.5}, {expected:.5}"
+            );
+            means.push((mean, se));
+        }
+        // The same pixels under the same density: equal within the noise.
+        let ((m1, s1), (m2, s2)) = (means[0], means[1]);
+        let bar = 4.0 * (s1 * s1 + s2 * s2).sqrt() + 1e-4 * m2;
+        assert!(
+            (m1 - m2).abs() < bar,
+            "{params}: shader {m1:.5} ± {s1:.5} against LightMesh {m2:.5} ± {s2:.5}"
+        );
+    }
+}
+
+#[test]
+fn only_objects_whose_shader_emits_become_lights() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let lights = |shader: &str| {
+        let desc =
+            load(dir.path(), &glowing_sphere(&path_tracer("MIS"), "0 1 3", "0 0 0"), &[("glow.lua", shader)]);
+        Scene::build(&desc).expect("scene builds").lights.len()
+    };
+    assert_eq!(lights(GLOW), 1);
+    // Emission defined but zero everywhere: no light, so no light samples.
+    assert_eq!(lights("function emission(s) return 0, 0, 0 end"), 0);
+    // Emission on part of the surface only (the upper half) is found.
+    assert_eq!(lights("function emission(s) if s.P.y > 2.2 then return 5, 5, 5 end return 0, 0, 0 end"), 1);
 }
 
 #[test]

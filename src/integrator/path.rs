@@ -32,7 +32,7 @@ use super::{light_reaching, surface_at, PathState, Surface};
 use crate::bsdf::fresnel;
 use crate::bsdf::sampling::{power_cosine, power_cosine_pdf};
 use crate::bsdf::Frame;
-use crate::light::Light;
+use crate::light::{Light, ShadedLight};
 use crate::material::{Material, Specular};
 use crate::math::{Ray, Vec3};
 use crate::render::scene::{Hit, Scene};
@@ -67,14 +67,15 @@ enum Came {
     Bounce { pdf: f32, n: Vec3 },
 }
 
-/// Sampler calls drawn from stratified patterns per camera sample: the
-/// camera's three and the first hit's light and bounce (see
-/// [`crate::render::sampler`]); deeper bounces draw independent uniforms.
-const STRATIFIED_CALLS: u32 = 8;
+/// Sampler calls of the first hit drawn from stratified patterns, after
+/// the camera's (the light choice, the light sample, the bounce's lobe
+/// choice and direction; see [`crate::render::sampler`]); deeper bounces
+/// draw independent uniforms.
+const STRATIFIED_FIRST_HIT: u32 = 4;
 
 /// Radiance arriving along the camera ray `ray`.
 pub fn radiance(scene: &Scene, ray: &Ray, p: &PathParams, st: &mut PathState) -> Vec3 {
-    st.sampler.stratify_first(STRATIFIED_CALLS);
+    st.sampler.stratify_first(st.sampler.calls() + STRATIFIED_FIRST_HIT);
     li(scene, ray, 0, Vec3::ONE, Came::Direct, p, st)
 }
 
@@ -145,33 +146,34 @@ fn shade(
     let mut color = Vec3::ZERO;
 
     if let Some((li_index, le)) = scene.emitted(hit, ray.d) {
-        let w = match came {
-            Came::Direct => 1.0,
-            Came::Bounce { pdf, .. } if p.mis => {
-                let pick = 1.0 / scene.lights.len() as f32;
-                power_heuristic(pdf, pick * light_pdf(&scene.lights[li_index], ray.o, hit, ray.d, st.time))
-            }
-            Came::Bounce { .. } if p.next_event => 0.0,
-            Came::Bounce { .. } => 1.0,
-        };
-        color += le * w;
+        color += le * hit_weight(scene, li_index, came, ray, hit, p, st.time);
     }
-    // A shader's emission is never sampled as a light, so whatever reaches it
-    // counts in full: no other technique could have found it.
+    // A shader's emission is weighed like an object light's where the object
+    // is a light ([`Light::Shaded`]); where it is not (the probes found no
+    // emission, or the shape cannot be sampled) only bounces find it, so it
+    // counts in full.
     if m.emission != Vec3::ZERO {
-        color += m.emission;
+        let w = match scene.light_of(hit) {
+            Some(li) if matches!(scene.lights[li], Light::Shaded(_)) => {
+                hit_weight(scene, li, came, ray, hit, p, st.time)
+            }
+            _ => 1.0,
+        };
+        color += m.emission * w;
     }
 
     let inside_dielectric = !entering && matches!(m.kind, Specular::Dielectric { .. });
     let reflects = m.diffuse.max_element() > 0.0 || m.specular.max_element() > 0.0;
     let origin = hit.p + ng * eps;
     if reflects && !inside_dielectric {
+        let frame = Frame::new(n);
+        let at = At { n, wo: frame.to_local(-ray.d), frame, d: ray.d };
         if p.next_event || p.mis {
-            color += next_event(scene, &m, hit, n, ray, origin, p, st);
+            color += next_event(scene, &m, hit, &at, origin, depth, p, st);
         }
         let more = depth < MAX_BOUNCES && (p.russian_roulette || depth < scene.max_depth);
         if more {
-            color += bounce(scene, &m, n, ray, origin, depth, beta, p, st);
+            color += bounce(scene, &m, &at, origin, depth, beta, p, st);
         }
     }
     if depth < scene.max_depth || (p.russian_roulette && depth < MAX_BOUNCES) {
@@ -190,9 +192,9 @@ fn next_event(
     scene: &Scene,
     m: &Material,
     hit: &Hit,
-    n: Vec3,
-    ray: &Ray,
+    at: &At,
     origin: Vec3,
+    depth: u32,
     p: &PathParams,
     st: &mut PathState,
 ) -> Vec3 {
@@ -207,21 +209,92 @@ fn next_event(
         (&scene.lights[..], 1.0)
     };
     for light in lights {
-        let Some((ls, cos, tr)) = light_reaching(scene, light, origin, hit.p, n, st) else { continue };
-        let w = if p.mis && hittable(light) {
-            power_heuristic(ls.pdf / scale, bounce_pdf(m, n, ray.d, ls.wi, p)) * scale
-        } else {
-            scale
-        };
-        color += reflectance(m, n, ls.wi, ray.d, cos) * (tr * ls.e) * w;
+        if let Light::Shaded(l) = light {
+            color += shaded_sample(scene, l, m, hit, at, origin, depth, scale, p, st);
+            continue;
+        }
+        let Some((ls, cos, tr)) = light_reaching(scene, light, origin, hit.p, at.n, st) else { continue };
+        let (f, bsdf_pdf) = light_terms(m, at, ls.wi, cos, p);
+        let w =
+            if p.mis && hittable(light) { power_heuristic(ls.pdf / scale, bsdf_pdf) * scale } else { scale };
+        color += f * (tr * ls.e) * w;
     }
     color
+}
+
+/// One sample of an object whose shader emits: a ray towards a point drawn
+/// on it, which counts only where its first hit is that point (for a sphere,
+/// any point of the object), with the shader's emission found there.
+#[allow(clippy::too_many_arguments)]
+fn shaded_sample(
+    scene: &Scene,
+    l: &ShadedLight,
+    m: &Material,
+    hit: &Hit,
+    at: &At,
+    origin: Vec3,
+    depth: u32,
+    scale: f32,
+    p: &PathParams,
+    st: &mut PathState,
+) -> Vec3 {
+    let u = st.sampler.next_2d();
+    let Some((wi, dist, pdf)) = l.sample(origin, hit.p, st.time, u) else { return Vec3::ZERO };
+    let cos = at.n.dot(wi);
+    if cos <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let r = Ray::new(origin, wi);
+    st.stats.shadow += 1;
+    let Some(h) = scene.intersect(&r, st.time, false) else { return Vec3::ZERO };
+    let eps = scene.shadow_epsilon;
+    // Another part of the same mesh in front of the sampled point blocks it
+    // (that part is a sample of its own).
+    if scene.prim_of(&h) != Some(l.prim) || (dist.is_finite() && h.t < dist * (1.0 - 1e-3) - eps) {
+        return Vec3::ZERO;
+    }
+    let vols = &scene.volumes;
+    let tr = if vols.surfaces.is_empty() && vols.media.is_empty() {
+        Vec3::ONE
+    } else {
+        volumes::shadow(scene, &r, h.t - eps, st)
+    };
+    if tr == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let before = st.travelled;
+    st.travelled += h.t;
+    let s = surface_at(scene, &r, &h, depth + 1, st);
+    st.travelled = before;
+    let Surface::Lit(e, _) = s else { return Vec3::ZERO };
+    if e.emission == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let (f, bsdf_pdf) = light_terms(m, at, wi, cos, p);
+    let w = if p.mis { power_heuristic(pdf / scale, bsdf_pdf) * scale } else { scale };
+    f * (tr * e.emission) * (w / pdf)
+}
+
+/// How much an emitter (light `li`) that a ray hit counts, by how the ray
+/// left its last surface: in full after the camera or a specular bounce;
+/// after a random bounce by the power heuristic under MIS, not at all under
+/// the course's next-event estimation (the light samples counted it).
+fn hit_weight(scene: &Scene, li: usize, came: Came, ray: &Ray, hit: &Hit, p: &PathParams, time: f32) -> f32 {
+    match came {
+        Came::Direct => 1.0,
+        Came::Bounce { pdf, .. } if p.mis => {
+            let pick = 1.0 / scene.lights.len() as f32;
+            power_heuristic(pdf, pick * light_pdf(&scene.lights[li], ray.o, hit, ray.d, time))
+        }
+        Came::Bounce { .. } if p.next_event => 0.0,
+        Came::Bounce { .. } => 1.0,
+    }
 }
 
 /// Whether a bounce can hit the light (then MIS weighs its two samples).
 #[inline]
 fn hittable(light: &Light) -> bool {
-    matches!(light, Light::Mesh(_) | Light::Sphere(_) | Light::Environment(_))
+    matches!(light, Light::Mesh(_) | Light::Sphere(_) | Light::Environment(_) | Light::Shaded(_))
 }
 
 /// The light's density for the direction `d` of a ray from `from` at
@@ -230,6 +303,7 @@ fn light_pdf(light: &Light, from: Vec3, hit: &Hit, d: Vec3, time: f32) -> f32 {
     match light {
         Light::Mesh(l) => l.pdf(from, hit.p, hit.ng),
         Light::Sphere(l) => l.pdf(from - l.motion * time, d.normalize()),
+        Light::Shaded(l) => l.pdf(from, hit.p, hit.ng, d, time),
         _ => 0.0,
     }
 }
@@ -245,21 +319,35 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
     a2 / (a2 + b2)
 }
 
-/// Density over solid angle with which [`bounce`] draws `wi` at a surface of
-/// facing normal `n` seen along `d`.
-fn bounce_pdf(m: &Material, n: Vec3, d: Vec3, wi: Vec3, p: &PathParams) -> f32 {
-    let cos = n.dot(wi);
-    if cos <= 0.0 {
-        return 0.0;
-    }
-    match (&m.brdf, p.mis) {
-        (Some(b), true) => {
-            let f = Frame::new(n);
-            b.pdf(m.diffuse, m.specular, f.to_local(-d), f.to_local(wi))
+/// The shading point's frame, shared by its light samples and its bounce:
+/// the facing shading normal `n`, the frame around it, the direction to the
+/// viewer in that frame, and the incoming ray's direction `d`.
+struct At {
+    n: Vec3,
+    frame: Frame,
+    wo: Vec3,
+    d: Vec3,
+}
+
+/// For a light sample from `wi` (`cos = n·wi > 0`): the reflectance times
+/// the cosine, and the density with which [`bounce`] would draw `wi` (zero
+/// unless MIS needs it), the BRDF's local directions worked out once.
+#[inline]
+fn light_terms(m: &Material, at: &At, wi: Vec3, cos: f32, p: &PathParams) -> (Vec3, f32) {
+    match &m.brdf {
+        Some(b) => {
+            let local = at.frame.to_local(wi);
+            let f = b.eval(m.diffuse, m.specular, local, at.wo) * cos;
+            let pdf = match p.mis {
+                true => b.pdf(m.diffuse, m.specular, at.wo, local),
+                false => 0.0,
+            };
+            (f, pdf)
         }
-        (None, true) => power_cosine_pdf(1.0, cos),
-        _ if p.importance => power_cosine_pdf(1.0, cos),
-        _ => power_cosine_pdf(0.0, cos),
+        None => {
+            let e = if p.importance || p.mis { 1.0 } else { 0.0 };
+            (reflectance(m, at.n, wi, at.d, cos), power_cosine_pdf(e, cos))
+        }
     }
 }
 
@@ -269,35 +357,39 @@ fn bounce_pdf(m: &Material, n: Vec3, d: Vec3, wi: Vec3, p: &PathParams) -> f32 {
 fn bounce(
     scene: &Scene,
     m: &Material,
-    n: Vec3,
-    ray: &Ray,
+    at: &At,
     origin: Vec3,
     depth: u32,
     beta: Vec3,
     p: &PathParams,
     st: &mut PathState,
 ) -> Vec3 {
-    let frame = Frame::new(n);
+    let (n, frame) = (at.n, &at.frame);
     let choice = st.sampler.next_1d();
     let u = st.sampler.next_2d();
-    let (wi, pdf) = match (&m.brdf, p.mis) {
+    // The BRDF's sample carries its value: no second evaluation.
+    let (wi, pdf, f) = match (&m.brdf, p.mis) {
         (Some(b), true) => {
-            let Some(s) = b.sample(m.diffuse, m.specular, frame.to_local(-ray.d), choice, u) else {
+            let Some(s) = b.sample(m.diffuse, m.specular, at.wo, choice, u) else {
                 return Vec3::ZERO;
             };
-            (frame.to_world(s.wi), s.pdf)
+            (frame.to_world(s.wi), s.pdf, Some(s.f))
         }
         _ => {
             let e = if p.importance || p.mis { 1.0 } else { 0.0 };
             let local = power_cosine(e, u);
-            (frame.to_world(local), power_cosine_pdf(e, local.z))
+            (frame.to_world(local), power_cosine_pdf(e, local.z), None)
         }
     };
     let cos = n.dot(wi);
     if cos <= 0.0 || pdf <= 0.0 {
         return Vec3::ZERO;
     }
-    let weight = reflectance(m, n, wi, ray.d, cos) / pdf;
+    let f_cos = match f {
+        Some(f) => f * cos,
+        None => reflectance(m, n, wi, at.d, cos),
+    };
+    let weight = f_cos / pdf;
     let next = beta * weight;
     let mut q = 1.0;
     if p.russian_roulette {

@@ -172,6 +172,101 @@ impl LightSphere {
     }
 }
 
+/// The shape of an object whose shader emits ([`ShadedLight`]).
+#[derive(Clone, Debug)]
+pub enum ShadedShape {
+    /// A mesh, sampled by area (its `radiance` is unused).
+    Mesh(LightMesh),
+    /// A sphere, sampled by the cone it subtends (its `radiance` is unused).
+    Sphere(LightSphere),
+}
+
+/// An object whose `DecalMode material` shader defines `emission(s)`: a
+/// light whose radiance is known only at points a ray finds. A sample is a
+/// point (mesh) or direction (sphere) drawn as for a `LightMesh` or
+/// `LightSphere`; the integrator traces a ray towards it and, when the ray's
+/// first hit is this object where the sample lies, reads the shader's
+/// emission there. A bounce that hits the object is weighed with the same
+/// density ([`ShadedLight::pdf`]), so the two techniques stay consistent even
+/// where the sample shape and the object differ (an ellipsoid-scaled sphere).
+#[derive(Clone, Debug)]
+pub struct ShadedLight {
+    /// Where samples are drawn.
+    pub shape: ShadedShape,
+    /// The top-level primitive of the object (what a ray's hit must be on).
+    pub prim: u32,
+    /// The largest emission component found when the scene was built (by
+    /// probing the shader over the surface): a lower bound of the true
+    /// maximum, reported, not relied on.
+    pub probed_max: f32,
+}
+
+impl ShadedLight {
+    /// A sample towards the object from `origin` (a surface point `p`
+    /// moved off its surface) at shutter `time`: unit direction, distance to
+    /// the sampled point (infinite for spheres, where any first hit on the
+    /// object is the sample), and the density over solid angle.
+    #[inline]
+    pub fn sample(&self, origin: Vec3, p: Vec3, time: f32, u: (f32, f32)) -> Option<(Vec3, f32, f32)> {
+        match &self.shape {
+            ShadedShape::Mesh(l) => {
+                let (q, nq) = l.point(u);
+                let q = q + l.motion * time;
+                let to = q - origin;
+                let dist = to.length();
+                let pdf = l.pdf(p, q, nq);
+                (pdf > 0.0 && pdf.is_finite() && dist > 0.0).then_some((to / dist, dist, pdf))
+            }
+            ShadedShape::Sphere(l) => {
+                let (wi, _, pdf) = l.sample(origin - l.motion * time, u)?;
+                Some((wi, f32::INFINITY, pdf))
+            }
+        }
+    }
+
+    /// The density with which [`sample`](Self::sample) from `from` picks the
+    /// direction `d` of a ray that hit the object at `q` (geometric normal
+    /// `ng`).
+    #[inline]
+    pub fn pdf(&self, from: Vec3, q: Vec3, ng: Vec3, d: Vec3, time: f32) -> f32 {
+        match &self.shape {
+            ShadedShape::Mesh(l) => l.pdf(from, q, ng),
+            ShadedShape::Sphere(l) => l.pdf(from - l.motion * time, d.normalize()),
+        }
+    }
+
+    /// Probe points on the surface at rest: `n` points spread by a
+    /// two-dimensional Halton sequence, each with its outward unit normal.
+    pub fn probe_points(&self, n: u32) -> Vec<(Vec3, Vec3)> {
+        (0..n)
+            .map(|i| {
+                let u = (radical_inverse(i, 2), radical_inverse(i, 3));
+                match &self.shape {
+                    ShadedShape::Mesh(l) => l.point(u),
+                    ShadedShape::Sphere(l) => {
+                        let z = 1.0 - 2.0 * u.0;
+                        let r = (1.0 - z * z).max(0.0).sqrt();
+                        let phi = 2.0 * PI * u.1;
+                        let d = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+                        (l.center + d * l.radius, d)
+                    }
+                }
+            })
+            .collect()
+    }
+}
+
+/// The radical inverse of `i` in `base`, in [0, 1).
+fn radical_inverse(mut i: u32, base: u32) -> f32 {
+    let (mut inv, mut f) = (0.0f64, 1.0f64 / base as f64);
+    while i > 0 {
+        inv += (i % base) as f64 * f;
+        i /= base;
+        f /= base as f64;
+    }
+    inv.min(1.0 - f64::EPSILON) as f32
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -239,6 +334,49 @@ mod tests {
         // Away from the cone, and from inside, there is no density.
         assert_eq!(s.pdf(p, Vec3::X), 0.0);
         assert!(s.sample(s.center, (0.5, 0.5)).is_none());
+    }
+
+    #[test]
+    fn shaded_samples_have_the_density_their_pdf_gives_and_probes_lie_on_the_surface() {
+        let square = [
+            [Vec3::new(-1.0, 2.0, -1.0), Vec3::new(1.0, 2.0, -1.0), Vec3::new(1.0, 2.0, 1.0)],
+            [Vec3::new(1.0, 2.0, 1.0), Vec3::new(-1.0, 2.0, 1.0), Vec3::new(-1.0, 2.0, -1.0)],
+        ];
+        let mesh = LightMesh::new(square.into_iter(), &Transform::IDENTITY, Vec3::ZERO).expect("has area");
+        let sphere = LightSphere::new(Vec3::new(0.0, 3.0, 0.0), 0.5, &Transform::IDENTITY, Vec3::ZERO);
+        let p = Vec3::ZERO;
+        let mut rng = Rng(5);
+        for shape in [ShadedShape::Mesh(mesh), ShadedShape::Sphere(sphere)] {
+            let l = ShadedLight { shape, prim: 0, probed_max: 0.0 };
+            // The estimate of the solid angle, Σ 1/pdf, against the exact one.
+            let (mut sum, n) = (0.0f64, 20_000);
+            for _ in 0..n {
+                let (wi, dist, pdf) = l.sample(p, p, 0.0, (rng.next(), rng.next())).expect("in view");
+                let q = p + wi * dist.min(1e3);
+                let ng = match &l.shape {
+                    ShadedShape::Mesh(_) => Vec3::Y,
+                    ShadedShape::Sphere(s) => (q - s.center).normalize(),
+                };
+                assert!((l.pdf(p, q, ng, wi, 0.0) - pdf).abs() <= 1e-3 * pdf);
+                sum += 1.0 / pdf as f64;
+            }
+            let want = match &l.shape {
+                // A 2 × 2 square at height 2: 4 asin(a b / sqrt((a² + h²)(b² + h²))), a = b = 1, h = 2.
+                ShadedShape::Mesh(_) => 4.0 * (1.0f64 / 5.0).asin(),
+                ShadedShape::Sphere(_) => 2.0 * std::f64::consts::PI * (1.0 - (1.0f64 - 0.25 / 9.0).sqrt()),
+            };
+            let got = sum / n as f64;
+            assert!((got - want).abs() < 0.02 * want, "solid angle {got} against {want}");
+            for (q, nq) in l.probe_points(64) {
+                let off = match &l.shape {
+                    ShadedShape::Mesh(_) => (q.y - 2.0).abs() + (nq.y.abs() - 1.0).abs(),
+                    ShadedShape::Sphere(s) => {
+                        ((q - s.center).length() - s.radius).abs() + (nq.length() - 1.0).abs()
+                    }
+                };
+                assert!(off < 1e-5, "probe {q:?} off the surface by {off}");
+            }
+        }
     }
 
     #[test]

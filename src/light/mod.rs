@@ -36,7 +36,7 @@ pub mod distribution;
 pub mod emitter;
 pub mod environment;
 
-pub use emitter::{LightMesh, LightSphere};
+pub use emitter::{LightMesh, LightSphere, ShadedLight, ShadedShape};
 pub use environment::Environment;
 
 use crate::math::{orthonormal_basis, Vec3};
@@ -155,6 +155,10 @@ pub enum Light {
     Sphere(LightSphere),
     /// The environment map.
     Environment(Arc<Environment>),
+    /// An object whose shader emits. Only the path tracer samples it (it
+    /// traces to the sample and asks the shader); [`Light::sample`] gives
+    /// nothing, so the recursive ray tracer shows the emission unlit.
+    Shaded(Arc<ShadedLight>),
 }
 
 /// Light arriving at a point from one light (or one sample of it).
@@ -247,6 +251,7 @@ impl Light {
                 let pdf = env.sampling_pdf(n, wi);
                 Some(LightSample { wi, dist: f32::INFINITY, e, point_source: false, pdf })
             }
+            Light::Shaded(_) => None,
         }
     }
 }

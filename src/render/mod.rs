@@ -233,7 +233,9 @@ fn render_tiles(
                     for s in samples.clone() {
                         let mut sampler = PixelSampler::new(opts.seed, x, y, s, spp);
                         let (jx, jy) = if spp == 1 { (0.5, 0.5) } else { sampler.next_2d() };
-                        let lens = sampler.next_2d();
+                        // A pinhole ignores the lens: its draw would cost a
+                        // stratified dimension for nothing.
+                        let lens = if camera.has_lens() { sampler.next_2d() } else { (0.5, 0.5) };
                         let time = sampler.next_1d();
                         let ray = camera.lens_ray(x as f32 + jx, y as f32 + jy, lens);
                         let screen = Vec2::new((x as f32 + jx) / w as f32, (y as f32 + jy) / h as f32);

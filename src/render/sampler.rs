@@ -83,6 +83,12 @@ impl PixelSampler {
         cmj_grid(self.slot, self.count, self.cols, self.rows, p)
     }
 
+    /// Calls drawn so far for this camera sample.
+    #[inline]
+    pub fn calls(&self) -> u32 {
+        self.dim
+    }
+
     /// How many samples the pixel takes.
     #[inline]
     pub fn count(&self) -> u32 {

@@ -156,7 +156,7 @@ impl Scene {
         let mut slots: Vec<Option<Prim>> = prims.into_iter().map(Some).collect();
         let prims = tlas.prim_order().iter().filter_map(|&i| slots[i as usize].take()).collect();
 
-        Ok(Scene {
+        let mut scene = Scene {
             meshes,
             ellipsoids,
             prims,
@@ -195,7 +195,9 @@ impl Scene {
                 .collect(),
             integrators: desc.cameras.iter().map(|c| Integrator::from_desc(&c.renderer)).collect(),
             warnings,
-        })
+        };
+        scene.add_shaded_lights();
+        Ok(scene)
     }
 }
 

@@ -23,6 +23,7 @@ use crate::volume::Volumes;
 use std::sync::Arc;
 
 mod build;
+mod shaded_lights;
 pub use build::BuildOptions;
 
 /// What a top-level primitive is.
@@ -206,21 +207,37 @@ impl Scene {
     /// an emitter's surface, and the radiance it sends back along `-d`.
     #[inline]
     pub fn emitted(&self, hit: &Hit, d: Vec3) -> Option<(usize, Vec3)> {
-        if self.emitters == 0 {
-            return None;
-        }
-        let prim = match hit.geom {
-            HitGeom::Triangle { prim, .. } | HitGeom::Sphere { prim } | HitGeom::Ellipsoid { prim } => prim,
-            HitGeom::Plane(_) | HitGeom::Volume(_) => return None,
-        };
-        let li = self.prims.get(prim as usize)?.light;
-        let l = match self.lights.get(li as usize)? {
+        let li = self.light_of(hit)?;
+        let l = match self.lights.get(li)? {
             Light::Mesh(m) => m.radiance,
             // A sphere shines outwards only.
             Light::Sphere(s) if d.dot(hit.ng) < 0.0 => s.radiance,
             _ => return None,
         };
-        Some((li as usize, l))
+        Some((li, l))
+    }
+
+    /// The light (an index into [`Scene::lights`]) whose object a hit lies
+    /// on: an object light's, or an emitting shader's ([`Light::Shaded`]).
+    #[inline]
+    pub fn light_of(&self, hit: &Hit) -> Option<usize> {
+        if self.emitters == 0 {
+            return None;
+        }
+        let li = self.prims.get(self.prim_of(hit)? as usize)?.light;
+        (li != NO_LIGHT).then_some(li as usize)
+    }
+
+    /// The top-level primitive a hit is on (none for planes and
+    /// hypertextures).
+    #[inline]
+    pub fn prim_of(&self, hit: &Hit) -> Option<u32> {
+        match hit.geom {
+            HitGeom::Triangle { prim, .. } | HitGeom::Sphere { prim } | HitGeom::Ellipsoid { prim } => {
+                Some(prim)
+            }
+            HitGeom::Plane(_) | HitGeom::Volume(_) => None,
+        }
     }
 
     /// Total triangles over all meshes (instances not counted again).

@@ -1,0 +1,93 @@
+//! Objects whose `DecalMode material` shader defines `emission(s)` become
+//! lights ([`Light::Shaded`]) that the path tracer samples like a
+//! `LightMesh` (meshes, by area) or a `LightSphere` (spheres, by the cone
+//! they subtend); ellipsoids and planes stay lit by bounces only.
+//!
+//! Which objects: the shader is probed when the scene is built, at
+//! [`PROBES`] points spread over the surface at rest (shutter time 0, the
+//! camera's first sample context). An object whose shader returned no
+//! emission at any of them is left out, so a zero-emission shader costs
+//! nothing beyond the path tracer's `emission != 0` check at hits. Emission
+//! too fine for the probes to see then reaches the image through bounces
+//! alone, at full weight as before: unbiased either way, only noisier.
+
+use super::{Geom, Scene, NO_LIGHT};
+use crate::integrator::{surface_at, PathState, RayStats, Surface};
+use crate::light::{Light, LightMesh, LightSphere, ShadedLight, ShadedShape};
+use crate::math::{Ray, Transform, Vec3};
+use crate::render::sampler::PixelSampler;
+use crate::scene::description::DecalMode;
+use crate::texture::Texture;
+use std::sync::Arc;
+
+/// Points at which each candidate's shader is asked for its emission.
+pub const PROBES: u32 = 256;
+
+impl Scene {
+    /// Adds every object whose shader emits somewhere the probes find, after
+    /// every other light (so scenes without one sample exactly as before).
+    pub(super) fn add_shaded_lights(&mut self) {
+        let Some(shaders) = &self.textures.shaders else { return };
+        let mut found = Vec::new();
+        for (pi, p) in self.prims.iter().enumerate() {
+            let emits = self.textures.maps_of(p.textures).any(|m| match (m.texture, m.decal) {
+                (Texture::Shader { id }, DecalMode::Material) => shaders.has_emission(id as usize),
+                _ => false,
+            });
+            if !emits || p.light != NO_LIGHT {
+                continue;
+            }
+            let xf = p.xf.as_deref().copied().unwrap_or(Transform::IDENTITY);
+            let shape = match p.geom {
+                Geom::Mesh(m) => match LightMesh::new(self.meshes[m as usize].corners(), &xf, Vec3::ZERO) {
+                    Some(mut l) => {
+                        l.motion = p.motion;
+                        ShadedShape::Mesh(l)
+                    }
+                    None => continue,
+                },
+                Geom::Sphere(s) => ShadedShape::Sphere(LightSphere {
+                    motion: p.motion,
+                    ..LightSphere::new(s.center, s.radius, &xf, Vec3::ZERO)
+                }),
+                Geom::Ellipsoid(_) => continue,
+            };
+            found.push(ShadedLight { shape, prim: pi as u32, probed_max: 0.0 });
+        }
+        for mut l in found {
+            l.probed_max = self.probe(&l);
+            if l.probed_max > 0.0 {
+                self.prims[l.prim as usize].light = self.lights.len() as u32;
+                self.lights.push(Light::Shaded(Arc::new(l)));
+                self.emitters += 1;
+            }
+        }
+    }
+
+    /// The largest emission component the shader gives at the probe points
+    /// (infinite when it fails there: the render will report the failure,
+    /// and until then the object counts as a light).
+    fn probe(&self, l: &ShadedLight) -> f32 {
+        let mut st = PathState::new(RayStats::default(), 0.0, PixelSampler::new(0, 0, 0, 0, 1));
+        let mut max = 0.0f32;
+        for (q, n) in l.probe_points(PROBES) {
+            // Start just off the surface, far enough for the hit to clear
+            // the intersection epsilon at the point's magnitude.
+            let delta = (q.abs().max_element() * 1e-4).max(4.0 * self.intersection_epsilon).max(1e-4);
+            for side in [1.0f32, -1.0] {
+                let ray = Ray::new(q + n * (delta * side), n * -side);
+                let Some(hit) = self.intersect(&ray, 0.0, false) else { continue };
+                if self.prim_of(&hit) != Some(l.prim) {
+                    continue;
+                }
+                match surface_at(self, &ray, &hit, 0, &mut st) {
+                    Surface::Lit(m, _) => max = max.max(m.emission.max_element()),
+                    Surface::Unlit(_) => {}
+                    Surface::Failed => return f32::INFINITY,
+                }
+                break;
+            }
+        }
+        max
+    }
+}
