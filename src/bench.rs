@@ -54,6 +54,7 @@ pub fn run(plys: &[PathBuf], threads: &[usize], reps: usize) -> anyhow::Result<(
             build_times.push(t0.elapsed().as_secs_f64());
         }
         let accel = accel.context("no build ran")?;
+        let rss_build = peak_rss_kib();
         let bvh = accel.bvh();
         println!(
             "   BVH build {:.1} ms (median of {BUILDS}; all cores); {} 4-wide nodes, depth {} (binary {}), {} leaves, {} 4-triangle blocks; accel {:.1} MiB",
@@ -95,7 +96,12 @@ pub fn run(plys: &[PathBuf], threads: &[usize], reps: usize) -> anyhow::Result<(
             );
         }
         if let Some(kib) = peak_rss_kib() {
-            println!("   peak RSS so far {:.1} MiB", kib as f64 / 1024.0);
+            let mib = |k: u64| k as f64 / 1024.0;
+            println!(
+                "   peak RSS so far {:.1} MiB (after the builds {:.1} MiB)",
+                mib(kib),
+                rss_build.map_or(f64::NAN, mib)
+            );
         }
     }
     Ok(())

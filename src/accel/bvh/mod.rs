@@ -37,7 +37,7 @@ use std::ops::Range;
 
 use glam::{Vec3, Vec3A, Vec4};
 
-use super::bvh_build::{build_binary, Node, INTERSECT_COST, SAH_MAX_DEPTH};
+use super::bvh_build::{build_binary, BinaryNodes, INTERSECT_COST, SAH_MAX_DEPTH};
 pub use super::bvh_build::{BINS, MAX_LEAF};
 use crate::math::{Aabb, Ray};
 
@@ -137,8 +137,8 @@ pub struct Bvh {
 
 /// Collapses the binary subtree at `i` into wide nodes appended to `out`;
 /// returns its reference and the wide depth below it.
-fn collapse(b2: &[Node], i: usize, out: &mut Vec<Node4>) -> (u32, usize) {
-    let n = &b2[i];
+fn collapse(b2: &BinaryNodes, i: usize, out: &mut Vec<Node4>) -> (u32, usize) {
+    let n = b2.get(i);
     if n.is_leaf() {
         return (LEAF | n.first << 3 | (n.count - 1), 0);
     }
@@ -149,13 +149,14 @@ fn collapse(b2: &[Node], i: usize, out: &mut Vec<Node4>) -> (u32, usize) {
         // first of equals, so the result is deterministic.
         let mut best: Option<(usize, f32)> = None;
         for (k, &c) in kids[..len].iter().enumerate() {
-            let area = b2[c].bounds().surface_area();
-            if !b2[c].is_leaf() && best.is_none_or(|(_, a)| area > a) {
+            let c = b2.get(c);
+            let area = c.bounds().surface_area();
+            if !c.is_leaf() && best.is_none_or(|(_, a)| area > a) {
                 best = Some((k, area));
             }
         }
         let Some((k, _)) = best else { break };
-        let first = b2[kids[k]].first as usize;
+        let first = b2.get(kids[k]).first as usize;
         kids.copy_within(k + 1..len, k + 2);
         kids[k] = first;
         kids[k + 1] = first + 1;
@@ -169,7 +170,7 @@ fn collapse(b2: &[Node], i: usize, out: &mut Vec<Node4>) -> (u32, usize) {
         let (r, d) = collapse(b2, c, out);
         node.child[k] = r;
         depth = depth.max(d);
-        let b = &b2[c];
+        let b = b2.get(c);
         for axis in 0..3 {
             node.bounds[2 * axis][k] = b.min[axis];
             node.bounds[2 * axis + 1][k] = b.max[axis];
@@ -251,7 +252,14 @@ impl Bvh {
     /// time: the SAH prices a leaf by its number of blocks, so leaves come
     /// out with (up to [`MAX_LEAF`]) primitives filling whole blocks.
     pub fn build_blocked(prim_bounds: &[Aabb], block: u32) -> Bvh {
-        Bvh::build_costed(prim_bounds, block, INTERSECT_COST)
+        Bvh::build_blocked_with(prim_bounds.len(), |i| prim_bounds[i], block)
+    }
+
+    /// [`Bvh::build_blocked`] over `n` primitives whose boxes come from
+    /// `prim_box(i)`, called once each (in parallel), so the caller need not
+    /// hold an array of boxes.
+    pub fn build_blocked_with(n: usize, prim_box: impl Fn(usize) -> Aabb + Sync, block: u32) -> Bvh {
+        Bvh::build_costed(n, &prim_box, block, INTERSECT_COST)
     }
 
     /// [`Bvh::build`] for the top level of a scene, whose primitives are
@@ -261,12 +269,12 @@ impl Bvh {
     /// eight objects of a Cornell box made one leaf, and every ray tested
     /// all of them.)
     pub fn build_objects(prim_bounds: &[Aabb]) -> Bvh {
-        Bvh::build_costed(prim_bounds, 1, OBJECT_COST)
+        Bvh::build_costed(prim_bounds.len(), &|i| prim_bounds[i], 1, OBJECT_COST)
     }
 
-    fn build_costed(prim_bounds: &[Aabb], block: u32, prim_cost: f32) -> Bvh {
-        assert!(prim_bounds.len() <= MAX_PRIMS, "more than 2^28 primitives in one BVH");
-        let Some((b2, prim_order, binary_depth)) = build_binary(prim_bounds, block, prim_cost) else {
+    fn build_costed(n: usize, prim_box: &(impl Fn(usize) -> Aabb + Sync), block: u32, prim_cost: f32) -> Bvh {
+        assert!(n <= MAX_PRIMS, "more than 2^28 primitives in one BVH");
+        let Some((b2, prim_order, binary_depth)) = build_binary(n, prim_box, block, prim_cost) else {
             return Bvh {
                 nodes: Vec::new(),
                 root: EMPTY,
@@ -276,10 +284,10 @@ impl Bvh {
                 binary_depth: 0,
             };
         };
-        let bounds = b2[0].bounds();
+        let bounds = b2.get(0).bounds();
         // A wide tree has about a third as many nodes as the binary one has
-        // inner nodes.
-        let mut nodes = Vec::with_capacity(b2.len() / 6 + 1);
+        // inner nodes, which are fewer than half the primitives.
+        let mut nodes = Vec::with_capacity(prim_order.len() / 6 + 1);
         let (root, depth) = collapse(&b2, 0, &mut nodes);
         drop(b2);
         nodes.shrink_to_fit();
