@@ -72,7 +72,16 @@ pub fn run(plys: &[PathBuf], threads: &[usize], reps: usize) -> anyhow::Result<(
         let mut out = vec![u32::MAX; dirs.len()];
         trace(&accel, eye, &dirs, &mut out);
         let hits = out.iter().filter(|&&p| p != u32::MAX).count();
-        println!("   hit fraction {:.4}", hits as f64 / dirs.len() as f64);
+        // FNV-1a over every ray's hit triangle: equal between two builds
+        // exactly when they find the same triangles.
+        let sum = out
+            .iter()
+            .fold(0xcbf2_9ce4_8422_2325u64, |h, &p| (h ^ u64::from(p)).wrapping_mul(0x100_0000_01b3));
+        println!(
+            "   hit fraction {:.4}; hit checksum {sum:016x}; node test {}",
+            hits as f64 / dirs.len() as f64,
+            crate::accel::bvh::node_test_isa()
+        );
 
         let mut base = None;
         for &n in threads {
