@@ -54,6 +54,7 @@ pub fn run(plys: &[PathBuf], threads: &[usize], reps: usize) -> anyhow::Result<(
             build_times.push(t0.elapsed().as_secs_f64());
         }
         let accel = accel.context("no build ran")?;
+        let rss_build = peak_rss_kib();
         let bvh = accel.bvh();
         println!(
             "   BVH build {:.1} ms (median of {BUILDS}; all cores); {} 4-wide nodes, depth {} (binary {}), {} leaves, {} 4-triangle blocks; accel {:.1} MiB",
@@ -71,7 +72,16 @@ pub fn run(plys: &[PathBuf], threads: &[usize], reps: usize) -> anyhow::Result<(
         let mut out = vec![u32::MAX; dirs.len()];
         trace(&accel, eye, &dirs, &mut out);
         let hits = out.iter().filter(|&&p| p != u32::MAX).count();
-        println!("   hit fraction {:.4}", hits as f64 / dirs.len() as f64);
+        // FNV-1a over every ray's hit triangle: equal between two builds
+        // exactly when they find the same triangles.
+        let sum = out
+            .iter()
+            .fold(0xcbf2_9ce4_8422_2325u64, |h, &p| (h ^ u64::from(p)).wrapping_mul(0x100_0000_01b3));
+        println!(
+            "   hit fraction {:.4}; hit checksum {sum:016x}; node test {}",
+            hits as f64 / dirs.len() as f64,
+            crate::accel::bvh::node_test_isa()
+        );
 
         let mut base = None;
         for &n in threads {
@@ -95,7 +105,12 @@ pub fn run(plys: &[PathBuf], threads: &[usize], reps: usize) -> anyhow::Result<(
             );
         }
         if let Some(kib) = peak_rss_kib() {
-            println!("   peak RSS so far {:.1} MiB", kib as f64 / 1024.0);
+            let mib = |k: u64| k as f64 / 1024.0;
+            println!(
+                "   peak RSS so far {:.1} MiB (after the builds {:.1} MiB)",
+                mib(kib),
+                rss_build.map_or(f64::NAN, mib)
+            );
         }
     }
     Ok(())

@@ -57,12 +57,9 @@ impl MeshAccel {
             let tri = Triangle::new(vertex(t[0])?, vertex(t[1])?, vertex(t[2])?, k);
             (!tri.is_degenerate()).then_some(tri)
         };
-        let bounds: Vec<Aabb> = (0..triangles.len() as u32)
-            .into_par_iter()
-            .map(|k| tri_of(k).map_or(Aabb::EMPTY, |t| Aabb::from_points(t.v.map(Vec3::from))))
-            .collect();
-        let mut bvh = Bvh::build_blocked(&bounds, 4);
-        drop(bounds);
+        let tri_box =
+            |k: usize| tri_of(k as u32).map_or(Aabb::EMPTY, |t| Aabb::from_points(t.v.map(Vec3::from)));
+        let mut bvh = Bvh::build_blocked_with(triangles.len(), tri_box, 4);
         // Number the blocks leaf by leaf (serial and cheap), then fill them
         // in parallel.
         let mut groups: Vec<[u32; 4]> = Vec::new();
@@ -84,11 +81,11 @@ impl MeshAccel {
             .map(|(g, &n)| {
                 // Every primitive in the tree had a non-empty box, so came
                 // from a valid triangle.
-                let tris: Vec<Triangle> = g[..n as usize]
-                    .iter()
-                    .map(|&k| tri_of(k).expect("BVH holds only valid triangles"))
-                    .collect();
-                TriBlock::new(&tris)
+                let mut tris = [Triangle { v: [[0.0; 3]; 3], prim: 0 }; 4];
+                for (t, &k) in tris.iter_mut().zip(&g[..n as usize]) {
+                    *t = tri_of(k).expect("BVH holds only valid triangles");
+                }
+                TriBlock::new(&tris[..n as usize])
             })
             .collect();
         MeshAccel { bvh, blocks, count }

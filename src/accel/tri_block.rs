@@ -104,13 +104,19 @@ impl TriBlock {
         }
         let neg = e0.cmplt(Vec4::ZERO) | e1.cmplt(Vec4::ZERO) | e2.cmplt(Vec4::ZERO);
         let pos = e0.cmpgt(Vec4::ZERO) | e1.cmpgt(Vec4::ZERO) | e2.cmpgt(Vec4::ZERO);
+        let inside = !(neg & pos);
+        if inside.bitmask() == 0 {
+            // Most blocks a ray reaches miss on the edge test: skip the
+            // division. Lanes that pass are computed as before.
+            return BlockHit { mask: 0, t: [0.0; 4], u: [0.0; 4], v: [0.0; 4] };
+        }
         let det = e0 + e1 + e2;
         let t_scaled = e0 * (sz * a2) + e1 * (sz * b2) + e2 * (sz * c2);
         let inv = Vec4::ONE / det;
         let t = t_scaled * inv;
         // `t > t_min && t < t_max` is false for NaN (from a NaN lane or a
         // zero determinant), as in the scalar test.
-        let ok = !(neg & pos)
+        let ok = inside
             & det.cmpne(Vec4::ZERO)
             & det.cmpeq(det)
             & t.cmpgt(Vec4::splat(t_min))

@@ -30,6 +30,14 @@
 //!   fetched. The exit distance is widened by a few ulps (Ize 2013, "Robust
 //!   BVH Ray Traversal") so a ray grazing a shared box face, as rays through
 //!   a shared triangle edge do, is never lost to rounding.
+//! - **AVX2 and FMA**: where the CPU has them (detected at run time, SSE
+//!   otherwise), the whole traversal, leaf test included, is compiled for
+//!   them, and the node test computes each plane as one fused
+//!   `b * inv - o * inv` with a margin for the rounding of `o * inv`. The
+//!   fused test may let a box through that the plain one culls, never the
+//!   reverse, and the leaf test is the same code (Rust never fuses on its
+//!   own), so hits are bit for bit those of the SSE path. On the bumpy-sphere
+//!   benchmark this path traces 1.3-1.7x the rays per second.
 //! - **Limits**: leaves hold at most [`MAX_LEAF`] primitives and a tree at
 //!   most 2^28 primitives (a leaf reference packs both in 32 bits).
 
@@ -37,7 +45,7 @@ use std::ops::Range;
 
 use glam::{Vec3, Vec3A, Vec4};
 
-use super::bvh_build::{build_binary, Node, INTERSECT_COST, SAH_MAX_DEPTH};
+use super::bvh_build::{build_binary, BinaryNodes, INTERSECT_COST, SAH_MAX_DEPTH};
 pub use super::bvh_build::{BINS, MAX_LEAF};
 use crate::math::{Aabb, Ray};
 
@@ -137,8 +145,8 @@ pub struct Bvh {
 
 /// Collapses the binary subtree at `i` into wide nodes appended to `out`;
 /// returns its reference and the wide depth below it.
-fn collapse(b2: &[Node], i: usize, out: &mut Vec<Node4>) -> (u32, usize) {
-    let n = &b2[i];
+fn collapse(b2: &BinaryNodes, i: usize, out: &mut Vec<Node4>) -> (u32, usize) {
+    let n = b2.get(i);
     if n.is_leaf() {
         return (LEAF | n.first << 3 | (n.count - 1), 0);
     }
@@ -149,13 +157,14 @@ fn collapse(b2: &[Node], i: usize, out: &mut Vec<Node4>) -> (u32, usize) {
         // first of equals, so the result is deterministic.
         let mut best: Option<(usize, f32)> = None;
         for (k, &c) in kids[..len].iter().enumerate() {
-            let area = b2[c].bounds().surface_area();
-            if !b2[c].is_leaf() && best.is_none_or(|(_, a)| area > a) {
+            let c = b2.get(c);
+            let area = c.bounds().surface_area();
+            if !c.is_leaf() && best.is_none_or(|(_, a)| area > a) {
                 best = Some((k, area));
             }
         }
         let Some((k, _)) = best else { break };
-        let first = b2[kids[k]].first as usize;
+        let first = b2.get(kids[k]).first as usize;
         kids.copy_within(k + 1..len, k + 2);
         kids[k] = first;
         kids[k + 1] = first + 1;
@@ -169,7 +178,7 @@ fn collapse(b2: &[Node], i: usize, out: &mut Vec<Node4>) -> (u32, usize) {
         let (r, d) = collapse(b2, c, out);
         node.child[k] = r;
         depth = depth.max(d);
-        let b = &b2[c];
+        let b = b2.get(c);
         for axis in 0..3 {
             node.bounds[2 * axis][k] = b.min[axis];
             node.bounds[2 * axis + 1][k] = b.max[axis];
@@ -187,6 +196,12 @@ struct RayPre {
     /// Row of [`Node4::bounds`] holding each axis's near and far plane.
     near: [usize; 3],
     far: [usize; 3],
+    /// For the fused test `b * inv + c`: `c = -o * inv`, moved down (near
+    /// planes) or up (far planes) by more than its rounding error.
+    c_near: [Vec4; 3],
+    c_far: [Vec4; 3],
+    /// Whether `c_near` and `c_far` are finite, so the fused test applies.
+    fused_ok: bool,
 }
 
 impl RayPre {
@@ -202,12 +217,62 @@ impl RayPre {
         // Written out instead of `[0, 1, 2].map(..)`: the array maps were
         // not inlined and cost as much as a node test per traversal.
         let (nx, ny, nz) = ((inv.x < 0.0) as usize, (inv.y < 0.0) as usize, (inv.z < 0.0) as usize);
+        // `b * inv - o * inv` in one rounding of a fused multiply-add, where
+        // `o * inv` was rounded once before: that product's error is
+        // absolute, up to half an ulp of it, and cancellation can make it
+        // large next to the result. A margin of two ulps, taken outwards,
+        // covers it and the rounding of the margin itself; the relative
+        // errors left are the ones `SLAB_EXPAND` already covers.
+        let oi = Vec3A::from(ray.o) * inv;
+        let pad = oi.abs() * (2.0 * f32::EPSILON);
+        let (cn, cf) = (-oi - pad, -oi + pad);
+        let fused_ok = cn.is_finite() && cf.is_finite();
         RayPre {
             o: [Vec4::splat(ray.o.x), Vec4::splat(ray.o.y), Vec4::splat(ray.o.z)],
             inv: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
             near: [nx, 2 + ny, 4 + nz],
             far: [1 - nx, 3 - ny, 5 - nz],
+            c_near: [Vec4::splat(cn.x), Vec4::splat(cn.y), Vec4::splat(cn.z)],
+            c_far: [Vec4::splat(cf.x), Vec4::splat(cf.y), Vec4::splat(cf.z)],
+            fused_ok,
         }
+    }
+
+    /// [`RayPre::hit`] with one fused multiply-add per plane instead of a
+    /// subtraction and a multiplication. It may let through a box the
+    /// plain test culls (by a few ulps), never the reverse, so the
+    /// primitives found and the hits reported are the same.
+    ///
+    /// # Safety
+    /// The CPU must have FMA, and `self.fused_ok` must hold.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline]
+    unsafe fn hit_fused(&self, n: &Node4, t_max: f32) -> (Vec4, u32) {
+        let b = &n.bounds;
+        let (inv, cn, cf) = (&self.inv, &self.c_near, &self.c_far);
+        let (near, far) = (&self.near, &self.far);
+        let tn = fmadd(b[near[0]], inv[0], cn[0])
+            .max(fmadd(b[near[1]], inv[1], cn[1]))
+            .max(fmadd(b[near[2]], inv[2], cn[2]).max(Vec4::ZERO));
+        let tf = fmadd(b[far[0]], inv[0], cf[0])
+            .min(fmadd(b[far[1]], inv[1], cf[1]))
+            .min(fmadd(b[far[2]], inv[2], cf[2]));
+        let tf = (tf * SLAB_EXPAND).min(Vec4::splat(t_max));
+        (tn, tn.cmple(tf).bitmask())
+    }
+
+    /// The node test, fused where the traversal was compiled for it (`FUSED`)
+    /// and this ray allows it.
+    #[inline(always)]
+    fn hit_with<const FUSED: bool>(&self, n: &Node4, t_max: f32) -> (Vec4, u32) {
+        #[cfg(target_arch = "x86_64")]
+        if FUSED && self.fused_ok {
+            // SAFETY: `FUSED` traversals are only entered after detecting
+            // AVX2 and FMA (`fused_available`).
+            return unsafe { self.hit_fused(n, t_max) };
+        }
+        self.hit(n, t_max)
     }
 
     /// Entry distances of the four children and the mask of those the ray
@@ -236,6 +301,35 @@ impl RayPre {
     }
 }
 
+/// `a * b + c` in one rounding, four lanes.
+///
+/// # Safety
+/// The CPU must have FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+#[inline]
+unsafe fn fmadd(a: [f32; 4], b: Vec4, c: Vec4) -> Vec4 {
+    use std::arch::x86_64::_mm_fmadd_ps;
+    Vec4::from(_mm_fmadd_ps(Vec4::from_array(a).into(), b.into(), c.into()))
+}
+
+/// Which node test the traversal uses on this CPU (for benchmark reports).
+pub fn node_test_isa() -> &'static str {
+    #[cfg(target_arch = "x86_64")]
+    if fused_available() {
+        return "AVX2+FMA";
+    }
+    "SSE"
+}
+
+/// Whether this CPU runs the AVX2 + FMA traversal (detected once; the
+/// standard library caches the answer).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn fused_available() -> bool {
+    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+}
+
 impl Bvh {
     /// Builds a BVH over the boxes of `prim_bounds`; primitive `i` is the one
     /// with box `prim_bounds[i]`. Boxes that are empty or not finite are left
@@ -251,7 +345,14 @@ impl Bvh {
     /// time: the SAH prices a leaf by its number of blocks, so leaves come
     /// out with (up to [`MAX_LEAF`]) primitives filling whole blocks.
     pub fn build_blocked(prim_bounds: &[Aabb], block: u32) -> Bvh {
-        Bvh::build_costed(prim_bounds, block, INTERSECT_COST)
+        Bvh::build_blocked_with(prim_bounds.len(), |i| prim_bounds[i], block)
+    }
+
+    /// [`Bvh::build_blocked`] over `n` primitives whose boxes come from
+    /// `prim_box(i)`, called once each (in parallel), so the caller need not
+    /// hold an array of boxes.
+    pub fn build_blocked_with(n: usize, prim_box: impl Fn(usize) -> Aabb + Sync, block: u32) -> Bvh {
+        Bvh::build_costed(n, &prim_box, block, INTERSECT_COST)
     }
 
     /// [`Bvh::build`] for the top level of a scene, whose primitives are
@@ -261,12 +362,12 @@ impl Bvh {
     /// eight objects of a Cornell box made one leaf, and every ray tested
     /// all of them.)
     pub fn build_objects(prim_bounds: &[Aabb]) -> Bvh {
-        Bvh::build_costed(prim_bounds, 1, OBJECT_COST)
+        Bvh::build_costed(prim_bounds.len(), &|i| prim_bounds[i], 1, OBJECT_COST)
     }
 
-    fn build_costed(prim_bounds: &[Aabb], block: u32, prim_cost: f32) -> Bvh {
-        assert!(prim_bounds.len() <= MAX_PRIMS, "more than 2^28 primitives in one BVH");
-        let Some((b2, prim_order, binary_depth)) = build_binary(prim_bounds, block, prim_cost) else {
+    fn build_costed(n: usize, prim_box: &(impl Fn(usize) -> Aabb + Sync), block: u32, prim_cost: f32) -> Bvh {
+        assert!(n <= MAX_PRIMS, "more than 2^28 primitives in one BVH");
+        let Some((b2, prim_order, binary_depth)) = build_binary(n, prim_box, block, prim_cost) else {
             return Bvh {
                 nodes: Vec::new(),
                 root: EMPTY,
@@ -276,10 +377,10 @@ impl Bvh {
                 binary_depth: 0,
             };
         };
-        let bounds = b2[0].bounds();
+        let bounds = b2.get(0).bounds();
         // A wide tree has about a third as many nodes as the binary one has
-        // inner nodes.
-        let mut nodes = Vec::with_capacity(b2.len() / 6 + 1);
+        // inner nodes, which are fewer than half the primitives.
+        let mut nodes = Vec::with_capacity(prim_order.len() / 6 + 1);
         let (root, depth) = collapse(&b2, 0, &mut nodes);
         drop(b2);
         nodes.shrink_to_fit();
@@ -381,15 +482,47 @@ impl Bvh {
     /// any call reported a hit.
     #[inline]
     pub fn closest<F: FnMut(Range<usize>, &mut f32) -> bool>(&self, ray: &Ray, t_max: f32, leaf: F) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if fused_available() {
+            // SAFETY: the CPU has AVX2 and FMA.
+            return unsafe { self.closest_fused(ray, t_max, leaf) };
+        }
+        self.closest_plain::<false, F>(ray, t_max, leaf)
+    }
+
+    /// [`Bvh::closest`] compiled for AVX2 and FMA, leaf test included (which
+    /// changes nothing in its results: Rust never fuses a multiply and an
+    /// add on its own).
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn closest_fused<F: FnMut(Range<usize>, &mut f32) -> bool>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        leaf: F,
+    ) -> bool {
+        self.closest_plain::<true, F>(ray, t_max, leaf)
+    }
+
+    #[inline(always)]
+    fn closest_plain<const FUSED: bool, F: FnMut(Range<usize>, &mut f32) -> bool>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        leaf: F,
+    ) -> bool {
         if 3 * self.depth < SMALL_STACK {
-            self.closest_with::<SMALL_STACK, F>(ray, t_max, leaf)
+            self.closest_with::<SMALL_STACK, FUSED, F>(ray, t_max, leaf)
         } else {
-            self.closest_with::<BIG_STACK, F>(ray, t_max, leaf)
+            self.closest_with::<BIG_STACK, FUSED, F>(ray, t_max, leaf)
         }
     }
 
     #[inline(always)]
-    fn closest_with<const N: usize, F: FnMut(Range<usize>, &mut f32) -> bool>(
+    fn closest_with<const N: usize, const FUSED: bool, F: FnMut(Range<usize>, &mut f32) -> bool>(
         &self,
         ray: &Ray,
         mut t_max: f32,
@@ -416,7 +549,7 @@ impl Bvh {
                 }
             } else {
                 let n = &nodes[cur as usize];
-                let (tn, mut mask) = r.hit(n, t_max);
+                let (tn, mut mask) = r.hit_with::<FUSED>(n, t_max);
                 if mask != 0 {
                     let first = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -469,15 +602,40 @@ impl Bvh {
     /// stops at the first such leaf.
     #[inline]
     pub fn any<F: FnMut(Range<usize>, f32) -> bool>(&self, ray: &Ray, t_max: f32, leaf: F) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if fused_available() {
+            // SAFETY: the CPU has AVX2 and FMA.
+            return unsafe { self.any_fused(ray, t_max, leaf) };
+        }
+        self.any_plain::<false, F>(ray, t_max, leaf)
+    }
+
+    /// [`Bvh::any`] compiled for AVX2 and FMA (see [`Bvh::closest_fused`]).
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn any_fused<F: FnMut(Range<usize>, f32) -> bool>(&self, ray: &Ray, t_max: f32, leaf: F) -> bool {
+        self.any_plain::<true, F>(ray, t_max, leaf)
+    }
+
+    #[inline(always)]
+    fn any_plain<const FUSED: bool, F: FnMut(Range<usize>, f32) -> bool>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        leaf: F,
+    ) -> bool {
         if 3 * self.depth < SMALL_STACK {
-            self.any_with::<SMALL_STACK, F>(ray, t_max, leaf)
+            self.any_with::<SMALL_STACK, FUSED, F>(ray, t_max, leaf)
         } else {
-            self.any_with::<BIG_STACK, F>(ray, t_max, leaf)
+            self.any_with::<BIG_STACK, FUSED, F>(ray, t_max, leaf)
         }
     }
 
     #[inline(always)]
-    fn any_with<const N: usize, F: FnMut(Range<usize>, f32) -> bool>(
+    fn any_with<const N: usize, const FUSED: bool, F: FnMut(Range<usize>, f32) -> bool>(
         &self,
         ray: &Ray,
         t_max: f32,
@@ -498,7 +656,7 @@ impl Bvh {
                 }
             } else {
                 let n = &nodes[cur as usize];
-                let (_, mut mask) = r.hit(n, t_max);
+                let (_, mut mask) = r.hit_with::<FUSED>(n, t_max);
                 if mask != 0 {
                     // Order does not matter for "any": take the first, defer the rest.
                     cur = n.child[mask.trailing_zeros() as usize];

@@ -291,3 +291,81 @@ fn huge_coordinates_and_nan_rays_stay_in_range() {
         });
     }
 }
+
+/// The AVX2 + FMA node test lets through every box the SSE test does (it
+/// may add a few by its margin), and traversals with either test find the
+/// same closest hits and the same occlusion.
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn fused_node_test_is_conservative_and_traversals_agree() {
+    if !fused_available() {
+        eprintln!("this CPU has no AVX2 and FMA: only the SSE traversal exists here");
+        return;
+    }
+    let mut rng = Rng(23);
+    let boxes = random_boxes(&mut rng, 5000);
+    let bvh = Bvh::build(&boxes);
+    let (mut plain_hits, mut extra) = (0usize, 0usize);
+    for k in 0..3000 {
+        // Origins inside the cloud, far outside it, and on box faces; some
+        // directions with exactly zero components.
+        let o = match k % 3 {
+            0 => rng.vec(-12.0, 12.0),
+            1 => rng.vec(-12.0, 12.0) + Vec3::splat(1e4),
+            _ => boxes[k % boxes.len()].min,
+        };
+        let mut d = rng.dir() * rng.range(0.1, 10.0);
+        if k % 7 == 0 {
+            d.x = 0.0;
+        }
+        if k % 11 == 0 {
+            d = Vec3::new(0.0, 0.0, -1.0);
+        }
+        let ray = Ray::new(o, d);
+        let t_max = if k % 4 == 0 { rng.range(1.0, 30.0) } else { f32::INFINITY };
+        let r = RayPre::new(&ray);
+        assert!(r.fused_ok, "ray {k}");
+        for n in bvh.nodes() {
+            let plain = r.hit(n, t_max).1;
+            // SAFETY: AVX2 and FMA were detected, and `fused_ok` holds.
+            let fused = unsafe { r.hit_fused(n, t_max) }.1;
+            assert_eq!(fused & plain, plain, "ray {k}: the fused test culled a box the plain one enters");
+            plain_hits += plain.count_ones() as usize;
+            extra += (fused & !plain).count_ones() as usize;
+        }
+        let inv = ray.d.recip();
+        let closest = |fused: bool| {
+            let mut best = None;
+            let leaf = |range: Range<usize>, t: &mut f32| {
+                let mut found = false;
+                for &p in &bvh.prim_order()[range] {
+                    if let Some(te) = boxes[p as usize].hit(ray.o, inv, *t) {
+                        if best.is_none_or(|b: (f32, u32)| te < b.0) {
+                            best = Some((te, p));
+                            *t = te;
+                            found = true;
+                        }
+                    }
+                }
+                found
+            };
+            // SAFETY: AVX2 and FMA were detected.
+            let hit = if fused {
+                unsafe { bvh.closest_fused(&ray, t_max, leaf) }
+            } else {
+                bvh.closest_plain::<false, _>(&ray, t_max, leaf)
+            };
+            (hit, best)
+        };
+        assert_eq!(closest(true), closest(false), "ray {k}");
+        let blocked = |range: Range<usize>, t: f32| {
+            bvh.prim_order()[range].iter().any(|&p| boxes[p as usize].hit(ray.o, inv, t).is_some())
+        };
+        // SAFETY: AVX2 and FMA were detected.
+        let any_fused = unsafe { bvh.any_fused(&ray, t_max, blocked) };
+        assert_eq!(any_fused, bvh.any_plain::<false, _>(&ray, t_max, blocked), "ray {k}");
+    }
+    assert!(plain_hits > 10_000, "{plain_hits}");
+    // The margin is a few ulps: it should almost never matter.
+    assert!(extra * 1000 < plain_hits, "{extra} extra boxes against {plain_hits}");
+}
