@@ -4,8 +4,8 @@
 //! through an FFI record vs `Function::call` with scalars; vec3 cdata vs scalar
 //! arithmetic). Run: `cargo bench --bench shader`.
 //!
-//! On the project's 2-core machine (before the shading point was written in
-//! place, which cut about 15% under load): empty color 86 ns; FFI record 2.4× faster
+//! On the project's 2-core machine: empty color 86 ns (again 86–106 ns on
+//! 2026-11-23 with the shading point written in place: no measurable change); FFI record 2.4× faster
 //! than `Function::call` with scalars (209 ns); Lua marble 379 ns vs Rust 193 ns
 //! (1.96×); height 166 ns; vec3 155 ns vs scalars 134 ns. `docs/shaders.md`
 //! has the table.
