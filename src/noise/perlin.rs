@@ -162,7 +162,7 @@ pub fn noise3(x: f32, y: f32, z: f32) -> f32 {
         corner(0, 1, 1),
         corner(1, 1, 1),
     ];
-    blend3(n, fade(fx), fade(fy), fade(fz))
+    blend3(ramp_coefficients(n), fade(fx), fade(fy), fade(fz))
 }
 
 /// The lattice hash of corner (a, b, c) of the cell spanned by `xs`, `ys`, `zs`.
@@ -172,20 +172,29 @@ fn hash3(xs: [usize; 2], ys: [usize; 2], zs: [usize; 2], a: usize, b: usize, c: 
     P[(P[(P[xs[a] & 255] as usize + ys[b]) & 511] as usize + zs[c]) & 511]
 }
 
-/// Trilinear blend of the eight corner ramps (`n[a + 2b + 4c]`) over the faded
-/// offsets, in one fixed order so that [`noise3`] and [`noise3_grad`] give the
-/// same bits.
+/// The eight corner ramps (`n[a + 2b + 4c]`) as the coefficients of
+/// k0 + k1·u + k2·v + k3·w + k4·uv + k5·vw + k6·wu + k7·uvw, shared by
+/// [`noise3`] and [`noise3_grad`] so that both give the same bits.
 #[inline(always)]
-fn blend3(n: [f32; 8], u: f32, v: f32, w: f32) -> f32 {
+fn ramp_coefficients(n: [f32; 8]) -> [f32; 8] {
     let [n000, n100, n010, n110, n001, n101, n011, n111] = n;
-    let k1 = n100 - n000;
-    let k2 = n010 - n000;
-    let k3 = n001 - n000;
-    let k4 = n000 - n100 - n010 + n110;
-    let k5 = n000 - n010 - n001 + n011;
-    let k6 = n000 - n100 - n001 + n101;
-    let k7 = -n000 + n100 + n010 - n110 + n001 - n101 - n011 + n111;
-    n000 + k1 * u + k2 * v + k3 * w + k4 * u * v + k5 * v * w + k6 * w * u + k7 * u * v * w
+    [
+        n000,
+        n100 - n000,
+        n010 - n000,
+        n001 - n000,
+        n000 - n100 - n010 + n110,
+        n000 - n010 - n001 + n011,
+        n000 - n100 - n001 + n101,
+        -n000 + n100 + n010 - n110 + n001 - n101 - n011 + n111,
+    ]
+}
+
+/// The trilinear blend over the faded offsets, from [`ramp_coefficients`].
+#[inline(always)]
+fn blend3(k: [f32; 8], u: f32, v: f32, w: f32) -> f32 {
+    let [k0, k1, k2, k3, k4, k5, k6, k7] = k;
+    k0 + k1 * u + k2 * v + k3 * w + k4 * u * v + k5 * v * w + k6 * w * u + k7 * u * v * w
 }
 
 /// [`noise3`] and its exact analytic gradient ∂n/∂(x, y, z).
@@ -238,14 +247,9 @@ fn core3(xs: [usize; 2], ys: [usize; 2], zs: [usize; 2], fx: f32, fy: f32, fz: f
     let (u, v, w) = (fade(fx), fade(fy), fade(fz));
     let (du, dv, dw) = (fade_d(fx), fade_d(fy), fade_d(fz));
 
-    let k1 = n100 - n000;
-    let k2 = n010 - n000;
-    let k3 = n001 - n000;
-    let k4 = n000 - n100 - n010 + n110;
-    let k5 = n000 - n010 - n001 + n011;
-    let k6 = n000 - n100 - n001 + n101;
-    let k7 = -n000 + n100 + n010 - n110 + n001 - n101 - n011 + n111;
-    let value = blend3([n000, n100, n010, n110, n001, n101, n011, n111], u, v, w);
+    let k = ramp_coefficients([n000, n100, n010, n110, n001, n101, n011, n111]);
+    let [_, k1, k2, k3, k4, k5, k6, k7] = k;
+    let value = blend3(k, u, v, w);
 
     let mut grad = [0.0f32; 3];
     for (axis, g) in grad.iter_mut().enumerate() {
