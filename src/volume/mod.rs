@@ -363,18 +363,14 @@ impl Volumes {
                 march_width,
             };
             if let (Some(n), Some(id)) = (v.grid, script) {
-                let key = baking.cache.and_then(|_| cache::key(desc, index, n));
-                match (baking.cache, key) {
-                    (Some(c), Some(key)) => match c.get(&key) {
-                        Some(grids) => vol.use_grids(grids),
-                        None => {
-                            let grids = vol.bake(shaders.as_ref(), id, n, baking).map_err(|e| err(v, e))?;
-                            let modules = shaders.as_ref().map(ShaderSet::required_files).unwrap_or_default();
-                            c.put(key, &modules, grids);
-                        }
-                    },
-                    _ => {
-                        vol.bake(shaders.as_ref(), id, n, baking).map_err(|e| err(v, e))?;
+                let slot = baking.cache.and_then(|c| cache::key(desc, index, n).map(|key| (c, key)));
+                if let Some(grids) = slot.as_ref().and_then(|(c, key)| c.get(key)) {
+                    vol.use_grids(grids);
+                } else {
+                    let grids = vol.bake(shaders.as_ref(), id, n, baking).map_err(|e| err(v, e))?;
+                    if let Some((c, key)) = slot {
+                        let modules = shaders.as_ref().map(ShaderSet::required_files).unwrap_or_default();
+                        c.put(key, &modules, grids);
                     }
                 }
             }
