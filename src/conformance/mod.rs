@@ -11,6 +11,8 @@
 mod discover;
 pub mod measures;
 pub mod noise;
+mod quirks;
+mod rule;
 pub mod runner;
 pub mod thresholds;
 
