@@ -381,3 +381,64 @@ fn tev_gets_each_pass_as_create_and_update_packets() {
     let centre = &floats[(24 * 48 + 24) * 3..][..3];
     assert!(centre[0] > centre[1] + 100.0, "the red sphere's linear radiance: {centre:?}");
 }
+
+/// `scene(shader)` with several samples a pixel (so the watch refines over
+/// several passes) and, when given, a scene-level display transform.
+fn refined_scene(shader: &str, display: Option<&str>) -> String {
+    let s = scene(shader).replace("</ImageResolution>", "</ImageResolution><NumSamples>6</NumSamples>");
+    match display {
+        Some(d) => s.replacen("<Scene>", &format!("<Scene>\n    <Display>{d}</Display>"), 1),
+        None => s,
+    }
+}
+
+/// The 8-bit pixels of a PNG, with its size.
+fn pixels(png: &[u8]) -> (u32, u32, Vec<u8>) {
+    let img = image::load_from_memory(png).expect("a PNG").to_rgb8();
+    (img.width(), img.height(), img.into_raw())
+}
+
+/// What `luster render` writes for `scene` in `dir`: the pixels of its PNG.
+fn rendered(dir: &std::path::Path, scene: &str, out: &str) -> (u32, u32, Vec<u8>) {
+    let status = Command::new(env!("CARGO_BIN_EXE_luster"))
+        .args(["render", "-q", scene, "-o", out, "--threads", "2"])
+        .current_dir(dir)
+        .stdin(Stdio::null())
+        .status()
+        .expect("luster render runs");
+    assert!(status.success(), "luster render {scene} failed");
+    pixels(&std::fs::read(dir.join(out).join("out.png")).expect("the rendered PNG"))
+}
+
+/// The refined frame's state: finished, at full resolution and all samples.
+fn refined(s: &serde_json::Value) -> bool {
+    finished(s) && s["preview"] == false && s["spp"].is_u64() && s["spp"] == s["target_spp"]
+}
+
+#[test]
+fn the_refined_frame_is_the_rendered_image_at_load_and_after_a_save() {
+    // The watch encodes its frames for speed, so the files differ; the
+    // pixels, decoded, must not differ in a single byte.
+    let dir = folder(&[("s.xml", &refined_scene("c.lua", None)), ("c.lua", &shader(0.9, 0.3, 0.1))]);
+    let w = start(dir.path(), "s.xml");
+    let rx = events(&w.addr);
+    let first = until(&rx, "the refined first frame", refined);
+    assert_eq!(first["target_spp"], 6);
+    let (n1, _, png) = frame(&w.addr);
+    let ours = pixels(&png);
+    assert_eq!((ours.0, ours.1), (48, 48), "the full resolution");
+    assert!(ours == rendered(dir.path(), "s.xml", "r1"), "the watch's frame differs from `luster render`");
+
+    // One save that changes both the shader (a new file) and the display
+    // transform, so a stale frame or a transform the watch missed shows.
+    std::fs::write(dir.path().join("d.lua"), shader(0.1, 0.5, 0.9)).unwrap();
+    save(&dir.path().join("s.xml"), &refined_scene("d.lua", Some("srgb")));
+    until(&rx, "a refined frame after the save", |s| refined(s) && s["frame"].as_u64() > Some(n1));
+    let (_, _, png) = frame(&w.addr);
+    let after = pixels(&png);
+    assert!(after != ours, "the save changed the image");
+    assert!(
+        after == rendered(dir.path(), "s.xml", "r2"),
+        "the watch's frame differs from `luster render` after the save"
+    );
+}

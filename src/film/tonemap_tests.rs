@@ -108,6 +108,43 @@ fn the_quantizer_table_agrees_with_the_formula() {
     }
 }
 
+/// The values where a quantizer's answer can change: around every edge,
+/// every bin's lower end, 2⁻²⁴ and 1, and values outside [0, 1].
+fn quantizer_probes(q: &Quantizer) -> Vec<f32> {
+    let around = |bits: u32| (bits.saturating_sub(3)..=bits.saturating_add(3)).map(f32::from_bits);
+    let mut v: Vec<f32> =
+        q.edges.iter().filter(|e| e.is_finite()).flat_map(|e| around(e.to_bits())).collect();
+    v.extend((0..=BINS as u32).flat_map(|i| around(LOW_BITS + (i << BIN_SHIFT))));
+    v.extend(around(LOW_BITS).chain(around(1.0f32.to_bits())).chain(around(1)));
+    v.extend([0.0, -0.0, -1e-30, -1.0, 2.0, f32::NAN, -f32::NAN, f32::INFINITY, f32::NEG_INFINITY]);
+    v
+}
+
+#[test]
+fn the_packed_table_answers_as_the_two_tables_do() {
+    let quantizers = [
+        Quantizer::new(Gamma::Power(2.2)),
+        Quantizer::new(Gamma::Power(1.0)),
+        Quantizer::new(Gamma::Srgb),
+        Quantizer::rounding(Gamma::Srgb),
+        Quantizer::rounding(Gamma::Power(2.2)),
+    ];
+    for q in quantizers {
+        assert!(!q.packed.is_empty(), "every gamma above 0.3 packs");
+        let general = Quantizer {
+            edges: q.edges,
+            start: q.start.clone(),
+            white: q.white,
+            one_step: true,
+            packed: Vec::new(),
+        };
+        for c in quantizer_probes(&q) {
+            assert_eq!(q.code(c), general.code(c), "at {c:e} ({:#x})", c.to_bits());
+        }
+    }
+    assert!(Quantizer::new(Gamma::Power(0.1)).packed.is_empty(), "two edges share a bin: the general path");
+}
+
 #[test]
 fn percentile_by_histogram_matches_a_full_sort() {
     // Zeros, ties, values spread over many octaves and some in one bucket.
