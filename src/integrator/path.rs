@@ -378,7 +378,9 @@ fn bounce(
         _ => {
             let e = if p.importance || p.mis { 1.0 } else { 0.0 };
             let local = power_cosine(e, u);
-            (frame.to_world(local), power_cosine_pdf(e, local.z), None)
+            // A BRDF is evaluated in the frame the direction was drawn in.
+            let f = m.brdf.as_ref().map(|b| b.eval(m.diffuse, m.specular, local, at.wo));
+            (frame.to_world(local), power_cosine_pdf(e, local.z), f)
         }
     };
     let cos = n.dot(wi);
