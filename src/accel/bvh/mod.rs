@@ -299,9 +299,10 @@ impl Bvh {
     ) -> bool {
         let r = RayPre::new(ray);
         let mut cur = self.root;
-        if cur & LEAF != 0 {
-            // Empty tree, or one leaf.
-            return cur != EMPTY && r.hit_box(&self.bounds, t_max) && leaf(leaf_range(cur), &mut t_max);
+        // Empty tree, or one leaf: the loop below calls `leaf` in one place
+        // only, so that LLVM inlines it.
+        if cur & LEAF != 0 && (cur == EMPTY || !r.hit_box(&self.bounds, t_max)) {
+            return false;
         }
         let nodes = &self.nodes[..];
         // Entries: child reference in the low half, entry distance's bits in
@@ -414,8 +415,8 @@ impl Bvh {
     ) -> bool {
         let r = RayPre::new(ray);
         let mut cur = self.root;
-        if cur & LEAF != 0 {
-            return cur != EMPTY && r.hit_box(&self.bounds, t_max) && leaf(leaf_range(cur), t_max);
+        if cur & LEAF != 0 && (cur == EMPTY || !r.hit_box(&self.bounds, t_max)) {
+            return false;
         }
         let nodes = &self.nodes[..];
         // Only entries below `sp` are ever read.

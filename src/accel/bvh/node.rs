@@ -163,11 +163,15 @@ impl RayPre {
     /// through a box the plain test culls (by a few ulps), never the
     /// reverse, so the primitives found and the hits reported are the same.
     ///
+    /// Not itself compiled for AVX2 (`#[target_feature]` forbids
+    /// `#[inline(always)]`, and LLVM would not inline it otherwise): it is
+    /// only called from traversals compiled for AVX2 and FMA, where it and
+    /// the intrinsics inline.
+    ///
     /// # Safety
     /// The CPU must have AVX2 and FMA, and `self.fused_ok` must hold.
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    #[inline]
+    #[inline(always)]
     pub(super) unsafe fn hit_fused(&self, n: &Node8, t_max: f32) -> ([f32; WIDTH], u32) {
         use std::arch::x86_64::*;
         let b = &n.bounds;
