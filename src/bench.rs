@@ -44,21 +44,23 @@ pub fn run(plys: &[PathBuf], threads: &[usize], reps: usize) -> anyhow::Result<(
             t_load
         );
 
-        let mut build_times = Vec::with_capacity(BUILDS);
+        let (mut build_times, mut build_cpu) = (Vec::with_capacity(BUILDS), Vec::with_capacity(BUILDS));
         let mut accel = None;
         for _ in 0..BUILDS {
             // Drop the previous tree first so peak memory is one tree's worth.
             drop(accel.take());
-            let t0 = Instant::now();
+            let (t0, c0) = (Instant::now(), cpu_seconds());
             accel = Some(MeshAccel::build(&positions, &triangles));
             build_times.push(t0.elapsed().as_secs_f64());
+            build_cpu.push(cpu_seconds().zip(c0).map_or(f64::NAN, |(c1, c0)| c1 - c0));
         }
         let accel = accel.context("no build ran")?;
         let rss_build = peak_rss_kib();
         let bvh = accel.bvh();
         println!(
-            "   BVH build {:.1} ms (median of {BUILDS}; all cores); {} 4-wide nodes, depth {} (binary {}), {} leaves, {} 4-triangle blocks; accel {:.1} MiB",
+            "   BVH build {:.1} ms (median of {BUILDS}; all cores; CPU {:.1} ms); {} wide nodes, depth {} (binary {}), {} leaves, {} 4-triangle blocks; accel {:.1} MiB",
             median(&mut build_times) * 1e3,
+            median(&mut build_cpu) * 1e3,
             bvh.node_count(),
             bvh.depth(),
             bvh.binary_depth(),
@@ -86,11 +88,15 @@ pub fn run(plys: &[PathBuf], threads: &[usize], reps: usize) -> anyhow::Result<(
         let mut base = None;
         for &n in threads {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build()?;
+            let mut cpu = Vec::with_capacity(reps);
             let mut times: Vec<f64> = (0..reps)
                 .map(|_| {
+                    let c0 = cpu_seconds();
                     let t0 = Instant::now();
                     pool.install(|| trace(&accel, eye, &dirs, &mut out));
-                    t0.elapsed().as_secs_f64()
+                    let t = t0.elapsed().as_secs_f64();
+                    cpu.push(cpu_seconds().zip(c0).map_or(f64::NAN, |(c1, c0)| c1 - c0));
+                    t
                 })
                 .collect();
             let min = times.iter().copied().fold(f64::INFINITY, f64::min);
@@ -98,10 +104,13 @@ pub fn run(plys: &[PathBuf], threads: &[usize], reps: usize) -> anyhow::Result<(
             let mrays = dirs.len() as f64 / med / 1e6;
             let scale = base.map_or(String::new(), |b: f64| format!("  ({:.2}x of first)", mrays / b));
             base.get_or_insert(mrays);
+            let cpu = median(&mut cpu);
             println!(
-                "   threads={n:<2} closest hit: median {:7.1} ms over {reps} -> {mrays:6.2} Mrays/s (min {:.1} ms){scale}",
+                "   threads={n:<2} closest hit: median {:7.1} ms over {reps} -> {mrays:6.2} Mrays/s (min {:.1} ms); CPU {:.1} ms -> {:.2} Mrays per CPU-second{scale}",
                 med * 1e3,
-                min * 1e3
+                min * 1e3,
+                cpu * 1e3,
+                dirs.len() as f64 / cpu / 1e6
             );
         }
         if let Some(kib) = peak_rss_kib() {
@@ -162,6 +171,19 @@ pub fn camera_rays(positions: &[Vec3]) -> (Vec3, Vec3, Vec<Vec3>) {
         }
     }
     (eye, c, dirs)
+}
+
+/// CPU time of all this process's threads so far, in seconds, from the
+/// scheduler's nanosecond counters (`/proc/self/task/*/schedstat`). On a
+/// machine shared with other jobs the wall time of a run measures the
+/// neighbours as much as the code; its CPU time far less so.
+pub fn cpu_seconds() -> Option<f64> {
+    let mut ns = 0u64;
+    for task in fs::read_dir("/proc/self/task").ok()? {
+        let stat = fs::read_to_string(task.ok()?.path().join("schedstat")).ok()?;
+        ns += stat.split_whitespace().next()?.parse::<u64>().ok()?;
+    }
+    Some(ns as f64 * 1e-9)
 }
 
 /// Peak resident set size of this process (VmHWM), where /proc has it.

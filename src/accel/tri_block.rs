@@ -86,21 +86,7 @@ impl TriBlock {
         let mut e2 = ax * by - ay * bx;
         let zero = (e0.cmpeq(Vec4::ZERO) | e1.cmpeq(Vec4::ZERO) | e2.cmpeq(Vec4::ZERO)).bitmask();
         if zero != 0 {
-            // On an edge in f32: those lanes are decided in f64 as in the
-            // scalar test.
-            let (mut f0, mut f1, mut f2) = (e0.to_array(), e1.to_array(), e2.to_array());
-            let (ax, ay, bx, by, cx, cy) =
-                (ax.to_array(), ay.to_array(), bx.to_array(), by.to_array(), cx.to_array(), cy.to_array());
-            let f = |x: f32| x as f64;
-            let mut m = zero;
-            while m != 0 {
-                let i = m.trailing_zeros() as usize;
-                m &= m - 1;
-                f0[i] = (f(bx[i]) * f(cy[i]) - f(by[i]) * f(cx[i])) as f32;
-                f1[i] = (f(cx[i]) * f(ay[i]) - f(cy[i]) * f(ax[i])) as f32;
-                f2[i] = (f(ax[i]) * f(by[i]) - f(ay[i]) * f(bx[i])) as f32;
-            }
-            (e0, e1, e2) = (Vec4::from_array(f0), Vec4::from_array(f1), Vec4::from_array(f2));
+            (e0, e1, e2) = edges_f64(zero, [ax, ay, bx, by, cx, cy], [e0, e1, e2]);
         }
         let neg = e0.cmplt(Vec4::ZERO) | e1.cmplt(Vec4::ZERO) | e2.cmplt(Vec4::ZERO);
         let pos = e0.cmpgt(Vec4::ZERO) | e1.cmpgt(Vec4::ZERO) | e2.cmpgt(Vec4::ZERO);
@@ -127,6 +113,26 @@ impl TriBlock {
         }
         BlockHit { mask, t: t.to_array(), u: (e1 * inv).to_array(), v: (e2 * inv).to_array() }
     }
+}
+
+/// The lanes of `zero`, on an edge in `f32`, decided in `f64` as in the
+/// scalar test; the other lanes of `e` are returned as they are. Rare, and
+/// kept out of line so the block test stays small enough to inline.
+#[cold]
+#[inline(never)]
+fn edges_f64(zero: u32, v: [Vec4; 6], e: [Vec4; 3]) -> (Vec4, Vec4, Vec4) {
+    let [ax, ay, bx, by, cx, cy] = v.map(|x| x.to_array());
+    let [mut f0, mut f1, mut f2] = e.map(|x| x.to_array());
+    let f = |x: f32| x as f64;
+    let mut m = zero;
+    while m != 0 {
+        let i = m.trailing_zeros() as usize;
+        m &= m - 1;
+        f0[i] = (f(bx[i]) * f(cy[i]) - f(by[i]) * f(cx[i])) as f32;
+        f1[i] = (f(cx[i]) * f(ay[i]) - f(cy[i]) * f(ax[i])) as f32;
+        f2[i] = (f(ax[i]) * f(by[i]) - f(ay[i]) * f(bx[i])) as f32;
+    }
+    (Vec4::from_array(f0), Vec4::from_array(f1), Vec4::from_array(f2))
 }
 
 #[cfg(test)]

@@ -1,6 +1,8 @@
 //! Tests of the BVH: against brute force, degenerate inputs, determinism.
 
+use super::node::{fused_available, RayPre};
 use super::*;
+use glam::Vec3;
 
 /// A small deterministic generator (SplitMix64), so tests need no crate.
 pub(crate) struct Rng(pub u64);
@@ -100,7 +102,7 @@ fn check_structure(bvh: &Bvh, boxes: &[Aabb]) {
         seen += 1;
         let n = &bvh.nodes()[i];
         let mut used = 0;
-        for k in 0..4 {
+        for k in 0..WIDTH {
             let b = n.child_bounds(k);
             match n.child(k) {
                 Child::Empty => assert!(b.is_empty()),
@@ -230,7 +232,7 @@ fn exponential_spacing_keeps_depth_bounded() {
         .collect();
     let bvh = Bvh::build(&boxes);
     check_structure(&bvh, &boxes);
-    assert!(3 * bvh.depth() < BIG_STACK, "depth {}", bvh.depth());
+    assert!((WIDTH - 1) * bvh.depth() < STACK, "depth {}", bvh.depth());
     let ray = Ray::new(Vec3::new(0.0, 0.5, 0.5), Vec3::X);
     assert_eq!(bvh_closest(&bvh, &boxes, &ray, f32::INFINITY), brute_closest(&boxes, &ray, f32::INFINITY));
 }
@@ -243,7 +245,7 @@ fn build_is_deterministic_across_thread_counts() {
     let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
     assert_eq!(a, one.install(|| Bvh::build(&boxes)));
     assert_eq!(a, three.install(|| Bvh::build(&boxes)));
-    assert_eq!(size_of::<Node4>(), 128);
+    assert_eq!(size_of::<Node8>(), 256);
 }
 
 #[test]
@@ -255,11 +257,12 @@ fn sah_beats_one_leaf_per_primitive() {
     let leaves = bvh.leaf_count();
     assert!(leaves < 4096 && leaves > 4096 / MAX_LEAF, "{leaves} leaves");
     assert!(bvh.binary_depth() < 40, "depth {}", bvh.binary_depth());
-    // The collapse fills nodes; only nodes whose binary children are
-    // all leaves stay narrow.
-    let slots = bvh.node_count() * 4;
+    // The collapse fills nodes; only nodes whose binary descendants run
+    // out of inner nodes stay narrow (this input uses about 61% of the
+    // eight slots; a collapse that stopped at two children would use 25%).
+    let slots = bvh.node_count() * WIDTH;
     let used = leaves + bvh.node_count() - 1;
-    assert!(used as f32 > 0.7 * slots as f32, "{used} of {slots} child slots used");
+    assert!(used as f32 > 0.55 * slots as f32, "{used} of {slots} child slots used");
 }
 
 #[test]

@@ -1,0 +1,257 @@
+//! The wide node of [`super::Bvh`] and the ray–node tests: eight child boxes
+//! side by side (structure of arrays), tested against one ray at once.
+//!
+//! Two tests exist for the same node layout, chosen at run time:
+//! - **AVX2 + FMA**: one 8-lane test, each slab plane computed as one fused
+//!   `b * inv - o * inv`, with the rounding of the precomputed `o * inv`
+//!   covered by a margin of two ulps taken outwards. It may let through a
+//!   box the plain test culls (by a few ulps), never the reverse.
+//! - **SSE** (any x86-64, and the reference): the node as two 4-lane halves,
+//!   `(b - o) * inv` per plane.
+//!
+//! Either way the near plane of each slab is chosen once per ray from the
+//! direction's signs, so a test is three plane distances per bound with no
+//! min/max of the two slab distances, and the exit distance is widened by a
+//! few ulps (Ize 2013, "Robust BVH Ray Traversal") so a ray grazing a shared
+//! box face, as rays through a shared triangle edge do, is never lost.
+
+use std::ops::Range;
+
+use glam::{Vec3, Vec3A, Vec4};
+
+use crate::math::{Aabb, Ray};
+
+/// Children per node.
+pub const WIDTH: usize = 8;
+/// Marks a child reference as a leaf: `LEAF | first << 3 | (count - 1)`.
+pub(super) const LEAF: u32 = 1 << 31;
+/// An unused child slot; its box is empty, so it is never entered.
+pub(super) const EMPTY: u32 = u32::MAX;
+/// `1 + 2 * gamma(3)` (pbrt's conservative slab-test factor): the exit
+/// distance is scaled by it so rounding never culls a box the ray touches.
+const SLAB_EXPAND: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
+
+/// An 8-wide node: its children's boxes as structure of arrays and their
+/// references. 256 bytes, four cache lines, each row 32-byte aligned for
+/// one AVX load.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(64))]
+pub struct Node8 {
+    /// Rows: min x, max x, min y, max y, min z, max z; one lane per child.
+    pub(super) bounds: [[f32; WIDTH]; 6],
+    /// Node index, leaf reference (`LEAF` bit set) or `EMPTY`.
+    pub(super) child: [u32; WIDTH],
+}
+
+impl Node8 {
+    pub(super) const EMPTY: Node8 = Node8 {
+        bounds: [
+            [f32::INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+        ],
+        child: [EMPTY; WIDTH],
+    };
+
+    /// The box of child `k`.
+    pub fn child_bounds(&self, k: usize) -> Aabb {
+        let b = &self.bounds;
+        Aabb::new(Vec3::new(b[0][k], b[2][k], b[4][k]), Vec3::new(b[1][k], b[3][k], b[5][k]))
+    }
+
+    /// What child `k` is.
+    pub fn child(&self, k: usize) -> Child {
+        decode(self.child[k])
+    }
+
+    /// Sets child `k`'s box.
+    pub(super) fn set_bounds(&mut self, k: usize, b: &Aabb) {
+        for axis in 0..3 {
+            self.bounds[2 * axis][k] = b.min[axis];
+            self.bounds[2 * axis + 1][k] = b.max[axis];
+        }
+    }
+
+    /// Row `row` as four-lane halves.
+    #[inline(always)]
+    fn half(&self, row: usize, h: usize) -> Vec4 {
+        let r = &self.bounds[row];
+        Vec4::new(r[4 * h], r[4 * h + 1], r[4 * h + 2], r[4 * h + 3])
+    }
+}
+
+/// A child slot of a [`Node8`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Child {
+    /// An inner node, by index.
+    Node(usize),
+    /// A leaf: a range of [`super::Bvh::prim_order`].
+    Leaf(Range<usize>),
+    /// Unused.
+    Empty,
+}
+
+#[inline(always)]
+pub(super) fn leaf_range(r: u32) -> Range<usize> {
+    let first = ((r & !LEAF) >> 3) as usize;
+    first..first + (r & 7) as usize + 1
+}
+
+pub(super) fn decode(r: u32) -> Child {
+    match r {
+        EMPTY => Child::Empty,
+        r if r & LEAF != 0 => Child::Leaf(leaf_range(r)),
+        r => Child::Node(r as usize),
+    }
+}
+
+/// Ray data the node test needs, computed once per traversal.
+#[derive(Clone, Copy)]
+pub(super) struct RayPre {
+    o: [Vec4; 3],
+    inv: [Vec4; 3],
+    /// Row of [`Node8::bounds`] holding each axis's near and far plane.
+    near: [usize; 3],
+    far: [usize; 3],
+    /// For the fused test `b * inv + c`: `c = -o * inv`, moved down (near
+    /// planes) or up (far planes) by more than its rounding error.
+    c_near: [f32; 3],
+    c_far: [f32; 3],
+    /// Whether `c_near` and `c_far` are finite, so the fused test applies.
+    pub(super) fused_ok: bool,
+}
+
+impl RayPre {
+    #[inline(always)]
+    pub(super) fn new(ray: &Ray) -> RayPre {
+        // A zero direction component would make 0 * inf = NaN for a box face
+        // through the origin; a tiny stand-in keeps it finite with the same
+        // answer.
+        let d = Vec3A::from(ray.d);
+        let tiny = Vec3A::splat(1e-30);
+        let d = Vec3A::select(d.abs().cmplt(tiny), tiny.copysign(d), d);
+        let inv = d.recip();
+        // Written out instead of `[0, 1, 2].map(..)`: the array maps were
+        // not inlined and cost as much as a node test per traversal.
+        let (nx, ny, nz) = ((inv.x < 0.0) as usize, (inv.y < 0.0) as usize, (inv.z < 0.0) as usize);
+        // `b * inv - o * inv` in one rounding of a fused multiply-add, where
+        // `o * inv` was rounded once before: that product's error is
+        // absolute, up to half an ulp of it, and cancellation can make it
+        // large next to the result. A margin of two ulps, taken outwards,
+        // covers it and the rounding of the margin itself; the relative
+        // errors left are the ones `SLAB_EXPAND` already covers.
+        let oi = Vec3A::from(ray.o) * inv;
+        let pad = oi.abs() * (2.0 * f32::EPSILON);
+        let (cn, cf) = (-oi - pad, -oi + pad);
+        let fused_ok = cn.is_finite() && cf.is_finite();
+        RayPre {
+            o: [Vec4::splat(ray.o.x), Vec4::splat(ray.o.y), Vec4::splat(ray.o.z)],
+            inv: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
+            near: [nx, 2 + ny, 4 + nz],
+            far: [1 - nx, 3 - ny, 5 - nz],
+            c_near: cn.to_array(),
+            c_far: cf.to_array(),
+            fused_ok,
+        }
+    }
+
+    /// [`RayPre::hit`] as one 8-lane test with one fused multiply-add per
+    /// plane instead of a subtraction and a multiplication. It may let
+    /// through a box the plain test culls (by a few ulps), never the
+    /// reverse, so the primitives found and the hits reported are the same.
+    ///
+    /// Not itself compiled for AVX2 (`#[target_feature]` forbids
+    /// `#[inline(always)]`, and LLVM would not inline it otherwise): it is
+    /// only called from traversals compiled for AVX2 and FMA, where it and
+    /// the intrinsics inline.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 and FMA, and `self.fused_ok` must hold.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    pub(super) unsafe fn hit_fused(&self, n: &Node8, t_max: f32) -> ([f32; WIDTH], u32) {
+        use std::arch::x86_64::*;
+        let b = &n.bounds;
+        let row = |r: usize| _mm256_load_ps(b[r].as_ptr());
+        let s = _mm256_set1_ps;
+        let (inv, cn, cf) = (&self.inv, &self.c_near, &self.c_far);
+        let (near, far) = (&self.near, &self.far);
+        let plane = |r: usize, a: usize, c: f32| _mm256_fmadd_ps(row(r), s(inv[a].x), s(c));
+        let tn = _mm256_max_ps(
+            _mm256_max_ps(plane(near[0], 0, cn[0]), plane(near[1], 1, cn[1])),
+            _mm256_max_ps(plane(near[2], 2, cn[2]), _mm256_setzero_ps()),
+        );
+        let tf = _mm256_min_ps(
+            _mm256_min_ps(plane(far[0], 0, cf[0]), plane(far[1], 1, cf[1])),
+            plane(far[2], 2, cf[2]),
+        );
+        let tf = _mm256_min_ps(_mm256_mul_ps(tf, s(SLAB_EXPAND)), s(t_max));
+        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
+        let mut out = [0.0f32; WIDTH];
+        _mm256_storeu_ps(out.as_mut_ptr(), tn);
+        (out, mask)
+    }
+
+    /// The node test, fused where the traversal was compiled for it (`FUSED`)
+    /// and this ray allows it.
+    #[inline(always)]
+    pub(super) fn hit_with<const FUSED: bool>(&self, n: &Node8, t_max: f32) -> ([f32; WIDTH], u32) {
+        #[cfg(target_arch = "x86_64")]
+        if FUSED && self.fused_ok {
+            // SAFETY: `FUSED` traversals are only entered after detecting
+            // AVX2 and FMA (`fused_available`).
+            return unsafe { self.hit_fused(n, t_max) };
+        }
+        self.hit(n, t_max)
+    }
+
+    /// Entry distances of the eight children and the mask of those the ray
+    /// meets within `[0, t_max]`, as two 4-lane halves.
+    #[inline(always)]
+    pub(super) fn hit(&self, n: &Node8, t_max: f32) -> ([f32; WIDTH], u32) {
+        let half = |h: usize| {
+            let slab = |row: usize, a: usize| (n.half(row, h) - self.o[a]) * self.inv[a];
+            let tn =
+                slab(self.near[0], 0).max(slab(self.near[1], 1)).max(slab(self.near[2], 2).max(Vec4::ZERO));
+            let tf = slab(self.far[0], 0).min(slab(self.far[1], 1)).min(slab(self.far[2], 2));
+            let tf = (tf * SLAB_EXPAND).min(Vec4::splat(t_max));
+            (tn, tn.cmple(tf).bitmask())
+        };
+        let ((lo, ml), (hi, mh)) = (half(0), half(1));
+        let (lo, hi) = (lo.to_array(), hi.to_array());
+        ([lo[0], lo[1], lo[2], lo[3], hi[0], hi[1], hi[2], hi[3]], ml | mh << 4)
+    }
+
+    /// The same test for one box (the root of a one-leaf tree), one lane
+    /// wide: the operations of [`RayPre::hit`] on lane 0.
+    #[inline(always)]
+    pub(super) fn hit_box(&self, b: &Aabb, t_max: f32) -> bool {
+        // Row `2a` of a node is axis a's minimum, row `2a + 1` its maximum.
+        let (lo, hi) = (b.min.to_array(), b.max.to_array());
+        let bound = |row: usize| if row % 2 == 0 { lo[row / 2] } else { hi[row / 2] };
+        let slab = |row: usize, a: usize| (bound(row) - self.o[a].x) * self.inv[a].x;
+        let tn = slab(self.near[0], 0).max(slab(self.near[1], 1)).max(slab(self.near[2], 2).max(0.0));
+        let tf = slab(self.far[0], 0).min(slab(self.far[1], 1)).min(slab(self.far[2], 2));
+        tn <= (tf * SLAB_EXPAND).min(t_max)
+    }
+}
+
+/// Which node test the traversal uses on this CPU (for benchmark reports).
+pub fn node_test_isa() -> &'static str {
+    #[cfg(target_arch = "x86_64")]
+    if fused_available() {
+        return "AVX2+FMA, 8 lanes";
+    }
+    "SSE, 2 x 4 lanes"
+}
+
+/// Whether this CPU runs the AVX2 + FMA traversal (detected once; the
+/// standard library caches the answer).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(super) fn fused_available() -> bool {
+    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+}
