@@ -8,15 +8,10 @@ use std::f32::consts::{FRAC_1_PI, PI};
 /// (`e = 0`: uniform, `e = 1`: cosine-weighted). `θ` never exceeds 90°.
 #[inline]
 pub fn power_cosine(e: f32, (u1, u2): (f32, f32)) -> Vec3 {
-    // The path tracer's uniform and cosine bounces skip the `powf`.
-    let cos = match e {
-        0.0 => u1,
-        1.0 => u1.sqrt(),
-        _ => u1.powf(1.0 / (e + 1.0)),
-    };
+    let cos = u1.powf(1.0 / (e + 1.0));
     let sin = (1.0 - cos * cos).max(0.0).sqrt();
-    let (s, c) = (2.0 * PI * u2).sin_cos();
-    Vec3::new(sin * c, sin * s, cos)
+    let phi = 2.0 * PI * u2;
+    Vec3::new(sin * phi.cos(), sin * phi.sin(), cos)
 }
 
 /// Density of [`power_cosine`] at a direction whose cosine to the axis is `cos`.
@@ -25,12 +20,7 @@ pub fn power_cosine_pdf(e: f32, cos: f32) -> f32 {
     if cos <= 0.0 {
         return 0.0;
     }
-    let p = match e {
-        0.0 => 1.0,
-        1.0 => cos,
-        _ => cos.powf(e),
-    };
-    (e + 1.0) * 0.5 * FRAC_1_PI * p
+    (e + 1.0) * 0.5 * FRAC_1_PI * cos.powf(e)
 }
 
 /// [`power_cosine`] about an arbitrary unit `axis` instead of `+z`.

@@ -378,9 +378,7 @@ fn bounce(
         _ => {
             let e = if p.importance || p.mis { 1.0 } else { 0.0 };
             let local = power_cosine(e, u);
-            // A BRDF is evaluated in the frame the direction was drawn in.
-            let f = m.brdf.as_ref().map(|b| b.eval(m.diffuse, m.specular, local, at.wo));
-            (frame.to_world(local), power_cosine_pdf(e, local.z), f)
+            (frame.to_world(local), power_cosine_pdf(e, local.z), None)
         }
     };
     let cos = n.dot(wi);

@@ -14,16 +14,10 @@
 //!
 //! A path tracer draws a few dimensions per bounce, and stratifying the deep
 //! ones gains little (the paths through them already differ) while a CMJ
-//! point costs three hashed permutations, each walking cycles with
-//! unpredictable branches (about 45 ns a point, a fifth of a diffuse path's
-//! time in the hw7 Cornell box). [`PixelSampler::stratify_first`] switches a
-//! sampler to the path tracer's draws: the next few calls (its first hit)
-//! are points of a shuffled, Owen-scrambled Sobol sequence (Burley,
-//! "Practical Hash-based Owen Scrambling", JCGT 2020), stratified over the
-//! pixel's samples in every power-of-two block at a quarter of CMJ's cost,
-//! and the rest independent hashed uniforms, still a pure function of (seed,
-//! pixel, sample, call). The camera's calls, and every call of the recursive
-//! ray tracer, stay CMJ.
+//! point costs three hashed permutations. [`PixelSampler::stratify_first`]
+//! keeps CMJ for the first calls (the camera and the first hit) and draws
+//! the rest as independent hashed uniforms, still a pure function of (seed,
+//! pixel, sample, call).
 
 /// The samples of one pixel: pattern seeds come from the pixel, sample
 /// `index` of `count` is drawn, and each call moves to the next dimension.
@@ -38,11 +32,8 @@ pub struct PixelSampler {
     slot: u32,
     cols: u32,
     rows: u32,
-    /// Calls drawn from stratified patterns; later calls are independent uniforms.
+    /// Calls drawn from CMJ patterns; later calls are independent uniforms.
     stratified: u32,
-    /// Whether [`stratify_first`](Self::stratify_first) switched the
-    /// stratified calls to Sobol points.
-    sobol: bool,
 }
 
 impl PixelSampler {
@@ -62,17 +53,14 @@ impl PixelSampler {
             cols,
             rows,
             stratified: u32::MAX,
-            sobol: false,
         }
     }
 
-    /// From here on, calls up to the first `calls` (counted from the
-    /// sampler's creation) are scrambled Sobol points and the later ones
-    /// independent uniform draws, both far cheaper than CMJ.
+    /// Stratifies only the first `calls` calls (counted from the sampler's
+    /// creation); the later ones are independent uniform draws, far cheaper.
     #[inline]
     pub fn stratify_first(&mut self, calls: u32) {
         self.stratified = calls;
-        self.sobol = true;
     }
 
     /// The hash of the current call for an independent draw.
@@ -92,9 +80,6 @@ impl PixelSampler {
         }
         let p = hash2(self.pixel_hash, self.dim);
         self.dim += 1;
-        if self.sobol {
-            return sobol_2d(self.index, p);
-        }
         cmj_grid(self.slot, self.count, self.cols, self.rows, p)
     }
 
@@ -118,74 +103,12 @@ impl PixelSampler {
         }
         let p = hash2(self.pixel_hash, self.dim);
         self.dim += 1;
-        if self.sobol {
-            return unit(owen(shuffle(self.index, p), p.wrapping_mul(0x68bc_21eb)));
-        }
         let s = permute(self.slot, self.count, p);
         ((s as f32 + rand_float(self.index, p ^ 0x9e37_79b9)) / self.count as f32).min(ONE_MINUS_EPS)
     }
 }
 
 const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
-
-/// Point `i` of the first two Sobol dimensions, shuffled and scrambled by
-/// `p`: the index goes through a nested uniform scramble (so different
-/// patterns visit the points in different orders), then each coordinate
-/// through its own Owen scramble. Any `2^k` points starting at a multiple of
-/// `2^k` form a (0, k, 2)-net: one point in every elementary interval.
-#[inline]
-fn sobol_2d(i: u32, p: u32) -> (f32, f32) {
-    let i = shuffle(i, p);
-    (unit(owen(i, p.wrapping_mul(0x68bc_21eb))), unit(owen_bits(sobol_1(i), p.wrapping_mul(0x02e5_be93))))
-}
-
-/// The sample index under a nested uniform scramble (a permutation of each
-/// aligned power-of-two block of indices, and of the blocks).
-#[inline]
-fn shuffle(i: u32, p: u32) -> u32 {
-    laine_karras(i.reverse_bits(), p).reverse_bits()
-}
-
-/// Owen scramble of the first Sobol dimension (the radical inverse of `i`),
-/// as the bits of a fraction: `owen_bits(i.reverse_bits(), seed)` written
-/// without the two reversals that cancel.
-#[inline]
-fn owen(i: u32, seed: u32) -> u32 {
-    laine_karras(i, seed).reverse_bits()
-}
-
-/// Owen scramble of the fraction whose bits are `x` (most significant first).
-#[inline]
-fn owen_bits(x: u32, seed: u32) -> u32 {
-    laine_karras(x.reverse_bits(), seed).reverse_bits()
-}
-
-/// The second Sobol dimension of `i`, as the bits of a fraction: its
-/// generator matrix is Pascal's triangle mod 2 (each direction number is the
-/// previous one xor itself shifted right by one).
-#[inline]
-fn sobol_1(mut i: u32) -> u32 {
-    let (mut v, mut r) = (1u32 << 31, 0u32);
-    while i != 0 {
-        r ^= v & (i & 1).wrapping_neg();
-        i >>= 1;
-        v ^= v >> 1;
-    }
-    r
-}
-
-/// Laine and Karras's hash, in which every output bit depends only on the
-/// input bits below it: applied to reversed bits it flips each digit by the
-/// digits before it, which is Owen scrambling.
-#[inline]
-fn laine_karras(mut x: u32, seed: u32) -> u32 {
-    x = x.wrapping_add(seed);
-    x ^= x.wrapping_mul(0x6c50_b47c);
-    x ^= x.wrapping_mul(0xb82f_1e52);
-    x ^= x.wrapping_mul(0xc7af_e638);
-    x ^= x.wrapping_mul(0x8d22_f6e6);
-    x
-}
 
 /// Point `s` of an `n`-point correlated multi-jittered pattern `p`.
 #[cfg(test)]
@@ -340,11 +263,10 @@ mod tests {
         let mut bins = [[0u32; 16]; 3];
         for i in 0..4096u32 {
             let mut s = PixelSampler::new(3, i % 64, i / 64, i % 7, 7);
-            let first = s.next_2d();
             s.stratify_first(2);
+            let first = s.next_2d();
             let mut again = PixelSampler::new(3, i % 64, i / 64, i % 7, 7);
             assert_eq!(again.next_2d(), first, "stratified calls unchanged");
-            s.next_1d();
             for _ in 0..4 {
                 s.next_1d();
             }
@@ -364,49 +286,6 @@ mod tests {
             (s.next_2d(), s.next_1d())
         };
         assert_eq!(draw(), draw());
-    }
-
-    #[test]
-    fn sobol_points_are_nets_in_every_aligned_power_of_two_block() {
-        // 64 points from a block start: in every elementary interval of
-        // area 1/64 (2^a × 2^b cells, a + b = 6) exactly one point; the
-        // same for each block of 16 inside.
-        for (p, start, k) in [(1u32, 0u32, 6u32), (0xdead_beef, 64, 6), (77, 48, 4), (5, 0, 4)] {
-            let n = 1u32 << k;
-            let pts: Vec<(f32, f32)> = (start..start + n).map(|i| sobol_2d(i, p)).collect();
-            for a in 0..=k {
-                let (cx, cy) = (1u32 << a, 1u32 << (k - a));
-                let mut seen = vec![false; n as usize];
-                for &(x, y) in &pts {
-                    assert!((0.0..1.0).contains(&x) && (0.0..1.0).contains(&y));
-                    let cell = ((x * cx as f32) as u32 * cy + (y * cy as f32) as u32) as usize;
-                    assert!(!seen[cell], "p={p} start={start}: two points in cell {cell} of {cx}x{cy}");
-                    seen[cell] = true;
-                }
-            }
-        }
-        // Patterns differ in order and position.
-        assert_ne!(sobol_2d(0, 1), sobol_2d(0, 2));
-    }
-
-    #[test]
-    fn path_draws_are_stratified_over_a_pixels_samples() {
-        // After the switch the 1D and 2D calls of 32 samples fill 32 strata.
-        let n = 32;
-        let draws: Vec<(f32, (f32, f32))> = (0..n)
-            .map(|i| {
-                let mut s = PixelSampler::new(4, 5, 6, i, n);
-                s.next_2d();
-                s.stratify_first(3);
-                (s.next_1d(), s.next_2d())
-            })
-            .collect();
-        for axis in 0..3 {
-            let mut v: Vec<u32> =
-                draws.iter().map(|&(a, (b, c))| ([a, b, c][axis] * n as f32) as u32).collect();
-            v.sort_unstable();
-            assert_eq!(v, (0..n).collect::<Vec<_>>(), "axis {axis}");
-        }
     }
 
     #[test]
