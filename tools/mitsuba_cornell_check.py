@@ -109,7 +109,7 @@ def write_obj(path, verts, idx, outward_from=None):
             f.write("f %d %d %d\n" % (3 * i + 1, 3 * i + 2, 3 * i + 3))
 
 
-def mitsuba_dict(work, verts, cam, meshes, lights, spheres, point, spp, res):
+def mitsuba_dict(work, verts, cam, meshes, lights, spheres, point, spp, res, seed=0):
     pos = np.array(vec(cam, "Position"))
     gaze = np.array(vec(cam, "Gaze"))
     up = vec(cam, "Up")
@@ -121,7 +121,7 @@ def mitsuba_dict(work, verts, cam, meshes, lights, spheres, point, spp, res):
             "fov": float(cam.find("FovY").text),
             "fov_axis": "y",
             "to_world": mi.ScalarTransform4f.look_at(origin=pos.tolist(), target=(pos + gaze).tolist(), up=up),
-            "sampler": {"type": "independent", "sample_count": spp},
+            "sampler": {"type": "independent", "sample_count": spp, "seed": seed},
             "film": {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": "box"},
                      "pixel_format": "rgb"},
         },
@@ -165,8 +165,8 @@ def cpu(who):
     return r.ru_utime + r.ru_stime
 
 
-def run_luster(luster, scene, work, threads):
-    cmd = [luster, "render", "-o", work, scene]
+def run_luster(luster, scene, work, threads, seed=0):
+    cmd = [luster, "render", "-o", work, scene, "--seed", str(seed)]
     if threads:
         cmd += ["-t", str(threads)]
     t, c = time.time(), cpu(resource.RUSAGE_CHILDREN)
@@ -194,6 +194,9 @@ def main():
     ap.add_argument("--threads", type=int, default=0, help="threads of both renderers (0: all cores)")
     ap.add_argument("--reps", type=int, default=3, help="alternating runs of each renderer in the speed check")
     ap.add_argument("--keep", help="folder to keep both renders in")
+    ap.add_argument("--floor", type=int, default=0, metavar="REF_SPP",
+                    help="instead: the noise floor of the FLIP check at --spp (each renderer against itself "
+                         "with two seeds) and both against Mitsuba at REF_SPP")
     a = ap.parse_args()
     mi.set_variant("scalar_rgb")
     if a.threads:
@@ -204,6 +207,9 @@ def main():
     _, verts, cam, meshes, lights, spheres, point = read_scene(a.scene)
     work = a.keep or tempfile.mkdtemp(prefix="luster-mi-")
     os.makedirs(work, exist_ok=True)
+    if a.floor:
+        noise_floor(a, work, verts, cam, meshes, lights, spheres, point, flip)
+        return
     for label, spp in (("accuracy", a.spp), ("speed", a.time_spp)):
         if spp <= 0:
             continue
@@ -229,6 +235,37 @@ def main():
               f"ratio {c_ours / c_theirs:.3f}; luster {mrays:.1f} Mrays/s (last run)")
         for k, r in enumerate(runs):
             print(f"    run {k + 1}: luster {r[0]:.2f} s wall / {r[1]:.2f} s CPU, mitsuba {r[2]:.2f} s wall / {r[3]:.2f} s CPU")
+
+
+def noise_floor(a, work, verts, cam, meshes, lights, spheres, point, flip):
+    """Mean HDR-FLIP of each renderer against itself (seeds 0 and 1) at
+    --spp, of the two against each other, and of each against Mitsuba at
+    --floor samples: what the 0.03 bar can mean at this sample count."""
+    ls = os.path.join(work, "luster.xml")
+    luster_scene(a.scene, ls, a.spp, a.res)
+    imgs = {}
+    for seed in (0, 1):
+        imgs[f"luster{seed}"] = run_luster(a.luster, ls, work, a.threads, seed)[0]
+        d = mitsuba_dict(work, verts, cam, meshes, lights, spheres, point, a.spp, a.res, seed)
+        imgs[f"mitsuba{seed}"] = run_mitsuba(d)[0]
+    d = mitsuba_dict(work, verts, cam, meshes, lights, spheres, point, a.floor, a.res, 7)
+    imgs["ref"] = run_mitsuba(d)[0]
+    if a.keep:
+        for k, v in imgs.items():
+            mi.Bitmap(v.astype(np.float32)).write(os.path.join(work, f"{k}.exr"))
+
+    def fl(ref, test):
+        return flip.evaluate(imgs[ref].astype(np.float32), imgs[test].astype(np.float32), "HDR")[1]
+
+    print(f"noise floor: {a.res}x{a.res}, {a.spp} spp (reference: Mitsuba at {a.floor} spp), mean HDR-FLIP")
+    print(f"  mitsuba seed 0 vs seed 1   {fl('mitsuba0', 'mitsuba1'):.4f}")
+    print(f"  luster seed 0 vs seed 1    {fl('luster0', 'luster1'):.4f}")
+    for s in (0, 1):
+        print(f"  mitsuba vs luster seed {s}   {fl(f'mitsuba{s}', f'luster{s}'):.4f}")
+    for k in ("mitsuba0", "mitsuba1", "luster0", "luster1"):
+        print(f"  reference vs {k:<10}   {fl('ref', k):.4f}")
+    lum = {k: (v @ W).mean() for k, v in imgs.items()}
+    print("  mean luminance: " + ", ".join(f"{k} {v:.5f}" for k, v in lum.items()))
 
 
 if __name__ == "__main__":
