@@ -77,7 +77,7 @@ pub fn noise(x: f32, y: f32, z: f32) -> f32 {
 /// [`noise`] and its exact analytic gradient ∂n/∂(x, y, z).
 #[inline]
 pub fn noise_grad(x: f32, y: f32, z: f32) -> (f32, [f32; 3]) {
-    let base = [x, y, z].map(super::floor);
+    let base = [x, y, z].map(crate::math::floor);
     // Saturating casts keep any float in range; wrapping adds keep i + 1 and
     // i + φ(…) from overflowing, and 2³² is a multiple of 16, so φ is unchanged.
     let cell = base.map(|b| b as i32);

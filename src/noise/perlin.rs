@@ -98,7 +98,7 @@ fn lerp(t: f32, a: f32, b: f32) -> f32 {
 /// NaN and ±inf included, gives a valid index) and its offset in the cell.
 #[inline(always)]
 fn lattice(x: f32) -> (usize, f32) {
-    let fl = super::floor(x);
+    let fl = crate::math::floor(x);
     ((fl as i32 & 255) as usize, x - fl)
 }
 
@@ -213,7 +213,7 @@ pub fn noise3_grad(x: f32, y: f32, z: f32) -> (f32, [f32; 3]) {
 #[inline]
 pub fn pnoise3(x: f32, y: f32, z: f32, px: i32, py: i32, pz: i32) -> f32 {
     let wrap = |v: f32, period: i32| {
-        let fl = super::floor(v);
+        let fl = crate::math::floor(v);
         let period = period.max(1);
         let i0 = (fl as i32).rem_euclid(period);
         let i1 = if i0 + 1 == period { 0 } else { i0 + 1 };

@@ -31,7 +31,7 @@ const SCALE4: f32 = 62.7;
 /// Masks a skewed cell coordinate to a table index; any float is safe.
 #[inline(always)]
 fn cell(v: f32) -> (f32, usize) {
-    let fl = super::floor(v);
+    let fl = crate::math::floor(v);
     (fl, (fl as i32 & 255) as usize)
 }
 

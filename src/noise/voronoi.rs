@@ -142,7 +142,7 @@ fn scan<const N: usize>(
 /// Runs the exact search with the metric resolved once, outside the loop.
 #[inline(always)]
 fn search<const N: usize>(p: [f32; N], metric: Metric, jitter: f32) -> ([f32; N], Best<N>) {
-    let base = p.map(super::floor);
+    let base = p.map(crate::math::floor);
     let cell = base.map(|b| b as i32);
     let frac: [f32; N] = core::array::from_fn(|k| p[k] - base[k]);
     let jitter = if jitter >= 0.0 { jitter.min(1.0) } else { 0.0 };

@@ -62,8 +62,8 @@ impl Level {
     /// The continuous texel coordinates of `uv`, wrapped into the image.
     #[inline]
     fn coords(&self, uv: Vec2) -> (f32, f32) {
-        let u = uv.x - crate::noise::floor(uv.x);
-        let v = uv.y - crate::noise::floor(uv.y);
+        let u = uv.x - crate::math::floor(uv.x);
+        let v = uv.y - crate::math::floor(uv.y);
         (u * self.width as f32, v * self.height as f32)
     }
 
@@ -77,7 +77,7 @@ impl Level {
         // The course weights texels as if their centres sat at integer
         // coordinates, half a texel up and left of where they are (hw4
         // cube_wall: 64.8 dB this way, 27.7 dB with centred texels).
-        let (x0, y0) = (crate::noise::floor(x), crate::noise::floor(y));
+        let (x0, y0) = (crate::math::floor(x), crate::math::floor(y));
         let (fx, fy) = (x - x0, y - y0);
         let (x0, y0) = (x0 as i64, y0 as i64);
         let top = self.fetch_clamped(x0, y0) * (1.0 - fx) + self.fetch_clamped(x0 + 1, y0) * fx;
