@@ -53,7 +53,7 @@ pub fn run(
     view: &ModelView,
     split: &Split,
 ) -> ExitCode {
-    let pool = match super::pool(threads) {
+    let pool = match super::args::pool(threads) {
         Ok(p) => p,
         Err(code) => return code,
     };

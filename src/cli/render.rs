@@ -23,7 +23,7 @@ pub fn run(
     view: &ModelView,
     frame: &(Option<(u32, u32)>, super::reframe::FrameArgs),
 ) -> ExitCode {
-    let pool = match super::pool(threads) {
+    let pool = match super::args::pool(threads) {
         Ok(p) => p,
         Err(code) => return code,
     };

@@ -52,17 +52,17 @@ struct JobArgs {
     #[arg(long, default_value_t = 0)]
     seed: u32,
     /// Reconstruction filter.
-    #[arg(long, value_enum, default_value_t = super::FilterArg::Box)]
-    filter: super::FilterArg,
+    #[arg(long, value_enum, default_value_t = super::args::FilterArg::Box)]
+    filter: super::args::FilterArg,
     /// Display transform of the 8-bit images (see `luster render --help`).
-    #[arg(long, value_name = "MODE", value_parser = super::parse_display)]
+    #[arg(long, value_name = "MODE", value_parser = super::args::parse_display)]
     display: Option<luster::film::Display>,
     /// Time limit of one shader call, in seconds (passed on to every task).
-    #[arg(long, value_name = "SECONDS", value_parser = super::parse_timeout)]
+    #[arg(long, value_name = "SECONDS", value_parser = super::args::parse_timeout)]
     shader_timeout: Option<f64>,
     /// A folder shaders' `require` searches (repeatable; passed on to every
     /// task as an absolute path).
-    #[arg(long = "shader-lib", value_name = "DIR", value_parser = super::parse_shader_lib)]
+    #[arg(long = "shader-lib", value_name = "DIR", value_parser = super::args::parse_shader_lib)]
     shader_lib: Vec<PathBuf>,
     /// Least time between two checkpoints of a task, in seconds.
     #[arg(long, value_name = "SECONDS", default_value_t = 60)]
@@ -121,7 +121,7 @@ fn write(a: &JobArgs) -> anyhow::Result<()> {
     if a.seed != 0 {
         render_args.extend(["--seed".to_string(), a.seed.to_string()]);
     }
-    if matches!(a.filter, super::FilterArg::Gaussian) {
+    if matches!(a.filter, super::args::FilterArg::Gaussian) {
         render_args.extend(["--filter".to_string(), "gaussian".to_string()]);
     }
     if let Some(d) = a.display {
