@@ -39,11 +39,10 @@
 //! same bins): neighbouring references fall in the same bins, and with one
 //! set each update waited for the previous one's store.
 //!
-//! Profile of the current build: `split` about 49% of samples of a bench
-//! run, most of it the load in the binning loop and the partition loop;
-//! `memcpy` 5% (part of it the `collect` of the filtered references,
-//! which goes through rayon's list of vectors and is copied once more);
-//! page faults on the 2n-node region about 3%; `collapse` 1.6% (serial).
+//! Profile before session 9: `split` and `bin_refs` about 40% of samples
+//! each, stalled just after loading a reference. The stall was not memory
+//! but denormal arithmetic on the index lane (see `PrimRef::min`); with
+//! that lane cleared the build takes about a third of the CPU time.
 
 use glam::{Vec3, Vec3A, Vec4};
 
@@ -176,9 +175,14 @@ struct PrimRef {
 }
 
 impl PrimRef {
+    /// The lower corner, with the index lane cleared: SSE arithmetic works
+    /// on all four lanes, and the index's bits read as a float are a
+    /// denormal for every index below 2^23. Each multiply or add on one
+    /// took a microcode assist (on the order of a hundred cycles), several
+    /// per reference per pass: that, not memory, was most of the build.
     #[inline]
     fn min(&self) -> Vec3A {
-        Vec3A::from_vec4(self.lo)
+        Vec3A::from_vec4(self.lo.with_w(0.0))
     }
     #[inline]
     fn max(&self) -> Vec3A {

@@ -14,11 +14,11 @@
 //! range are dropped at build time: they can never be hit, and leaving them
 //! out means the intersection code never has to think about them.
 
-use std::ops::Range;
-
 use glam::Vec3;
 use rayon::prelude::*;
 
+#[cfg(target_arch = "x86_64")]
+use super::bvh::fused_available;
 use super::bvh::Bvh;
 use super::tri_block::TriBlock;
 use super::triangle::{Triangle, WatertightRay};
@@ -118,38 +118,57 @@ impl MeshAccel {
         t_max: f32,
         cull: f32,
     ) -> Option<TriHit> {
+        #[cfg(target_arch = "x86_64")]
+        if fused_available() {
+            // SAFETY: the CPU has AVX2 and FMA.
+            return unsafe { self.intersect_avx2(ray, wr, t_min, t_max, cull) };
+        }
+        self.intersect_with::<false>(ray, wr, t_min, t_max, cull)
+    }
+
+    /// [`MeshAccel::intersect_prepared`] compiled for AVX2 and FMA: the
+    /// traversal's fused node test, and leaves of two blocks tested as one
+    /// 8-lane block pair. Hits are bit for bit those of the 4-lane path.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn intersect_avx2(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+        t_min: f32,
+        t_max: f32,
+        cull: f32,
+    ) -> Option<TriHit> {
+        self.intersect_with::<true>(ray, wr, t_min, t_max, cull)
+    }
+
+    #[inline(always)]
+    fn intersect_with<const AVX: bool>(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+        t_min: f32,
+        t_max: f32,
+        cull: f32,
+    ) -> Option<TriHit> {
         let mut best = None;
         let blocks = &self.blocks[..];
-        let mut leaf = |range: Range<usize>, t_max: &mut f32| {
-            let mut found = false;
-            for b in &blocks[range] {
-                let h = b.intersect(wr, t_min, *t_max);
-                // Lanes in order, each against the nearest hit so far: the
-                // same choice as testing the triangles one by one.
-                let mut m = h.mask;
-                while m != 0 {
-                    let i = m.trailing_zeros() as usize;
-                    m &= m - 1;
-                    // A lane's t passed `t > t_min`, so it is not NaN.
-                    if h.t[i] >= *t_max || (cull != 0.0 && cull * b.triangle(i).normal().dot(ray.d) > 0.0) {
-                        continue;
-                    }
-                    *t_max = h.t[i];
-                    best = Some(TriHit { t: h.t[i], prim: b.prim(i), u: h.u[i], v: h.v[i] });
-                    found = true;
-                }
-            }
-            found
-        };
         match self.bvh.single_leaf() {
             // A small mesh (a wall, a light): its one or two blocks cost no
             // more than the box test would.
             Some(range) => {
                 let mut t = t_max;
-                leaf(range, &mut t);
+                leaf_closest::<AVX>(&blocks[range], ray, wr, t_min, &mut t, cull, &mut best);
             }
             None => {
-                self.bvh.closest(ray, t_max, leaf);
+                // The leaf test is called in this one place, so it inlines
+                // into the traversal loop.
+                self.bvh.closest_with::<AVX, _>(ray, t_max, |range, t_max| {
+                    leaf_closest::<AVX>(&blocks[range], ray, wr, t_min, t_max, cull, &mut best)
+                });
             }
         }
         best
@@ -165,13 +184,33 @@ impl MeshAccel {
     /// [`MeshAccel::intersect_prepared`]).
     #[inline]
     pub fn occluded_prepared(&self, ray: &Ray, wr: &WatertightRay, t_min: f32, t_max: f32) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if fused_available() {
+            // SAFETY: the CPU has AVX2 and FMA.
+            return unsafe { self.occluded_avx2(ray, wr, t_min, t_max) };
+        }
+        self.occluded_with::<false>(ray, wr, t_min, t_max)
+    }
+
+    /// [`MeshAccel::occluded_prepared`] compiled for AVX2 and FMA (see
+    /// [`MeshAccel::intersect_avx2`]).
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn occluded_avx2(&self, ray: &Ray, wr: &WatertightRay, t_min: f32, t_max: f32) -> bool {
+        self.occluded_with::<true>(ray, wr, t_min, t_max)
+    }
+
+    #[inline(always)]
+    fn occluded_with<const AVX: bool>(&self, ray: &Ray, wr: &WatertightRay, t_min: f32, t_max: f32) -> bool {
         let blocks = &self.blocks[..];
-        let leaf = |range: Range<usize>, t_max: f32| {
-            blocks[range].iter().any(|b| b.intersect(wr, t_min, t_max).mask != 0)
-        };
         match self.bvh.single_leaf() {
-            Some(range) => leaf(range, t_max),
-            None => self.bvh.any(ray, t_max, leaf),
+            Some(range) => leaf_any::<AVX>(&blocks[range], wr, t_min, t_max),
+            None => self.bvh.any_with::<AVX, _>(ray, t_max, |range, t_max| {
+                leaf_any::<AVX>(&blocks[range], wr, t_min, t_max)
+            }),
         }
     }
 
@@ -200,6 +239,85 @@ impl MeshAccel {
     pub fn memory_bytes(&self) -> usize {
         self.bvh.memory_bytes() + self.blocks.capacity() * size_of::<TriBlock>()
     }
+}
+
+/// Tests a leaf's blocks for the closest hit below `*t_max`, lowering it and
+/// recording the hit in `best`; returns whether one was found. With `AVX`
+/// (only in code compiled for AVX2) blocks go two at a time through the
+/// 8-lane test.
+#[inline(always)]
+fn leaf_closest<const AVX: bool>(
+    blocks: &[TriBlock],
+    ray: &Ray,
+    wr: &WatertightRay,
+    t_min: f32,
+    t_max: &mut f32,
+    cull: f32,
+    best: &mut Option<TriHit>,
+) -> bool {
+    let mut found = false;
+    // Lanes in order, each against the nearest hit so far: the same choice
+    // as testing the triangles one by one. (A lane of a pair's second block
+    // was tested against the `t_max` from before the first block's hits; a
+    // hit that is no longer closer is dropped here, as it would have been
+    // there.)
+    macro_rules! take {
+        ($b:expr, $i:expr, $t:expr, $u:expr, $v:expr) => {{
+            let (b, i, t): (&TriBlock, usize, f32) = ($b, $i, $t);
+            // A lane's t passed `t > t_min`, so it is not NaN.
+            let skip = t >= *t_max || (cull != 0.0 && cull * b.triangle(i).normal().dot(ray.d) > 0.0);
+            if !skip {
+                *t_max = t;
+                *best = Some(TriHit { t, prim: b.prim(i), u: $u, v: $v });
+                found = true;
+            }
+        }};
+    }
+    let mut rest = blocks;
+    #[cfg(target_arch = "x86_64")]
+    if AVX {
+        let mut pairs = blocks.chunks_exact(2);
+        for p in &mut pairs {
+            // SAFETY: `AVX` code runs only where the CPU has AVX2.
+            let h = unsafe { TriBlock::intersect_pair(&p[0], &p[1], wr, t_min, *t_max) };
+            let mut m = h.mask;
+            while m != 0 {
+                let i = m.trailing_zeros() as usize;
+                m &= m - 1;
+                take!(&p[i / 4], i % 4, h.t[i], h.u[i], h.v[i]);
+            }
+        }
+        rest = pairs.remainder();
+    }
+    for b in rest {
+        let h = b.intersect(wr, t_min, *t_max);
+        let mut m = h.mask;
+        while m != 0 {
+            let i = m.trailing_zeros() as usize;
+            m &= m - 1;
+            take!(b, i, h.t[i], h.u[i], h.v[i]);
+        }
+    }
+    found
+}
+
+/// Whether some triangle of a leaf's blocks is hit with `t_min < t < t_max`
+/// (blocks two at a time with `AVX`, as in [`leaf_closest`]).
+#[inline(always)]
+fn leaf_any<const AVX: bool>(blocks: &[TriBlock], wr: &WatertightRay, t_min: f32, t_max: f32) -> bool {
+    let mut rest = blocks;
+    #[cfg(target_arch = "x86_64")]
+    if AVX {
+        let mut pairs = blocks.chunks_exact(2);
+        for p in &mut pairs {
+            // SAFETY: `AVX` code runs only where the CPU has AVX2.
+            if unsafe { TriBlock::intersect_pair(&p[0], &p[1], wr, t_min, t_max) }.mask != 0 {
+                return true;
+            }
+        }
+        rest = pairs.remainder();
+    }
+    rest.iter().any(|b| b.intersect(wr, t_min, t_max).mask != 0)
 }
 
 #[cfg(test)]

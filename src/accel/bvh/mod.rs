@@ -42,7 +42,7 @@ use crate::math::{Aabb, Ray};
 mod node;
 
 #[cfg(target_arch = "x86_64")]
-use node::fused_available;
+pub(crate) use node::fused_available;
 use node::{decode, leaf_range, RayPre, EMPTY, LEAF};
 pub use node::{node_test_isa, Child, Node8, WIDTH};
 
@@ -288,6 +288,31 @@ impl Bvh {
         leaf: F,
     ) -> bool {
         self.closest_plain::<true, F>(ray, t_max, leaf)
+    }
+
+    /// [`Bvh::closest`] for a caller that has itself been compiled for AVX2
+    /// and FMA (`FUSED`, after checking [`fused_available`]) or not, so that
+    /// the traversal, and the caller's leaf test with it, inline into the
+    /// caller's own AVX2 code (see [`super::MeshAccel`]).
+    #[inline(always)]
+    pub(crate) fn closest_with<const FUSED: bool, F: FnMut(Range<usize>, &mut f32) -> bool>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        leaf: F,
+    ) -> bool {
+        self.closest_plain::<FUSED, F>(ray, t_max, leaf)
+    }
+
+    /// [`Bvh::any`] as [`Bvh::closest_with`] is to [`Bvh::closest`].
+    #[inline(always)]
+    pub(crate) fn any_with<const FUSED: bool, F: FnMut(Range<usize>, f32) -> bool>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        leaf: F,
+    ) -> bool {
+        self.any_plain::<FUSED, F>(ray, t_max, leaf)
     }
 
     #[inline(always)]

@@ -252,6 +252,6 @@ pub fn node_test_isa() -> &'static str {
 /// standard library caches the answer).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-pub(super) fn fused_available() -> bool {
+pub(crate) fn fused_available() -> bool {
     std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
 }
