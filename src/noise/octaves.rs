@@ -137,12 +137,8 @@ mod avx2 {
         let a = [perm(xs[0]), perm(xs[1])];
         let idx = |p: __m256i, q: __m256i| _mm256_and_si256(_mm256_add_epi32(p, q), m511);
         // b[a + 2b] = P[(P[xs[a]] + ys[b]) & 511]
-        let b = [
-            perm(idx(a[0], ys[0])),
-            perm(idx(a[1], ys[0])),
-            perm(idx(a[0], ys[1])),
-            perm(idx(a[1], ys[1])),
-        ];
+        let b =
+            [perm(idx(a[0], ys[0])), perm(idx(a[1], ys[0])), perm(idx(a[0], ys[1])), perm(idx(a[1], ys[1]))];
         let zero = _mm256_setzero_ps();
         let one = _mm256_set1_ps(1.0);
         // The scalar code subtracts the corner as a float, 0.0 included
@@ -283,7 +279,10 @@ mod tests {
                 let [x, y, z, g] = rng.point4(-50.0, 50.0);
                 let (lac, gain) = (1.5 + (g + 50.0) / 50.0, g / 60.0);
                 let t = turbulence3(x, y, z, octaves, lac, gain);
-                assert!(same(t, plain(x, y, z, octaves, lac, gain, true)), "turbulence {octaves} at {x} {y} {z}");
+                assert!(
+                    same(t, plain(x, y, z, octaves, lac, gain, true)),
+                    "turbulence {octaves} at {x} {y} {z}"
+                );
                 let f = fbm3(x, y, z, octaves, lac, gain);
                 assert!(same(f, plain(x, y, z, octaves, lac, gain, false)), "fbm {octaves} at {x} {y} {z}");
             }

@@ -120,7 +120,9 @@ impl Caller {
         } else {
             match lua.exec_raw::<Value>((), |s| lua::lua_xmove(l, s, 1)) {
                 Ok(Value::Error(e)) => *e,
-                Ok(v) => mlua::Error::RuntimeError(v.to_string().unwrap_or_else(|_| format!("<{}>", v.type_name()))),
+                Ok(v) => mlua::Error::RuntimeError(
+                    v.to_string().unwrap_or_else(|_| format!("<{}>", v.type_name())),
+                ),
                 Err(e) => e,
             }
         };
