@@ -42,6 +42,7 @@
 
 pub mod course;
 pub mod fractal;
+mod octaves;
 pub mod perlin;
 pub mod simplex;
 pub mod voronoi;

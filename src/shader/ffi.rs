@@ -16,7 +16,8 @@
 //!
 //! # Soundness
 //!
-//! This is the only module of the shader runtime with `unsafe`:
+//! This and `call.rs` (raw calls into Lua) are the modules of the shader
+//! runtime with `unsafe`:
 //!
 //! * [`IoBlock`] holds pointers to cdata that the prelude allocated with
 //!   `ffi.new` and keeps referenced for the life of its Lua state (the prelude's

@@ -36,7 +36,9 @@
 //! prelude allocated as FFI cdata (`ffi.rs`), then calls a no-argument Lua
 //! wrapper that passes the record to the script as `s`, checks the results and
 //! writes them into a second record. Nothing is converted through the Lua
-//! stack; `benches/shader.rs` compares this with `Function::call` on scalars.
+//! stack, and the wrapper is called with a bare `lua_pcall` from a Lua thread
+//! that keeps every wrapper on its stack (`call.rs`); `benches/shader.rs`
+//! compares this with `Function::call` on scalars.
 //! Built-in noise is Rust, reached through a table of function pointers.
 //!
 //! # Safety of user scripts
@@ -49,6 +51,7 @@
 //! not bounded: a single call into a C library function (`string.find` with a
 //! pathological pattern on a long string) runs to its end before the next check.
 
+mod call;
 mod error;
 mod ffi;
 mod instrument;

@@ -6,6 +6,7 @@ use std::time::Duration;
 
 use mlua::{Function, LightUserData, Lua, LuaOptions, StdLib, Table, Value};
 
+use super::call::{Caller, Slot};
 use super::error::{ShaderError, ShaderErrorKind};
 use super::ffi::{self, IoBlock, Shade};
 use super::instrument::{instrument, ScanError};
@@ -20,13 +21,24 @@ const PRELUDE: &str = include_str!("prelude.lua");
 /// or tables fails with a memory error instead of exhausting the machine.
 pub(crate) const MEMORY_LIMIT: usize = 256 * 1024 * 1024;
 
-/// The entry wrappers of one compiled shader.
+/// The entry wrappers of one compiled shader, as kept by the state's [`Caller`].
 struct Compiled {
     name: String,
-    entries: [Option<Function>; ENTRIES],
+    entries: [Option<Slot>; ENTRIES],
     /// `height` at three points in one call, for bump mapping.
-    height3: Option<Function>,
+    height3: Option<Slot>,
     /// Every material output in one call (`DecalMode material`).
+    material: Option<Slot>,
+}
+
+/// Wrappers kept per shader: one per entry point, `height3` and `material`.
+const WRAPPERS: usize = ENTRIES + 2;
+
+/// The entry wrappers of one shader as the prelude made them.
+struct Wrappers {
+    name: String,
+    entries: [Option<Function>; ENTRIES],
+    height3: Option<Function>,
     material: Option<Function>,
 }
 
@@ -35,6 +47,8 @@ pub(crate) struct ThreadState {
     io: IoBlock,
     shaders: Vec<Compiled>,
     timeout: Duration,
+    /// Holds and calls the wrappers; dropped before `lua`.
+    caller: Caller,
     lua: Lua,
     /// The images `texture()` samples. Boxed so the prelude can hold its
     /// address (a thin pointer) for the life of the state; declared after
@@ -141,10 +155,12 @@ impl ThreadState {
             ctype_names.push((format!("'{inner}'"), format!("'{name}'")));
             ctype_names.push((inner.to_string(), name));
         }
+        let caller = Caller::new(&lua, sources.len().saturating_mul(WRAPPERS)).map_err(internal)?;
         let mut state = ThreadState {
             io,
             shaders: Vec::with_capacity(sources.len()),
             timeout,
+            caller,
             lua,
             _images: images,
             ctype_names,
@@ -157,6 +173,7 @@ impl ThreadState {
         for src in sources {
             let makers = [&make_entry, &make_height3, &make_material];
             let compiled = state.compile(src, &make_env, &makers, &tick)?;
+            let compiled = state.keep(compiled)?;
             state.shaders.push(compiled);
         }
         Ok(state)
@@ -168,7 +185,7 @@ impl ThreadState {
         make_env: &Function,
         [make_entry, make_height3, make_material]: &[&Function; 3],
         tick: &Function,
-    ) -> Result<Compiled, ShaderError> {
+    ) -> Result<Wrappers, ShaderError> {
         let name = src.name.as_str();
         let file = src.path.display().to_string();
         let lua_err = |e: mlua::Error| self.error(name, &e);
@@ -235,7 +252,23 @@ impl ThreadState {
         }
         let height3 = make_height3.call((env.clone(), name)).map_err(lua_err)?;
         let material = make_material.call((env, name)).map_err(lua_err)?;
-        Ok(Compiled { name: name.to_string(), entries, height3, material })
+        Ok(Wrappers { name: name.to_string(), entries, height3, material })
+    }
+
+    /// Puts a shader's wrappers on the caller's stack.
+    fn keep(&mut self, w: Wrappers) -> Result<Compiled, ShaderError> {
+        let (lua, caller) = (&self.lua, &mut self.caller);
+        let internal = |e: mlua::Error| {
+            ShaderError::new(ShaderErrorKind::Internal, &w.name, format!("shader runtime: {e}"))
+        };
+        let mut keep = |f: &Option<Function>| f.as_ref().map(|f| caller.keep(lua, f)).transpose();
+        let mut entries = [None; ENTRIES];
+        for (slot, f) in entries.iter_mut().zip(&w.entries) {
+            *slot = keep(f).map_err(internal)?;
+        }
+        let height3 = keep(&w.height3).map_err(internal)?;
+        let material = keep(&w.material).map_err(internal)?;
+        Ok(Compiled { name: w.name, entries, height3, material })
     }
 
     /// A call that ran past its deadline fails even when the script caught
@@ -277,7 +310,7 @@ impl ThreadState {
 
     /// Which entry points shader `id` defines.
     pub(crate) fn entries(&self, id: usize) -> [bool; ENTRIES] {
-        self.shaders.get(id).map_or([false; ENTRIES], |c| c.entries.each_ref().map(Option::is_some))
+        self.shaders.get(id).map_or([false; ENTRIES], |c| c.entries.map(|e| e.is_some()))
     }
 
     /// Calls one entry point; the result's channels (a height in `[0]`).
@@ -289,7 +322,7 @@ impl ThreadState {
                 format!("no shader with id {id} (the set has {})", self.shaders.len()),
             ));
         };
-        let Some(f) = &shader.entries[entry as usize] else {
+        let Some(f) = shader.entries[entry as usize] else {
             return Err(ShaderError::new(
                 ShaderErrorKind::Usage,
                 &shader.name,
@@ -297,7 +330,7 @@ impl ThreadState {
             ));
         };
         self.io.begin(|s| write_shade(s, input));
-        let result = match f.call::<()>(()) {
+        let result = match self.caller.call(&self.lua, f) {
             Ok(()) => {
                 self.check_deadline(&shader.name)?;
                 let o = self.io.out();
@@ -348,7 +381,7 @@ impl ThreadState {
         input: &ShadeInput,
     ) -> Result<ffi::MaterialOut, ShaderError> {
         let shader = self.shader(id)?;
-        let Some(f) = &shader.material else {
+        let Some(f) = shader.material else {
             return Err(ShaderError::new(
                 ShaderErrorKind::Usage,
                 &shader.name,
@@ -357,7 +390,7 @@ impl ThreadState {
             ));
         };
         self.io.begin_material(|s| write_shade(s, input));
-        let result = match f.call::<()>(()) {
+        let result = match self.caller.call(&self.lua, f) {
             Ok(()) => self.check_deadline(&shader.name).map(|()| self.io.material()),
             Err(e) => Err(self.error(&shader.name, &e)),
         };
@@ -380,7 +413,7 @@ impl ThreadState {
     /// Calls `height` at three points in one Lua call (bump mapping).
     pub(crate) fn call_height3(&self, id: usize, inputs: &[ShadeInput; 3]) -> Result<[f64; 3], ShaderError> {
         let shader = self.shader(id)?;
-        let Some(f) = &shader.height3 else {
+        let Some(f) = shader.height3 else {
             return Err(ShaderError::new(
                 ShaderErrorKind::Usage,
                 &shader.name,
@@ -392,7 +425,7 @@ impl ThreadState {
                 write_shade(dst, input);
             }
         });
-        match f.call::<()>(()) {
+        match self.caller.call(&self.lua, f) {
             Ok(()) => {
                 self.check_deadline(&shader.name)?;
                 let o = self.io.out();
