@@ -10,7 +10,8 @@
 //! loaded machine wall time swings with the other jobs while CPU time moves
 //! much less, so the CPU ratio is the figure to trust there; on a quiet one
 //! the two agree. Run: `cargo bench --bench film` (`-- --reps N` for more
-//! repetitions, `-- --outputs-only` to loop B's output stage for a profiler).
+//! repetitions, `-- --outputs-only` to loop B's output stage for a profiler,
+//! `-- --exr-compression` for what each EXR compression costs on this film).
 
 use luster::film::outputs::{plan_outputs, write_outputs};
 use luster::film::Display;
@@ -90,6 +91,10 @@ fn main() {
         }
         return;
     }
+    if args.iter().any(|a| a == "--exr-compression") {
+        exr_compressions(&warm.film, reps);
+        return;
+    }
     // Both sides write into the same folder every repetition, so from the
     // second on each file replaces the one before, as a user re-rendering a
     // scene under the same name sees it.
@@ -150,4 +155,79 @@ fn main() {
         t_png * 1e3
     );
     println!("B / A = {:.3} wall, {:.3} CPU  (target <= 1.05)", bw / aw, bc / ac);
+}
+
+/// The encoding cost (into memory, no file) and size of the film's EXR under
+/// each compression the course or the `exr` crate offers, on one thread and
+/// on all; the course's own EXRs are 16-bit half PIZ.
+fn exr_compressions(film: &luster::film::Film, reps: usize) {
+    use exr::prelude::*;
+    let (w, h) = (film.width as usize, film.height as usize);
+    let px = &film.pixels;
+    println!(
+        "EXR encoding of the {w}x{h} film into memory, {reps} repetitions, medians (wall / process CPU)"
+    );
+    let kinds = [
+        ("f32 uncompressed", Compression::Uncompressed, false),
+        ("f32 RLE", Compression::RLE, false),
+        ("f32 ZIP (1 line)", Compression::ZIP1, false),
+        ("f32 ZIP (16 lines)", Compression::ZIP16, false),
+        ("f32 PIZ", Compression::PIZ, false),
+        ("half PIZ (the course's)", Compression::PIZ, true),
+    ];
+    for (name, compression, half) in kinds {
+        let encoding = Encoding { compression, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing };
+        for parallel in [false, true] {
+            let (mut walls, mut cpus, mut size) = (Vec::new(), Vec::new(), 0);
+            for _ in 0..reps {
+                let mut out = std::io::Cursor::new(Vec::with_capacity(16 * w * h));
+                let t = Stamp::now();
+                let result = if half {
+                    let ch = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
+                        let p = px[y * w + x];
+                        (f16::from_f32(p.x), f16::from_f32(p.y), f16::from_f32(p.z))
+                    });
+                    let image = Image::from_layer(Layer::new(
+                        (w, h),
+                        LayerAttributes::default(),
+                        encoding.clone(),
+                        ch,
+                    ));
+                    if parallel {
+                        image.write().to_buffered(&mut out)
+                    } else {
+                        image.write().non_parallel().to_buffered(&mut out)
+                    }
+                } else {
+                    let ch = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
+                        let p = px[y * w + x];
+                        (p.x, p.y, p.z)
+                    });
+                    let image = Image::from_layer(Layer::new(
+                        (w, h),
+                        LayerAttributes::default(),
+                        encoding.clone(),
+                        ch,
+                    ));
+                    if parallel {
+                        image.write().to_buffered(&mut out)
+                    } else {
+                        image.write().non_parallel().to_buffered(&mut out)
+                    }
+                };
+                result.expect("the EXR encodes");
+                let (wall, cpu) = t.since(Stamp::now());
+                walls.push(wall);
+                cpus.push(cpu);
+                size = out.into_inner().len();
+            }
+            println!(
+                "{name:24} {:12} {:7.1} ms / {:7.1} ms CPU  {:6.2} MB",
+                if parallel { "all threads" } else { "one thread" },
+                median(&mut walls) * 1e3,
+                median(&mut cpus) * 1e3,
+                size as f64 / 1e6
+            );
+        }
+    }
 }
