@@ -187,12 +187,8 @@ fn exr_compressions(film: &luster::film::Film, reps: usize) {
                         let p = px[y * w + x];
                         (f16::from_f32(p.x), f16::from_f32(p.y), f16::from_f32(p.z))
                     });
-                    let image = Image::from_layer(Layer::new(
-                        (w, h),
-                        LayerAttributes::default(),
-                        encoding.clone(),
-                        ch,
-                    ));
+                    let image =
+                        Image::from_layer(Layer::new((w, h), LayerAttributes::default(), encoding, ch));
                     if parallel {
                         image.write().to_buffered(&mut out)
                     } else {
@@ -203,12 +199,8 @@ fn exr_compressions(film: &luster::film::Film, reps: usize) {
                         let p = px[y * w + x];
                         (p.x, p.y, p.z)
                     });
-                    let image = Image::from_layer(Layer::new(
-                        (w, h),
-                        LayerAttributes::default(),
-                        encoding.clone(),
-                        ch,
-                    ));
+                    let image =
+                        Image::from_layer(Layer::new((w, h), LayerAttributes::default(), encoding, ch));
                     if parallel {
                         image.write().to_buffered(&mut out)
                     } else {
