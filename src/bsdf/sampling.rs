@@ -20,7 +20,14 @@ pub fn power_cosine_pdf(e: f32, cos: f32) -> f32 {
     if cos <= 0.0 {
         return 0.0;
     }
-    (e + 1.0) * 0.5 * FRAC_1_PI * cos.powf(e)
+    // The uniform and cosine densities need no `powf` (a libm call on every
+    // bounce): `x⁰ = 1` and `x¹ = x` exactly, so the value is the same.
+    let c = match e {
+        0.0 => 1.0,
+        1.0 => cos,
+        _ => cos.powf(e),
+    };
+    (e + 1.0) * 0.5 * FRAC_1_PI * c
 }
 
 /// [`power_cosine`] about an arbitrary unit `axis` instead of `+z`.
