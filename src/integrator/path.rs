@@ -67,33 +67,15 @@ enum Came {
     Bounce { pdf: f32, n: Vec3 },
 }
 
-/// Sampler calls of the first hit, drawn from stratified patterns after the
-/// camera's (see [`crate::render::sampler`]); deeper bounces draw
-/// independent uniforms. Under MIS: the light choice, the light sample, the
-/// bounce's lobe choice and direction. The course's variants draw one
-/// sample of every light that has an extent when they use next-event
-/// estimation, then the bounce's direction (no lobe choice: they bounce by
-/// the variant's fixed density).
-fn stratified_first_hit(scene: &Scene, p: &PathParams) -> u32 {
-    if p.mis {
-        return 4;
-    }
-    let lights = match p.next_event {
-        true => scene.lights.iter().filter(|l| draws_sample(l)).count() as u32,
-        false => 0,
-    };
-    lights + 1
-}
-
-/// Whether [`Light::sample`] (or the shaded light's sampling) draws a
-/// sampler dimension for this light.
-fn draws_sample(light: &Light) -> bool {
-    !matches!(light, Light::Point(_) | Light::Spot(_) | Light::Directional { .. })
-}
+/// Sampler calls of the first hit drawn from stratified patterns, after
+/// the camera's (the light choice, the light sample, the bounce's lobe
+/// choice and direction; see [`crate::render::sampler`]); deeper bounces
+/// draw independent uniforms.
+const STRATIFIED_FIRST_HIT: u32 = 4;
 
 /// Radiance arriving along the camera ray `ray`.
 pub fn radiance(scene: &Scene, ray: &Ray, p: &PathParams, st: &mut PathState) -> Vec3 {
-    st.sampler.stratify_first(st.sampler.calls() + stratified_first_hit(scene, p));
+    st.sampler.stratify_first(st.sampler.calls() + STRATIFIED_FIRST_HIT);
     li(scene, ray, 0, Vec3::ONE, Came::Direct, p, st)
 }
 
@@ -393,9 +375,7 @@ fn bounce(
     st: &mut PathState,
 ) -> Vec3 {
     let (n, frame) = (at.n, &at.frame);
-    // Only a BRDF sampled under MIS picks a lobe; the course's variants
-    // spend no sampler call on it.
-    let choice = if p.mis { st.sampler.next_1d() } else { 0.0 };
+    let choice = st.sampler.next_1d();
     let u = st.sampler.next_2d();
     // The BRDF's sample carries its value: no second evaluation.
     let (wi, pdf, f) = match (&m.brdf, p.mis) {
