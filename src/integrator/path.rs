@@ -135,10 +135,20 @@ fn shade(
     p: &PathParams,
     st: &mut PathState,
 ) -> Vec3 {
-    let (m, ns) = match surface_at(scene, ray, hit, depth, st) {
-        Surface::Lit(m, ns) => (m, ns),
-        Surface::Unlit(c) => return c,
-        Surface::Failed => return Vec3::ZERO,
+    // A surface without maps is its scene material as it is: borrowed, not
+    // copied out through [`surface_at`].
+    let mapped;
+    let (m, ns) = if hit.textures.is_empty() {
+        (&scene.materials[hit.material as usize], hit.ns)
+    } else {
+        match surface_at(scene, ray, hit, depth, st) {
+            Surface::Lit(m, ns) => {
+                mapped = m;
+                (&mapped, ns)
+            }
+            Surface::Unlit(c) => return c,
+            Surface::Failed => return Vec3::ZERO,
+        }
     };
     let entering = ray.d.dot(hit.ng) < 0.0;
     let (n, ng) = if entering { (ns, hit.ng) } else { (-ns, -hit.ng) };
@@ -169,15 +179,15 @@ fn shade(
         let frame = Frame::new(n);
         let at = At { n, wo: frame.to_local(-ray.d), frame, d: ray.d };
         if p.next_event || p.mis {
-            color += next_event(scene, &m, hit, &at, origin, depth, p, st);
+            color += next_event(scene, m, hit, &at, origin, depth, p, st);
         }
         let more = depth < MAX_BOUNCES && (p.russian_roulette || depth < scene.max_depth);
         if more {
-            color += bounce(scene, &m, &at, origin, depth, beta, p, st);
+            color += bounce(scene, m, &at, origin, depth, beta, p, st);
         }
     }
     if depth < scene.max_depth || (p.russian_roulette && depth < MAX_BOUNCES) {
-        color += specular(scene, &m, hit, n, ng, ray, entering, depth, beta, p, st);
+        color += specular(scene, m, hit, n, ng, ray, entering, depth, beta, p, st);
     }
     if let (true, Specular::Dielectric { absorption, .. }) = (inside_dielectric, m.kind) {
         color *= (-absorption * hit.t).exp();
@@ -385,9 +395,11 @@ fn bounce(
     if cos <= 0.0 || pdf <= 0.0 {
         return Vec3::ZERO;
     }
-    let f_cos = match f {
-        Some(f) => f * cos,
-        None => reflectance(m, n, wi, at.d, cos),
+    let f_cos = match (f, &m.brdf) {
+        (Some(f), _) => f * cos,
+        // The frame and view direction [`reflectance`] would build again.
+        (None, Some(b)) => b.eval(m.diffuse, m.specular, frame.to_local(wi), at.wo) * cos,
+        (None, None) => reflectance(m, n, wi, at.d, cos),
     };
     let weight = f_cos / pdf;
     let next = beta * weight;

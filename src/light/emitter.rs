@@ -30,6 +30,9 @@
 use crate::math::{orthonormal_basis, Transform, Vec3};
 use std::f32::consts::PI;
 
+/// Lights with at most this many triangles pick one by a linear count.
+const SCAN_TRIANGLES: usize = 32;
+
 /// A mesh that emits `radiance` from every point of both faces, in world space.
 #[derive(Clone, Debug)]
 pub struct LightMesh {
@@ -78,7 +81,15 @@ impl LightMesh {
     pub fn point(&self, (u1, u2): (f32, f32)) -> (Vec3, Vec3) {
         let total = self.area();
         let target = u1 * total;
-        let i = self.cdf.partition_point(|&c| c <= target).min(self.tris.len() - 1);
+        // A light of a few triangles (the course's boxes have ten) is
+        // searched by counting, without the binary search's unpredictable
+        // branches; both find the first sum above `target`.
+        let i = if self.cdf.len() <= SCAN_TRIANGLES {
+            self.cdf.iter().map(|&c| usize::from(c <= target)).sum::<usize>()
+        } else {
+            self.cdf.partition_point(|&c| c <= target)
+        };
+        let i = i.min(self.tris.len() - 1);
         let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
         // The part of u1 left over inside the chosen triangle is uniform again.
         let u1 = ((target - lo) / (self.cdf[i] - lo)).clamp(0.0, 1.0);

@@ -339,8 +339,10 @@ impl Scene {
             Some(xf) => (xf.normal_to_world(ng), xf.normal_to_world(ns)),
             None => (ng, ns),
         };
+        // Flat triangles and spheres have one normal: normalized once.
+        let flat = ng == ns;
         let ng = ng.normalize();
-        let mut ns = ns.normalize();
+        let mut ns = if flat { ng } else { ns.normalize() };
         if ns.dot(ng) < 0.0 {
             ns = -ns;
         }
