@@ -57,7 +57,18 @@ cleanup() {
         kill "$p" 2>/dev/null || true
     done
     wait 2>/dev/null || true
-    if [ "${KEEP:-}" = 1 ]; then say "kept $tmp"; else rm -rf "$tmp"; fi
+    # Chromium's helper processes can still be writing into the profile
+    # when the browser is killed: retry, and never let cleanup decide the
+    # test's exit status.
+    if [ "${KEEP:-}" = 1 ]; then
+        say "kept $tmp"
+    else
+        for _ in 1 2 3 4 5; do
+            rm -rf "$tmp" 2>/dev/null && break
+            sleep 1
+        done
+    fi
+    return 0
 }
 trap cleanup EXIT
 
