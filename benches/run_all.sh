@@ -42,7 +42,8 @@ echo "== 1. BVH against Embree (bumpy sphere, 1.31M triangles, 1920x1080 primary
 # on a shared 2-core machine the CPU-time ratios are the ones to trust.
 MESH=$WORK/bumpy_sphere_L8.ply
 # Field before "Mrays/s" (wall) or before "Mrays per CPU-second", on lines matching $1.
-mrays() { awk -v pat="$1" '$0 ~ pat {for(i=1;i<=NF;i++) if($i=="Mrays/s") print $(i-1)}'; }
+# The unit may carry punctuation ("Mrays/s;" in tools/embree_cpu.py's lines).
+mrays() { awk -v pat="$1" '$0 ~ pat {for(i=1;i<=NF;i++) if($i ~ /^Mrays\/s[;,]?$/) print $(i-1)}'; }
 mcpu() { awk -v pat="$1" '$0 ~ pat {for(i=2;i<NF;i++) if($i=="Mrays" && $(i+1)=="per") print $(i-1)}'; }
 # Build wall ms (first number before "ms") and CPU ms (after "CPU").
 bwall() { awk '/BVH build/{for(i=2;i<=NF;i++) if($i ~ /^ms/) {print $(i-1); exit}}'; }

@@ -77,6 +77,27 @@ impl Tile {
         self.weight[i] += w;
     }
 
+    /// Writes the filtered values into `rows`, the rows from `rows_y0` on of
+    /// a film `width` pixels wide (row-major), so that bands of a film can be
+    /// filled in parallel. A pixel that got no sample (a render stopped by a
+    /// shader failure) is left as it is.
+    pub fn write_rows(&self, rows: &mut [Vec3], width: usize, rows_y0: u32) {
+        let tw = self.width as usize;
+        if tw == 0 {
+            return;
+        }
+        // Row by row: a division and a remainder per pixel cost more than
+        // the copy.
+        for (r, (sums, wts)) in self.sum.chunks_exact(tw).zip(self.weight.chunks_exact(tw)).enumerate() {
+            let at = ((self.y0 - rows_y0) as usize + r) * width + self.x0 as usize;
+            for ((p, s), &wt) in rows[at..at + tw].iter_mut().zip(sums).zip(wts) {
+                if wt > 0.0 {
+                    *p = *s / wt;
+                }
+            }
+        }
+    }
+
     /// The pixels it covers: `(x0, y0, x1, y1)`, ends excluded.
     pub fn bounds(&self) -> (u32, u32, u32, u32) {
         let h = (self.sum.len() as u32).checked_div(self.width).unwrap_or(0);
@@ -115,14 +136,7 @@ impl Film {
     /// Writes a finished tile's filtered values into the film. A pixel that
     /// got no sample (a render stopped by a shader failure) stays black.
     pub fn merge(&mut self, tile: &Tile) {
-        let w = self.width as usize;
-        for (i, (s, &wt)) in tile.sum.iter().zip(&tile.weight).enumerate() {
-            let (tx, ty) = (i % tile.width as usize, i / tile.width as usize);
-            let at = (tile.y0 as usize + ty) * w + tile.x0 as usize + tx;
-            if wt > 0.0 {
-                self.pixels[at] = *s / wt;
-            }
-        }
+        tile.write_rows(&mut self.pixels, self.width as usize, 0);
     }
 
     /// 8-bit RGB with the course's semantics for images that are not tone

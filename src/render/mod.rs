@@ -23,7 +23,7 @@ pub use crate::film::Filter;
 
 use crate::film::{Film, Tile};
 use crate::integrator::{PathState, RayStats};
-use crate::math::Vec2;
+use crate::math::{Vec2, Vec3};
 use crate::shader::ShaderError;
 use rayon::prelude::*;
 use sampler::PixelSampler;
@@ -273,17 +273,72 @@ fn render_tiles(
     RenderedImage { film: merged(w, h, &tiles), stats, spp: taken }
 }
 
-/// The `w`×`h` film of `tiles`.
+/// The `w`×`h` film of `tiles`, which are in the row-major order of
+/// [`tile_origins`]. Filled in parallel, a band of tile rows per job: done
+/// serially, zeroing an 800×800 film (faulting its pages in) and copying the
+/// tiles into it took ~10 ms on one thread after the render had ended, the
+/// largest serial part of a small render. Each pixel is written by its one
+/// tile, so the bytes are those of a serial merge.
 fn merged(w: u32, h: u32, tiles: &[(Tile, RayStats)]) -> Film {
-    let mut film = Film::new(w, h);
-    for (tile, _) in tiles {
-        film.merge(tile);
-    }
-    film
+    let band = (w as usize * TILE as usize).max(1);
+    let mut pixels: Vec<Vec3> =
+        (0..w as usize * h as usize).into_par_iter().with_min_len(band).map(|_| Vec3::ZERO).collect();
+    pixels.par_chunks_mut(band).enumerate().for_each(|(b, rows)| {
+        let y0 = b as u32 * TILE;
+        let first = tiles.partition_point(|(t, _)| t.bounds().1 < y0);
+        let end = tiles.partition_point(|(t, _)| t.bounds().1 < y0 + TILE);
+        for (tile, _) in &tiles[first..end] {
+            tile.write_rows(rows, w as usize, y0);
+        }
+    });
+    Film { width: w, height: h, pixels }
 }
 
 /// Samples per pixel of the pass after `taken` of `spp`: 1, 1, 2, 4, ...,
 /// at most an eighth of `spp`, never past it.
 fn pass_size(taken: u32, spp: u32) -> u32 {
     taken.max(1).min(spp.div_ceil(8)).min(spp - taken)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The parallel merge puts every sampled pixel of every tile given where
+    /// it belongs, leaves unsampled pixels and missing tiles black, and
+    /// handles sizes that are not multiples of the tile edge.
+    #[test]
+    fn merged_film_holds_each_tiles_pixels() {
+        let (w, h) = (37, 45);
+        let value = |x: u32, y: u32| Vec3::new(x as f32, y as f32, (x * 7 + y) as f32 * 0.25);
+        let sel = TileSelection { first: 1, step: 2, end: 100 };
+        let mut tiles = Vec::new();
+        for (i, (x0, y0)) in tile_origins(w, h).into_iter().enumerate() {
+            if !sel.contains(i as u32) {
+                continue;
+            }
+            let mut t = Tile::new(x0, y0, (x0 + TILE).min(w), (y0 + TILE).min(h), Filter::Box);
+            for y in y0..(y0 + TILE).min(h) {
+                for x in x0..(x0 + TILE).min(w) {
+                    if (x + y) % 5 != 0 {
+                        // Two samples: the pixel is their average.
+                        t.add_sample(x, y, 0.5, 0.5, value(x, y) * 0.5);
+                        t.add_sample(x, y, 0.5, 0.5, value(x, y) * 1.5);
+                    }
+                }
+            }
+            tiles.push((t, RayStats::default()));
+        }
+        let film = merged(w, h, &tiles);
+        assert_eq!((film.width, film.height, film.pixels.len()), (w, h, (w * h) as usize));
+        let per_row = w.div_ceil(TILE);
+        for y in 0..h {
+            for x in 0..w {
+                let tile = (y / TILE) * per_row + x / TILE;
+                let want = if sel.contains(tile) && (x + y) % 5 != 0 { value(x, y) } else { Vec3::ZERO };
+                assert_eq!(film.pixels[(y * w + x) as usize], want, "pixel ({x}, {y})");
+            }
+        }
+        assert!(merged(0, 0, &[]).pixels.is_empty());
+    }
 }

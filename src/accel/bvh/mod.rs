@@ -43,7 +43,7 @@ mod node;
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) use node::fused_available;
-use node::{decode, leaf_range, RayPre, EMPTY, LEAF};
+use node::{decode, leaf_range, NodeTest, RayPre, EMPTY, LEAF};
 pub use node::{node_test_isa, Child, Node8, WIDTH};
 
 /// SAH cost of testing one top-level object, against one node visit (see
@@ -330,6 +330,7 @@ impl Bvh {
             return false;
         }
         let nodes = &self.nodes[..];
+        let test: NodeTest = r.node_test::<FUSED>();
         // Entries: child reference in the low half, entry distance's bits in
         // the high half. Only entries below `sp` are ever read.
         let mut stack = [MaybeUninit::<u64>::uninit(); STACK];
@@ -350,7 +351,7 @@ impl Bvh {
                 }
             } else {
                 let n = &nodes[cur as usize];
-                let (tn, mut mask) = r.hit_with::<FUSED>(n, t_max);
+                let (tn, mut mask) = test.hit(&r, n, t_max);
                 if mask != 0 {
                     let a = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -444,6 +445,7 @@ impl Bvh {
             return false;
         }
         let nodes = &self.nodes[..];
+        let test: NodeTest = r.node_test::<FUSED>();
         // Only entries below `sp` are ever read.
         let mut stack = [MaybeUninit::<u32>::uninit(); STACK];
         let mut sp = 0;
@@ -454,7 +456,7 @@ impl Bvh {
                 }
             } else {
                 let n = &nodes[cur as usize];
-                let (_, mut mask) = r.hit_with::<FUSED>(n, t_max);
+                let (_, mut mask) = test.hit(&r, n, t_max);
                 if mask != 0 {
                     // Order does not matter for "any": take the first, defer the rest.
                     cur = n.child[mask.trailing_zeros() as usize];

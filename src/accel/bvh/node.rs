@@ -163,14 +163,13 @@ impl RayPre {
     /// through a box the plain test culls (by a few ulps), never the
     /// reverse, so the primitives found and the hits reported are the same.
     ///
-    /// Not itself compiled for AVX2 (`#[target_feature]` forbids
-    /// `#[inline(always)]`, and LLVM would not inline it otherwise): it is
-    /// only called from traversals compiled for AVX2 and FMA, where it and
-    /// the intrinsics inline.
+    /// The traversals run it as [`FusedRay::hit`], with the per-ray
+    /// constants broadcast once; this per-node form is the reference the
+    /// tests check that one against, lane for lane.
     ///
     /// # Safety
     /// The CPU must have AVX2 and FMA, and `self.fused_ok` must hold.
-    #[cfg(target_arch = "x86_64")]
+    #[cfg(all(target_arch = "x86_64", test))]
     #[inline(always)]
     pub(super) unsafe fn hit_fused(&self, n: &Node8, t_max: f32) -> ([f32; WIDTH], u32) {
         use std::arch::x86_64::*;
@@ -195,17 +194,17 @@ impl RayPre {
         (out, mask)
     }
 
-    /// The node test, fused where the traversal was compiled for it (`FUSED`)
-    /// and this ray allows it.
+    /// The node test a traversal runs for this ray: fused where the
+    /// traversal was compiled for it (`FUSED`) and this ray allows it.
     #[inline(always)]
-    pub(super) fn hit_with<const FUSED: bool>(&self, n: &Node8, t_max: f32) -> ([f32; WIDTH], u32) {
+    pub(super) fn node_test<const FUSED: bool>(&self) -> NodeTest {
         #[cfg(target_arch = "x86_64")]
         if FUSED && self.fused_ok {
             // SAFETY: `FUSED` traversals are only entered after detecting
             // AVX2 and FMA (`fused_available`).
-            return unsafe { self.hit_fused(n, t_max) };
+            return NodeTest::Fused(unsafe { FusedRay::new(self) });
         }
-        self.hit(n, t_max)
+        NodeTest::Plain
     }
 
     /// Entry distances of the eight children and the mask of those the ray
@@ -236,6 +235,101 @@ impl RayPre {
         let tn = slab(self.near[0], 0).max(slab(self.near[1], 1)).max(slab(self.near[2], 2).max(0.0));
         let tf = slab(self.far[0], 0).min(slab(self.far[1], 1)).min(slab(self.far[2], 2));
         tn <= (tf * SLAB_EXPAND).min(t_max)
+    }
+}
+
+/// The node test chosen once per traversal ([`RayPre::node_test`]).
+// It lives in one traversal's registers and stack frame: boxing the large
+// variant would put an indirection into every node test.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Copy)]
+pub(super) enum NodeTest {
+    /// [`RayPre::hit`].
+    Plain,
+    /// [`FusedRay::hit`].
+    #[cfg(target_arch = "x86_64")]
+    Fused(FusedRay),
+}
+
+impl NodeTest {
+    /// Entry distances and hit mask of `n`'s children (see [`RayPre::hit`]).
+    #[inline(always)]
+    pub(super) fn hit(&self, r: &RayPre, n: &Node8, t_max: f32) -> ([f32; WIDTH], u32) {
+        match self {
+            NodeTest::Plain => r.hit(n, t_max),
+            // SAFETY: a `FusedRay` exists only where the CPU has AVX2 and FMA.
+            #[cfg(target_arch = "x86_64")]
+            NodeTest::Fused(f) => unsafe { f.hit(n, t_max) },
+        }
+    }
+}
+
+/// The fused test's per-ray constants, broadcast to eight lanes once per
+/// traversal rather than at every node, with the near and far rows as
+/// offsets into a node. Before, each node test re-broadcast them from the
+/// [`RayPre`] and bounds-checked the six row indices: about half the node
+/// test's instructions.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+pub(super) struct FusedRay {
+    inv: [std::arch::x86_64::__m256; 3],
+    c_near: [std::arch::x86_64::__m256; 3],
+    c_far: [std::arch::x86_64::__m256; 3],
+    /// Offsets in `f32`s of each axis's near and far row from a node's start.
+    near: [usize; 3],
+    far: [usize; 3],
+}
+
+#[cfg(target_arch = "x86_64")]
+impl FusedRay {
+    /// # Safety
+    /// The CPU must have AVX2 and FMA, and `r.fused_ok` must hold.
+    #[inline(always)]
+    unsafe fn new(r: &RayPre) -> FusedRay {
+        use std::arch::x86_64::_mm256_set1_ps as s;
+        let (inv, cn, cf) = (&r.inv, &r.c_near, &r.c_far);
+        FusedRay {
+            inv: [s(inv[0].x), s(inv[1].x), s(inv[2].x)],
+            c_near: [s(cn[0]), s(cn[1]), s(cn[2])],
+            c_far: [s(cf[0]), s(cf[1]), s(cf[2])],
+            near: r.near.map(|row| row * WIDTH),
+            far: r.far.map(|row| row * WIDTH),
+        }
+    }
+
+    /// `RayPre::hit_fused` (kept for the tests) with the constants broadcast beforehand: the
+    /// same operations on the same values, so the same lanes.
+    ///
+    /// Not itself compiled for AVX2 (`#[target_feature]` forbids
+    /// `#[inline(always)]`, and LLVM would not inline it otherwise): it is
+    /// only called from traversals compiled for AVX2 and FMA, where it and
+    /// the intrinsics inline.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 and FMA.
+    #[inline(always)]
+    unsafe fn hit(&self, n: &Node8, t_max: f32) -> ([f32; WIDTH], u32) {
+        use std::arch::x86_64::*;
+        let b = n.bounds.as_ptr().cast::<f32>();
+        // SAFETY: the offsets are rows 0 to 5 of the six rows, each row
+        // 32-byte aligned (the node is 64-byte aligned, a row 32 bytes).
+        let row = |off: usize| _mm256_load_ps(b.add(off));
+        let (inv, cn, cf) = (&self.inv, &self.c_near, &self.c_far);
+        let (near, far) = (&self.near, &self.far);
+        let plane = |off: usize, a: usize, c: __m256| _mm256_fmadd_ps(row(off), inv[a], c);
+        let tn = _mm256_max_ps(
+            _mm256_max_ps(plane(near[0], 0, cn[0]), plane(near[1], 1, cn[1])),
+            _mm256_max_ps(plane(near[2], 2, cn[2]), _mm256_setzero_ps()),
+        );
+        let tf = _mm256_min_ps(
+            _mm256_min_ps(plane(far[0], 0, cf[0]), plane(far[1], 1, cf[1])),
+            plane(far[2], 2, cf[2]),
+        );
+        let tf = _mm256_min_ps(_mm256_mul_ps(tf, _mm256_set1_ps(SLAB_EXPAND)), _mm256_set1_ps(t_max));
+        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
+        let mut out = [0.0f32; WIDTH];
+        _mm256_storeu_ps(out.as_mut_ptr(), tn);
+        (out, mask)
     }
 }
 

@@ -331,7 +331,12 @@ fn fused_node_test_is_conservative_and_traversals_agree() {
         for n in bvh.nodes() {
             let plain = r.hit(n, t_max).1;
             // SAFETY: AVX2 and FMA were detected, and `fused_ok` holds.
-            let fused = unsafe { r.hit_fused(n, t_max) }.1;
+            let (fused_tn, fused) = unsafe { r.hit_fused(n, t_max) };
+            // The traversals' form of the fused test (constants broadcast
+            // once per ray) computes the same lanes.
+            let (pre_tn, pre) = r.node_test::<true>().hit(&r, n, t_max);
+            assert_eq!(pre, fused, "ray {k}: the traversal's fused test disagrees");
+            assert_eq!(pre_tn.map(f32::to_bits), fused_tn.map(f32::to_bits), "ray {k}");
             assert_eq!(fused & plain, plain, "ray {k}: the fused test culled a box the plain one enters");
             plain_hits += plain.count_ones() as usize;
             extra += (fused & !plain).count_ones() as usize;
