@@ -136,13 +136,10 @@ mod tests {
     use crate::math::Transform;
 
     fn square(size: f32, radiance: f32) -> Light {
-        let (a, b, c, d) = (
-            Vec3::ZERO,
-            Vec3::new(size, 0.0, 0.0),
-            Vec3::new(size, 0.0, size),
-            Vec3::new(0.0, 0.0, size),
-        );
-        let m = LightMesh::new([[a, b, c], [a, c, d]].into_iter(), &Transform::IDENTITY, Vec3::splat(radiance));
+        let (a, b, c, d) =
+            (Vec3::ZERO, Vec3::new(size, 0.0, 0.0), Vec3::new(size, 0.0, size), Vec3::new(0.0, 0.0, size));
+        let m =
+            LightMesh::new([[a, b, c], [a, c, d]].into_iter(), &Transform::IDENTITY, Vec3::splat(radiance));
         Light::Mesh(std::sync::Arc::new(m.expect("the square has area")))
     }
 
