@@ -253,7 +253,7 @@ mod tests {
         let mut a = 0x1234_5678u32;
         for len in (1u32..=1100).chain([4095, 4096, 65_537, 1 << 31, u32::MAX]) {
             let span = Span::new(len);
-            let mut check = |a: u32| {
+            let check = |a: u32| {
                 assert_eq!(span.rem(a), a % len, "{a} % {len}");
                 assert_eq!(span.div(a), a / len, "{a} / {len}");
             };
