@@ -146,11 +146,29 @@ struct Span {
     magic: u64,
 }
 
+/// [`Span::magic`] of the lengths up to 256 (every grid side up to 65 536
+/// samples): a sampler is made per camera sample, and a 64-bit division
+/// costs as much as the ones it saves.
+const MAGIC: [u64; 257] = {
+    let mut t = [0u64; 257];
+    let mut l = 1;
+    while l < t.len() {
+        t[l] = (u64::MAX / l as u64).wrapping_add(1);
+        l += 1;
+    }
+    t
+};
+
 impl Span {
+    #[inline]
     fn new(len: u32) -> Span {
         let len = len.max(1);
         let mask = if len == 1 { 0 } else { u32::MAX >> (len - 1).leading_zeros() };
-        Span { len, mask, magic: (u64::MAX / u64::from(len)).wrapping_add(1) }
+        let magic = match MAGIC.get(len as usize) {
+            Some(&m) => m,
+            None => (u64::MAX / u64::from(len)).wrapping_add(1),
+        };
+        Span { len, mask, magic }
     }
 
     /// `a % len`.
