@@ -2,8 +2,9 @@
 //! (512×512, MaxRecursionDepth 3) rendered by luster's MIS path tracer and by
 //! the course's NEE + importance-sampling variant, against the recursive ray
 //! tracer (direct light only) on the same scene as the reference, alternately
-//! in the same run; prints medians, Mrays/s and the ratio of each to the
-//! reference per sample. The comparison with Mitsuba 3 at equal samples and
+//! in the same run; prints medians of wall and process CPU time (the fair
+//! figure on a shared machine), Mrays/s and the CPU ratio of each to the
+//! reference. The comparison with Mitsuba 3 at equal samples and
 //! depth is `tools/mitsuba_cornell_check.py`. Run:
 //! `cargo bench --bench path` (`-- --spp N --reps N`; needs ../shared).
 
@@ -19,6 +20,15 @@ fn arg(args: &[String], name: &str, default: usize) -> usize {
         .and_then(|s| s.parse().ok())
         .unwrap_or(default)
         .max(1)
+}
+
+/// CPU seconds used so far by every thread of this process.
+fn cpu_now() -> f64 {
+    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+    // SAFETY: `ts` is a valid, writable timespec for the call's duration.
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
+    assert_eq!(rc, 0, "the process CPU clock is readable");
+    ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
 }
 
 fn main() {
@@ -52,13 +62,15 @@ fn main() {
     ];
     let opts = RenderOptions { spp: Some(spp), ..Default::default() };
     let mut times = vec![Vec::new(); variants.len()];
+    let mut cpus = vec![Vec::new(); variants.len()];
     let mut rays = vec![0u64; variants.len()];
     for _ in 0..reps {
         for (k, (_, integrator)) in variants.iter().enumerate() {
             scene.integrators[0] = *integrator;
-            let t = Instant::now();
+            let (t, c) = (Instant::now(), cpu_now());
             let img = render_with(&scene, 0, &opts, &|_| {});
             times[k].push(t.elapsed().as_secs_f64());
+            cpus[k].push(cpu_now() - c);
             rays[k] = img.stats.total();
         }
     }
@@ -66,14 +78,14 @@ fn main() {
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
     };
-    let reference = median(&mut times[0].clone());
+    let reference = median(&mut cpus[0].clone());
     println!("512x512, {spp} spp, {reps} repetitions, medians:");
     for (k, (name, _)) in variants.iter().enumerate() {
-        let t = median(&mut times[k]);
+        let (t, c) = (median(&mut times[k]), median(&mut cpus[k]));
         println!(
-            "  {name:<26} {t:>7.2} s  {:>6.2} Mrays/s  {:>5.2}x the reference",
-            rays[k] as f64 / t / 1e6,
-            t / reference
+            "  {name:<26} {t:>7.2} s wall {c:>7.2} s CPU  {:>6.2} Mrays/CPU-s  {:>5.2}x the reference's CPU",
+            rays[k] as f64 / c / 1e6,
+            c / reference
         );
     }
 }

@@ -84,6 +84,29 @@ fn every_variant_finds_the_known_radiance_under_a_sphere_light() {
 }
 
 #[test]
+fn mis_choosing_lights_by_power_keeps_the_known_radiance() {
+    // The sphere light of `floor_scene` (power π·10·4π·0.25 ≈ 98.7) and a
+    // point light of intensity 4 at (2, 2, 0) (power 4π·4 ≈ 50.3): MIS
+    // chooses them 2:1, not evenly. The point light adds
+    // ρ/π · I cos/d² = 0.5/π · 4 · (2/√8)/8 at the origin; the sphere does not
+    // shade it (the line passes 1.41 from its centre). A light whose choice
+    // were weighed with another chance than it was drawn with would miss.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let text = floor_scene("<Renderer>PathTracing</Renderer><RendererParams>MIS</RendererParams>").replace(
+        "  <VertexData>",
+        "  <Lights><PointLight id=\"1\"><Position>2 2 0</Position><Intensity>4 4 4</Intensity></PointLight></Lights>\n  <VertexData>",
+    );
+    let expected = 0.3125 + 0.5 / std::f64::consts::PI * 4.0 * (2.0 / 8f64.sqrt()) / 8.0;
+    let img = render(&load(dir.path(), &text), &RenderOptions { spp: Some(64), ..Default::default() });
+    let (m, se) = mean_and_se(&img);
+    println!("two lights under MIS: {m:.4} ± {se:.4} (expected {expected:.4})");
+    assert!(
+        (m - expected).abs() <= 4.0 * se + 0.01 * expected,
+        "mean {m:.4} ± {se:.4}, expected {expected:.4}"
+    );
+}
+
+#[test]
 fn next_event_estimation_does_not_count_an_emitter_twice() {
     // Two bounces: an emitter seen by the bounce ray would add the direct
     // light a second time (a 100% excess) if next-event estimation did not

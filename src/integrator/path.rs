@@ -14,7 +14,7 @@
 //! | `ImportanceSampling` | cosine-weighted bounces, `p = cos/π` |
 //! | `NextEventEstimation` | every light sampled at every hit; an emitter a bounce then hits adds nothing (it was counted already) |
 //! | `RussianRoulette` | no depth limit: a path goes on with probability `q = min(1, max(throughput))` and its estimate is divided by `q` |
-//! | `MIS` (luster) | bounces drawn from the BSDF; one light, chosen uniformly, sampled per hit (its estimate times the number of lights); light and bounce samples both count, weighed by the power heuristic `p_a² / (p_a² + p_b²)` with the light's density times the chance of choosing it; the environment light is sampled and hit alike |
+//! | `MIS` (luster) | bounces drawn from the BSDF; one light, chosen by power ([`crate::light::pick`]), sampled per hit (its estimate divided by the chance of choosing it); light and bounce samples both count, weighed by the power heuristic `p_a² / (p_a² + p_b²)` with the light's density times the chance of choosing it; the environment light is sampled and hit alike |
 //!
 //! Without `RussianRoulette` a path ends after `MaxRecursionDepth` bounces,
 //! as the course's reflections do. Mirrors, conductors and dielectrics are
@@ -116,7 +116,7 @@ fn escaped(scene: &Scene, ray: &Ray, came: Came, p: &PathParams, st: &PathState)
         // The density of the environment's own sampler (importance, uniform
         // or cosine about the normal), as its light samples were drawn.
         Came::Bounce { pdf, n } if p.mis => {
-            power_heuristic(pdf, env.sampling_pdf(Some(n), d) / scene.lights.len() as f32)
+            power_heuristic(pdf, env.sampling_pdf(Some(n), d) * scene.light_pick.environment_pmf())
         }
         Came::Bounce { .. } if p.next_event => 0.0,
         Came::Bounce { .. } => 1.0,
@@ -209,12 +209,14 @@ fn next_event(
     st: &mut PathState,
 ) -> Vec3 {
     let mut color = Vec3::ZERO;
-    // MIS takes one light per hit, chosen uniformly: a shadow ray per hit
+    // MIS takes one light per hit, chosen by power: a shadow ray per hit
     // whatever the number of lights. The course's variant samples them all.
     let (lights, scale) = if p.mis && scene.lights.len() > 1 {
-        let k = scene.lights.len();
-        let i = ((st.sampler.next_1d() * k as f32) as usize).min(k - 1);
-        (&scene.lights[i..=i], k as f32)
+        let (i, pick) = scene.light_pick.choose(st.sampler.next_1d());
+        if pick <= 0.0 {
+            return color;
+        }
+        (&scene.lights[i..=i], 1.0 / pick)
     } else {
         (&scene.lights[..], 1.0)
     };
@@ -293,7 +295,7 @@ fn hit_weight(scene: &Scene, li: usize, came: Came, ray: &Ray, hit: &Hit, p: &Pa
     match came {
         Came::Direct => 1.0,
         Came::Bounce { pdf, .. } if p.mis => {
-            let pick = 1.0 / scene.lights.len() as f32;
+            let pick = scene.light_pick.pmf(li);
             power_heuristic(pdf, pick * light_pdf(&scene.lights[li], ray.o, hit, ray.d, time))
         }
         Came::Bounce { .. } if p.next_event => 0.0,

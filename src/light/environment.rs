@@ -94,6 +94,24 @@ impl Environment {
         self.lookup(self.uv(d))
     }
 
+    /// The radiance averaged over all directions (each texel weighed by its
+    /// solid angle), for choosing lights by power.
+    pub fn mean_radiance(&self) -> Vec3 {
+        let (mut sum, mut omega) = (Vec3::ZERO, 0.0f32);
+        for y in 0..self.height {
+            for x in 0..self.width {
+                let a = texel_solid_angle(self.mapping, x, y, self.width, self.height);
+                sum += self.texels[y * self.width + x] * a;
+                omega += a;
+            }
+        }
+        if omega > 0.0 {
+            sum / omega
+        } else {
+            Vec3::ZERO
+        }
+    }
+
     #[inline]
     fn lookup(&self, uv: Vec2) -> Vec3 {
         let x = ((uv.x * self.width as f32) as usize).min(self.width - 1);

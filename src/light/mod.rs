@@ -35,9 +35,11 @@
 pub mod distribution;
 pub mod emitter;
 pub mod environment;
+pub mod pick;
 
 pub use emitter::{LightMesh, LightSphere, ShadedLight, ShadedShape};
 pub use environment::Environment;
+pub use pick::LightPick;
 
 use crate::math::{orthonormal_basis, Vec3};
 use crate::render::sampler::PixelSampler;

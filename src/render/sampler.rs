@@ -25,13 +25,15 @@
 pub struct PixelSampler {
     pixel_hash: u32,
     index: u32,
-    count: u32,
     dim: u32,
     /// `index % count`, and the CMJ grid's columns `m = ⌊√count⌋` and rows
-    /// `⌈count/m⌉`: the same for every dimension, so worked out once.
+    /// `⌈count/m⌉`: the same for every dimension, so worked out once, each
+    /// with what [`permute`] needs (its mask and an exact division by
+    /// multiplication).
     slot: u32,
-    cols: u32,
-    rows: u32,
+    n: Span,
+    cols: Span,
+    rows: Span,
     /// Calls drawn from CMJ patterns; later calls are independent uniforms.
     stratified: u32,
 }
@@ -47,11 +49,11 @@ impl PixelSampler {
         PixelSampler {
             pixel_hash,
             index,
-            count,
             dim: 0,
             slot: index % count,
-            cols,
-            rows,
+            n: Span::new(count),
+            cols: Span::new(cols),
+            rows: Span::new(rows),
             stratified: u32::MAX,
         }
     }
@@ -80,7 +82,7 @@ impl PixelSampler {
         }
         let p = hash2(self.pixel_hash, self.dim);
         self.dim += 1;
-        cmj_grid(self.slot, self.count, self.cols, self.rows, p)
+        cmj_grid(self.slot, self.n, self.cols, self.rows, p)
     }
 
     /// Calls drawn so far for this camera sample.
@@ -92,7 +94,7 @@ impl PixelSampler {
     /// How many samples the pixel takes.
     #[inline]
     pub fn count(&self) -> u32 {
-        self.count
+        self.n.len
     }
 
     /// The next 1D dimension: a value in `[0, 1)` stratified over the samples.
@@ -103,8 +105,8 @@ impl PixelSampler {
         }
         let p = hash2(self.pixel_hash, self.dim);
         self.dim += 1;
-        let s = permute(self.slot, self.count, p);
-        ((s as f32 + rand_float(self.index, p ^ 0x9e37_79b9)) / self.count as f32).min(ONE_MINUS_EPS)
+        let s = permute(self.slot, self.n, p);
+        ((s as f32 + rand_float(self.index, p ^ 0x9e37_79b9)) / self.n.len as f32).min(ONE_MINUS_EPS)
     }
 }
 
@@ -114,35 +116,86 @@ const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
 #[cfg(test)]
 fn cmj(s: u32, n: u32, p: u32) -> (f32, f32) {
     let m = ((n as f32).sqrt() as u32).max(1);
-    cmj_grid(s, n, m, n.div_ceil(m), p)
+    cmj_grid(s, Span::new(n), Span::new(m), Span::new(n.div_ceil(m)), p)
 }
 
 /// [`cmj`] with its `m × k` grid given (`m = ⌊√n⌋`, `k = ⌈n/m⌉`).
 #[inline]
-fn cmj_grid(s: u32, n: u32, m: u32, k: u32, p: u32) -> (f32, f32) {
+fn cmj_grid(s: u32, n: Span, m: Span, k: Span, p: u32) -> (f32, f32) {
     let s = permute(s, n, p.wrapping_mul(0x5163_3e2d));
-    let sx = permute(s % m, m, p.wrapping_mul(0x68bc_21eb));
-    let sy = permute(s / m, k, p.wrapping_mul(0x02e5_be93));
+    let sx = permute(m.rem(s), m, p.wrapping_mul(0x68bc_21eb));
+    let sy = permute(m.div(s), k, p.wrapping_mul(0x02e5_be93));
     let jx = rand_float(s, p.wrapping_mul(0x967a_889b));
     let jy = rand_float(s, p.wrapping_mul(0x368c_c8b7));
+    let (n, m, k) = (n.len, m.len, k.len);
     let x = (sx as f32 + (sy as f32 + jx) / k as f32) / m as f32;
     let y = (s as f32 + jy) / n as f32;
     (x.min(ONE_MINUS_EPS), y.min(ONE_MINUS_EPS))
 }
 
+/// A length `l ≥ 1` the sampler divides by, with what division and
+/// [`permute`] need worked out once: the mask of the next power of two, and
+/// the constant of an exact 32-bit quotient and remainder by multiplication
+/// (Lemire, Kaser and Kurz, "Faster remainder by direct computation", 2019),
+/// so a CMJ point costs no hardware division.
+#[derive(Clone, Copy, Debug)]
+struct Span {
+    len: u32,
+    mask: u32,
+    /// `⌈2⁶⁴ / len⌉` (0 for `len = 1`, where it wraps).
+    magic: u64,
+}
+
+/// [`Span::magic`] of the lengths up to 256 (every grid side up to 65 536
+/// samples): a sampler is made per camera sample, and a 64-bit division
+/// costs as much as the ones it saves.
+const MAGIC: [u64; 257] = {
+    let mut t = [0u64; 257];
+    let mut l = 1;
+    while l < t.len() {
+        t[l] = (u64::MAX / l as u64).wrapping_add(1);
+        l += 1;
+    }
+    t
+};
+
+impl Span {
+    #[inline]
+    fn new(len: u32) -> Span {
+        let len = len.max(1);
+        let mask = if len == 1 { 0 } else { u32::MAX >> (len - 1).leading_zeros() };
+        let magic = match MAGIC.get(len as usize) {
+            Some(&m) => m,
+            None => (u64::MAX / u64::from(len)).wrapping_add(1),
+        };
+        Span { len, mask, magic }
+    }
+
+    /// `a % len`.
+    #[inline]
+    fn rem(self, a: u32) -> u32 {
+        let low = self.magic.wrapping_mul(u64::from(a));
+        ((u128::from(low) * u128::from(self.len)) >> 64) as u32
+    }
+
+    /// `a / len`.
+    #[inline]
+    fn div(self, a: u32) -> u32 {
+        if self.len == 1 {
+            return a;
+        }
+        ((u128::from(self.magic) * u128::from(a)) >> 64) as u32
+    }
+}
+
 /// A pseudo-random permutation of `0..l` selected by `p` (Kensler 2013): a
 /// hash that is a bijection on the next power of two, cycle-walked into range.
 #[inline]
-fn permute(mut i: u32, l: u32, p: u32) -> u32 {
-    if l <= 1 {
+fn permute(mut i: u32, l: Span, p: u32) -> u32 {
+    if l.len <= 1 {
         return 0;
     }
-    let mut w = l - 1;
-    w |= w >> 1;
-    w |= w >> 2;
-    w |= w >> 4;
-    w |= w >> 8;
-    w |= w >> 16;
+    let w = l.mask;
     loop {
         i ^= p;
         i = i.wrapping_mul(0xe170_893d);
@@ -162,11 +215,11 @@ fn permute(mut i: u32, l: u32, p: u32) -> u32 {
         i = i.wrapping_mul(0xc860_a3df);
         i &= w;
         i ^= i >> 5;
-        if i < l {
+        if i < l.len {
             break;
         }
     }
-    (i.wrapping_add(p)) % l
+    l.rem(i.wrapping_add(p))
 }
 
 /// A hashed float in `[0, 1)` for index `i` under pattern `p`.
@@ -212,12 +265,41 @@ mod tests {
     use super::*;
 
     #[test]
+    fn span_divides_exactly() {
+        // The multiplication's quotient and remainder against the hardware's,
+        // at the ends of the range and on a spread of numerators.
+        let mut a = 0x1234_5678u32;
+        for len in (1u32..=1100).chain([4095, 4096, 65_537, 1 << 31, u32::MAX]) {
+            let span = Span::new(len);
+            let check = |a: u32| {
+                assert_eq!(span.rem(a), a % len, "{a} % {len}");
+                assert_eq!(span.div(a), a / len, "{a} / {len}");
+            };
+            for x in [0, 1, len - 1, len, len.wrapping_add(1), u32::MAX - 1, u32::MAX] {
+                check(x);
+            }
+            for _ in 0..200 {
+                a ^= a << 13;
+                a ^= a >> 17;
+                a ^= a << 5;
+                check(a);
+            }
+            // The mask is `len − 1` with every bit below its highest set.
+            let mut w = len - 1;
+            for shift in [1, 2, 4, 8, 16] {
+                w |= w >> shift;
+            }
+            assert_eq!(span.mask, w, "mask of {len}");
+        }
+    }
+
+    #[test]
     fn permute_is_a_permutation() {
         for l in [1u32, 2, 3, 7, 16, 100, 400] {
             for p in [0u32, 1, 0xdead_beef] {
                 let mut seen = vec![false; l as usize];
                 for i in 0..l {
-                    let j = permute(i, l, p) as usize;
+                    let j = permute(i, Span::new(l), p) as usize;
                     assert!(!seen[j], "l={l} p={p}: {j} twice");
                     seen[j] = true;
                 }

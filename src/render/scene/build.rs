@@ -6,7 +6,7 @@ use crate::accel::Bvh;
 use crate::geometry::mesh::{vertex_normals, welded_vertex_normals};
 use crate::geometry::{Ellipsoid, Mesh, Plane, Sphere};
 use crate::integrator::Integrator;
-use crate::light::{AreaLight, Environment, Light, LightMesh, LightSphere, PointLight, SpotLight};
+use crate::light::{AreaLight, Environment, Light, LightMesh, LightPick, LightSphere, PointLight, SpotLight};
 use crate::material::Material;
 use crate::math::{Aabb, Vec2};
 use crate::render::camera::Camera;
@@ -178,6 +178,7 @@ impl Scene {
             materials: desc.materials.iter().map(Material::from_desc).collect(),
             lights,
             emitters,
+            light_pick: LightPick::default(),
             environment,
             ambient: desc.ambient_light,
             background: desc.background,
@@ -197,6 +198,9 @@ impl Scene {
             warnings,
         };
         scene.add_shaded_lights();
+        let bounds = scene.tlas.bounds();
+        let radius = 0.5 * (bounds.max - bounds.min).length();
+        scene.light_pick = LightPick::by_power(&scene.lights, radius);
         Ok(scene)
     }
 }

@@ -13,7 +13,7 @@
 use crate::accel::triangle::WatertightRay;
 use crate::accel::{Bvh, TriHit};
 use crate::geometry::{Ellipsoid, Mesh, Plane, Sphere};
-use crate::light::{Environment, Light};
+use crate::light::{Environment, Light, LightPick};
 use crate::material::Material;
 use crate::math::{Ray, Transform, Vec2, Vec3};
 use crate::render::camera::Camera;
@@ -155,6 +155,8 @@ pub struct Scene {
     pub environment: Option<Arc<Environment>>,
     /// How many of [`lights`](Self::lights) are emitting objects.
     pub emitters: usize,
+    /// The chance the MIS path tracer samples each light, by power.
+    pub light_pick: LightPick,
     /// Ambient light.
     pub ambient: Vec3,
     /// Colour of rays that miss.
