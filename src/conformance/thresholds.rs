@@ -236,6 +236,8 @@ mod tests {
             left_out: 0,
             luminance_z,
             mean_luminance: [0.5, 0.5],
+            ref_variance: 0.3,
+            ref_measured: false,
         };
         assert!(b.accepts(&c, None, None, Some(&z(1.1, 0.0, 1.0))));
         assert!(
