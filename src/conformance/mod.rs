@@ -493,5 +493,14 @@ mod tests {
         assert_eq!(exp("json/s.json", Encoding::Json, "a.png"), Some("expected/a.png".into()));
         assert_eq!(exp("xml/s.xml", Encoding::Xml, "h.exr"), Some("expected/h.png".into()));
         assert_eq!(exp("xml/s.xml", Encoding::Xml, "none.png"), None);
+        // The other year's render of the same image measures the course's
+        // noise; an image in no year's folder has none.
+        let other =
+            |p: &str| Case::other_year(&hw.join(p)).map(|p| p.strip_prefix(hw).unwrap().to_path_buf());
+        assert_eq!(other("expected/2022/a.png"), Some("expected/2020/a.png".into()));
+        assert_eq!(other("expected/2020/a.png"), Some("expected/2022/a.png".into()));
+        assert_eq!(other("expected/h.exr"), None);
+        std::fs::remove_file(hw.join("expected/2020/a.png")).unwrap();
+        assert_eq!(other("expected/2022/a.png"), None);
     }
 }

@@ -10,9 +10,11 @@
 //! `(a − a')²/2` estimates a pixel's variance, so `Σ (a − a')² / (2 n²)`
 //! estimates the variance of the block mean of `n` pixels, at exactly the
 //! sample count rendered. The course's image is a Monte Carlo estimate too,
-//! at its own count, with noise we cannot measure from one image: its
-//! variance is taken as ours scaled by `ref_variance_ratio` (see
-//! [`ref_variance_ratio`]). So `σ² = σ²_ours (1 + ratio) + floor²`. Noise
+//! at its own count. Where the course rendered the scene twice (hw7's 2020
+//! and 2022 images) its block variance `σ²_ref` is measured from the two
+//! ([`RefNoise`], [`block_z_measured`]); from one image it cannot be, and it
+//! is taken as ours scaled by [`ref_variance_ratio`]: `σ²_ref = ratio ·
+//! σ²_ours`. So `σ² = σ²_ours + σ²_ref + floor²`. Noise
 //! alone gives `z ~ N(0, 1)` whatever the count; a bias — a light of the
 //! wrong size, a wrong pdf, a misplaced object — adds `(bias/σ)²` to z²
 //! where it is, and shows at any count.
@@ -77,11 +79,14 @@ pub const EMITTER_FACTOR: f64 = 10.0;
 /// had |z| > 5 without it, biased by 1–6% at the box's top corners.
 pub const LINEAR_RELATIVE_FLOOR: f64 = 0.005;
 
-/// The course references' variance per sample relative to ours: measured at
-/// the course's full counts on hw3 (1.2× on `cornellbox_area`, 2.5× on
-/// `metal_glass_plates`, 4× on `spheres_dof`: our samples are stratified,
-/// the course's are not); the largest, so a noisier reference is never
-/// mistaken for a bias.
+/// The course references' variance per sample relative to ours, where only
+/// one course image exists (hw3, hw4): measured at the course's full counts
+/// on hw3 (1.2× on `cornellbox_area`, 2.5× on `metal_glass_plates`, 4× on
+/// `spheres_dof`: our samples are stratified, the course's are not); the
+/// largest, so a noisier reference is never mistaken for a bias. It ties the
+/// bar to our sampler: a better-stratified one lowers ours, not the
+/// course's. Where the course has two renders (hw7) their difference
+/// measures it instead ([`RefNoise`]): 0.66–4.2× ours there.
 pub const REF_NOISE_PER_SAMPLE: f64 = 4.0;
 
 /// The reference's variance of a block mean relative to ours, for our render
