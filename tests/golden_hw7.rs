@@ -124,6 +124,12 @@ fn hw7_images_match_the_course_within_their_noise() {
         row("course 2020 against 2022", &years);
         row("our seed 0 against seed 1", &ours);
         row("ours ×1.03 against the course", &bright);
+        if course.is_some() {
+            // For comparison only: what the 4× rule made of the same renders.
+            let old = |a: &Rgb32Image, b: &Rgb32Image| block_z(a, b, &reference, &model).expect("one size");
+            row("  (4× rule) ours", &old(&a, &b));
+            row("  (4× rule) ours ×1.03", &old(&scaled(&a, 1.03), &scaled(&b, 1.03)));
+        }
         assert!(
             z.left_out < z.count / 3 / 10,
             "{expected}: more than a tenth of the blocks left out as lights: {z:?}"
