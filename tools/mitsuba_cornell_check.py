@@ -21,7 +21,10 @@ Conventions:
     the vertical axis; box pixel filter in both.
 
 Prints, for the accuracy check (--spp, default 1024): mean HDR-FLIP (NVIDIA's
-flip-evaluator) and the relative difference of the mean luminance; for the
+flip-evaluator) of the linear images, mean LDR-FLIP of the images through the
+scene's own display transform (see tone_map), and the relative difference of
+the mean luminance; with --floor, the same figures for each renderer against
+itself (two seeds) and against a high-count Mitsuba reference; for the
 speed check (--time-spp, default 100, 512x512, the same depth): the two
 renderers run alternately (luster, Mitsuba, luster, ... --reps times each),
 and the medians of each one's wall time and CPU time (user + system: on a
@@ -32,7 +35,8 @@ ratios, and luster's Mrays/s as it reports it. Both use every core unless
 Setup: python3 -m venv /tmp/mi && /tmp/mi/bin/pip install mitsuba numpy flip-evaluator
 Run:   cargo build --release && /tmp/mi/bin/python tools/mitsuba_cornell_check.py
 Targets (issue 13): mean FLIP <= 0.03, mean luminance within 1%; time ratio
-luster/Mitsuba <= 0.5.
+luster/Mitsuba <= 0.5. What the FLIP bar can mean (Mitsuba's own seed-to-seed
+figure is 0.042 HDR, 0.027 LDR at 1024 spp): docs/path-tracing.md, Checks.
 """
 
 import argparse
@@ -194,9 +198,10 @@ def main():
     ap.add_argument("--threads", type=int, default=0, help="threads of both renderers (0: all cores)")
     ap.add_argument("--reps", type=int, default=3, help="alternating runs of each renderer in the speed check")
     ap.add_argument("--keep", help="folder to keep both renders in")
-    ap.add_argument("--floor", type=int, default=0, metavar="REF_SPP",
+    ap.add_argument("--floor", type=int, default=None, metavar="REF_SPP",
                     help="instead: the noise floor of the FLIP check at --spp (each renderer against itself "
-                         "with two seeds) and both against Mitsuba at REF_SPP")
+                         "with two seeds) and both against Mitsuba at REF_SPP (0: no such reference); images "
+                         "already in --keep are reused")
     a = ap.parse_args()
     mi.set_variant("scalar_rgb")
     if a.threads:
@@ -207,7 +212,7 @@ def main():
     _, verts, cam, meshes, lights, spheres, point = read_scene(a.scene)
     work = a.keep or tempfile.mkdtemp(prefix="luster-mi-")
     os.makedirs(work, exist_ok=True)
-    if a.floor:
+    if a.floor is not None:
         noise_floor(a, work, verts, cam, meshes, lights, spheres, point, flip)
         return
     for label, spp in (("accuracy", a.spp), ("speed", a.time_spp)):
@@ -227,9 +232,9 @@ def main():
             mi.Bitmap(ours.astype(np.float32)).write(os.path.join(work, f"luster_{label}.exr"))
             mi.Bitmap(theirs.astype(np.float32)).write(os.path.join(work, f"mitsuba_{label}.exr"))
         lo, lt = (ours @ W).mean(), (theirs @ W).mean()
-        _, fl, _ = flip.evaluate(theirs.astype(np.float32), ours.astype(np.float32), "HDR")
+        fl, fl_ldr = flips(flip, theirs, ours)
         print(f"{label}: {a.res}x{a.res}, {spp} spp, depth 5 (MaxRecursionDepth 3)")
-        print(f"  mean HDR-FLIP {fl:.4f}   mean luminance luster {lo:.5f} mitsuba {lt:.5f} ({100 * (lo / lt - 1):+.2f}%)")
+        print(f"  mean HDR-FLIP {fl:.4f}, LDR-FLIP {fl_ldr:.4f}   mean luminance luster {lo:.5f} mitsuba {lt:.5f} ({100 * (lo / lt - 1):+.2f}%)")
         print(f"  {reps} alternating runs each, medians: wall time luster {t_ours:.2f} s, mitsuba {t_theirs:.2f} s, "
               f"ratio {t_ours / t_theirs:.3f}; CPU time luster {c_ours:.2f} s, mitsuba {c_theirs:.2f} s, "
               f"ratio {c_ours / c_theirs:.3f}; luster {mrays:.1f} Mrays/s (last run)")
@@ -237,35 +242,77 @@ def main():
             print(f"    run {k + 1}: luster {r[0]:.2f} s wall / {r[1]:.2f} s CPU, mitsuba {r[2]:.2f} s wall / {r[3]:.2f} s CPU")
 
 
+def tone_map(img, like, key=0.18, burn=1.0, gamma=2.2):
+    """The scene's display transform (Photographic, TMOOptions "0.18 1",
+    Saturation 1, Gamma 2.2), clamped and truncated to 8 bits as the course's
+    PNGs are, with its log-average and burn-out white taken from `like` (the
+    pair's reference) so that both images of a pair go through one curve:
+    the course's operator computes them from each noisy image itself."""
+    y_like = like @ W
+    log_avg = np.exp(np.mean(np.log(1e-5 + y_like)))
+    white = np.percentile(key / log_avg * y_like, 100 - burn)
+    y = img @ W
+    lum = key / log_avg * y
+    out = lum * (1 + lum / white ** 2) / (1 + lum)
+    rgb = img * (out / np.where(y > 0, y, 1))[..., None]
+    rgb = np.clip(rgb, 0, 1) ** (1 / gamma)
+    return np.floor(rgb * 255) / 255
+
+
+def flips(flip, ref, test):
+    """Mean HDR-FLIP of the linear images and mean LDR-FLIP of the tone-mapped ones."""
+    hdr = flip.evaluate(ref.astype(np.float32), test.astype(np.float32), "HDR")[1]
+    ldr = flip.evaluate(tone_map(ref, ref).astype(np.float32), tone_map(test, ref).astype(np.float32), "LDR")[1]
+    return hdr, ldr
+
+
 def noise_floor(a, work, verts, cam, meshes, lights, spheres, point, flip):
-    """Mean HDR-FLIP of each renderer against itself (seeds 0 and 1) at
-    --spp, of the two against each other, and of each against Mitsuba at
-    --floor samples: what the 0.03 bar can mean at this sample count."""
+    """Mean HDR- and LDR-FLIP of each renderer against itself (seeds 0 and 1)
+    at --spp, of the two against each other, and of each against Mitsuba at
+    --floor samples: what the 0.03 bar can mean at this sample count. Each
+    image is kept in --keep (or the temporary folder) and reused when it is
+    already there, so a run can be resumed and the table recomputed."""
     ls = os.path.join(work, "luster.xml")
     luster_scene(a.scene, ls, a.spp, a.res)
+    jobs = [(f"{who}{seed}", who, seed, a.spp) for seed in (0, 1) for who in ("mitsuba", "luster")]
+    if a.floor > 0:
+        jobs.append(("ref", "mitsuba", 7, a.floor))
     imgs = {}
-    for seed in (0, 1):
-        imgs[f"luster{seed}"] = run_luster(a.luster, ls, work, a.threads, seed)[0]
-        d = mitsuba_dict(work, verts, cam, meshes, lights, spheres, point, a.spp, a.res, seed)
-        imgs[f"mitsuba{seed}"] = run_mitsuba(d)[0]
-    d = mitsuba_dict(work, verts, cam, meshes, lights, spheres, point, a.floor, a.res, 7)
-    imgs["ref"] = run_mitsuba(d)[0]
-    if a.keep:
-        for k, v in imgs.items():
-            mi.Bitmap(v.astype(np.float32)).write(os.path.join(work, f"{k}.exr"))
+    for name, who, seed, spp in jobs:
+        path = os.path.join(work, f"{name}.exr")
+        if os.path.exists(path):
+            imgs[name] = np.array(mi.Bitmap(path), dtype=np.float64)[..., :3]
+            continue
+        if who == "luster":
+            imgs[name] = run_luster(a.luster, ls, work, a.threads, seed)[0]
+        else:
+            imgs[name] = run_mitsuba(mitsuba_dict(work, verts, cam, meshes, lights, spheres, point, spp, a.res,
+                                                  seed))[0]
+        mi.Bitmap(imgs[name].astype(np.float32)).write(path)
+    if imgs["mitsuba0"].shape[0] != a.res:
+        sys.exit(f"{work} holds images of another size than --res {a.res}")
+    imgs["mitsuba01"] = (imgs["mitsuba0"] + imgs["mitsuba1"]) / 2
 
-    def fl(ref, test):
-        return flip.evaluate(imgs[ref].astype(np.float32), imgs[test].astype(np.float32), "HDR")[1]
-
-    print(f"noise floor: {a.res}x{a.res}, {a.spp} spp (reference: Mitsuba at {a.floor} spp), mean HDR-FLIP")
-    print(f"  mitsuba seed 0 vs seed 1   {fl('mitsuba0', 'mitsuba1'):.4f}")
-    print(f"  luster seed 0 vs seed 1    {fl('luster0', 'luster1'):.4f}")
-    for s in (0, 1):
-        print(f"  mitsuba vs luster seed {s}   {fl(f'mitsuba{s}', f'luster{s}'):.4f}")
-    for k in ("mitsuba0", "mitsuba1", "luster0", "luster1"):
-        print(f"  reference vs {k:<10}   {fl('ref', k):.4f}")
+    print(f"noise floor: {a.res}x{a.res}, {a.spp} spp, mean FLIP (reference first; LDR: the scene's tone "
+          f"mapping, curve from the reference)")
+    pairs = [("mitsuba0", "mitsuba1", "Mitsuba seed 0 vs seed 1 (the floor)"),
+             ("luster0", "luster1", "luster seed 0 vs seed 1"),
+             ("mitsuba0", "luster0", "Mitsuba vs luster, seed 0"),
+             ("mitsuba1", "luster1", "Mitsuba vs luster, seed 1"),
+             ("mitsuba01", "luster0", f"Mitsuba at {2 * a.spp} (two seeds) vs luster 0"),
+             ("mitsuba01", "luster1", f"Mitsuba at {2 * a.spp} (two seeds) vs luster 1")]
+    if "ref" in imgs:
+        pairs += [("ref", k, f"Mitsuba at {a.floor} vs {k}") for k in ("mitsuba0", "mitsuba1", "luster0", "luster1")]
+    print(f"  {'pair':<46} {'HDR-FLIP':>9} {'LDR-FLIP':>9}")
+    for ref, test, label in pairs:
+        hdr, ldr = flips(flip, imgs[ref], imgs[test])
+        print(f"  {label:<46} {hdr:9.4f} {ldr:9.4f}")
     lum = {k: (v @ W).mean() for k, v in imgs.items()}
     print("  mean luminance: " + ", ".join(f"{k} {v:.5f}" for k, v in lum.items()))
+    m = (lum["mitsuba0"] + lum["mitsuba1"]) / 2
+    print(f"  luster against Mitsuba (two seeds each): {100 * ((lum['luster0'] + lum['luster1']) / 2 / m - 1):+.2f}%"
+          f" (seed to seed: Mitsuba {100 * (lum['mitsuba1'] / lum['mitsuba0'] - 1):+.2f}%, "
+          f"luster {100 * (lum['luster1'] / lum['luster0'] - 1):+.2f}%)")
 
 
 if __name__ == "__main__":

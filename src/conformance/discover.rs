@@ -81,6 +81,21 @@ impl Case {
         })
     }
 
+    /// The other year's render of the image at `hdr` (an
+    /// `expected/2022/` or `expected/2020/` file), when the folder has one:
+    /// the course rendered hw7 in both years, so the pair measures its noise
+    /// (see [`ref_noise`](super::ref_noise)).
+    pub fn other_year(hdr: &Path) -> Option<PathBuf> {
+        let dir = hdr.parent()?;
+        let other = match dir.file_name()?.to_str()? {
+            "2022" => "2020",
+            "2020" => "2022",
+            _ => return None,
+        };
+        let path = dir.parent()?.join(other).join(hdr.file_name()?);
+        path.is_file().then_some(path)
+    }
+
     /// Whether the scene file names one of its homework's expected images.
     ///
     /// A cheap textual test, made without loading the scene (and its meshes):

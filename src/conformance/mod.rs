@@ -12,6 +12,7 @@ mod discover;
 pub mod measures;
 pub mod noise;
 mod quirks;
+pub mod ref_noise;
 mod rule;
 pub mod runner;
 pub mod thresholds;
@@ -306,12 +307,19 @@ fn run_case_into(
                 Err(e) => r.error = Some(e),
             }
         }
+        // An unreadable other year only costs the measured noise.
+        let other_year = expected_hdr
+            .as_deref()
+            .filter(|_| second.is_some())
+            .and_then(Case::other_year)
+            .and_then(|p| Rgb32Image::load(p).ok());
         if let Some(exp) = expected {
             let judged = second.as_ref().map(|s| Judged {
                 second_film: s,
                 second_rgb: second_rgb.as_deref().unwrap_or_default(),
                 film: &img.film,
                 hdr_reference: hdr_reference.as_ref(),
+                other_year: other_year.as_ref(),
                 spp: r.spp,
                 ref_spp: r.scene_spp,
             });
@@ -372,6 +380,9 @@ struct Judged<'a> {
     second_film: &'a Film,
     second_rgb: &'a [u8],
     hdr_reference: Option<&'a Rgb32Image>,
+    /// The course's other year's render of the same image, which measures
+    /// its noise.
+    other_year: Option<&'a Rgb32Image>,
     spp: u32,
     ref_spp: u32,
 }
@@ -407,7 +418,11 @@ fn compare_with(
         Some(j) => match j.hdr_reference {
             Some(hdr) => {
                 let model = noise::NoiseModel::linear(j.spp, j.ref_spp, hdr);
-                noise::block_z(&linear_image(j.film), &linear_image(j.second_film), hdr, &model)
+                let (ours, second) = (linear_image(j.film), linear_image(j.second_film));
+                match j.other_year.and_then(|o| ref_noise::measured_if_agreeing(hdr, o, &model)) {
+                    Some(course) => noise::block_z_measured(&ours, &second, hdr, &model, &course),
+                    None => noise::block_z(&ours, &second, hdr, &model),
+                }
             }
             None => {
                 let second = rgb8_image(w, h, j.second_rgb).ok_or("the second render has the wrong size")?;
@@ -478,5 +493,14 @@ mod tests {
         assert_eq!(exp("json/s.json", Encoding::Json, "a.png"), Some("expected/a.png".into()));
         assert_eq!(exp("xml/s.xml", Encoding::Xml, "h.exr"), Some("expected/h.png".into()));
         assert_eq!(exp("xml/s.xml", Encoding::Xml, "none.png"), None);
+        // The other year's render of the same image measures the course's
+        // noise; an image in no year's folder has none.
+        let other =
+            |p: &str| Case::other_year(&hw.join(p)).map(|p| p.strip_prefix(hw).unwrap().to_path_buf());
+        assert_eq!(other("expected/2022/a.png"), Some("expected/2020/a.png".into()));
+        assert_eq!(other("expected/2020/a.png"), Some("expected/2022/a.png".into()));
+        assert_eq!(other("expected/h.exr"), None);
+        std::fs::remove_file(hw.join("expected/2020/a.png")).unwrap();
+        assert_eq!(other("expected/2022/a.png"), None);
     }
 }

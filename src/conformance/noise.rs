@@ -10,9 +10,11 @@
 //! `(a − a')²/2` estimates a pixel's variance, so `Σ (a − a')² / (2 n²)`
 //! estimates the variance of the block mean of `n` pixels, at exactly the
 //! sample count rendered. The course's image is a Monte Carlo estimate too,
-//! at its own count, with noise we cannot measure from one image: its
-//! variance is taken as ours scaled by `ref_variance_ratio` (see
-//! [`ref_variance_ratio`]). So `σ² = σ²_ours (1 + ratio) + floor²`. Noise
+//! at its own count. Where the course rendered the scene twice (hw7's 2020
+//! and 2022 images) its block variance `σ²_ref` is measured from the two
+//! ([`RefNoise`], [`block_z_measured`]); from one image it cannot be, and it
+//! is taken as ours scaled by [`ref_variance_ratio`]: `σ²_ref = ratio ·
+//! σ²_ours`. So `σ² = σ²_ours + σ²_ref + floor²`. Noise
 //! alone gives `z ~ N(0, 1)` whatever the count; a bias — a light of the
 //! wrong size, a wrong pdf, a misplaced object — adds `(bias/σ)²` to z²
 //! where it is, and shows at any count.
@@ -51,6 +53,7 @@
 //!   computed from the noisy image itself, so the course's 100-spp PNG and
 //!   ours at a few spp are mapped by different curves.
 
+pub use super::ref_noise::RefNoise;
 use crate::image::Rgb32Image;
 
 /// |z| beyond which a block counts as an outlier: a normal variable passes
@@ -76,11 +79,14 @@ pub const EMITTER_FACTOR: f64 = 10.0;
 /// had |z| > 5 without it, biased by 1–6% at the box's top corners.
 pub const LINEAR_RELATIVE_FLOOR: f64 = 0.005;
 
-/// The course references' variance per sample relative to ours: measured at
-/// the course's full counts on hw3 (1.2× on `cornellbox_area`, 2.5× on
-/// `metal_glass_plates`, 4× on `spheres_dof`: our samples are stratified,
-/// the course's are not); the largest, so a noisier reference is never
-/// mistaken for a bias.
+/// The course references' variance per sample relative to ours, where only
+/// one course image exists (hw3, hw4): measured at the course's full counts
+/// on hw3 (1.2× on `cornellbox_area`, 2.5× on `metal_glass_plates`, 4× on
+/// `spheres_dof`: our samples are stratified, the course's are not); the
+/// largest, so a noisier reference is never mistaken for a bias. It ties the
+/// bar to our sampler: a better-stratified one lowers ours, not the
+/// course's. Where the course has two renders (hw7) their difference
+/// measures it instead ([`RefNoise`]): 0.66–4.2× ours there.
 pub const REF_NOISE_PER_SAMPLE: f64 = 4.0;
 
 /// The reference's variance of a block mean relative to ours, for our render
@@ -192,10 +198,16 @@ pub struct BlockZ {
     pub luminance_z: f64,
     /// Mean luminance of ours and of the reference.
     pub mean_luminance: [f64; 2],
+    /// The reference's variance of a block mean relative to ours, summed
+    /// over the judged blocks and channels, at the two counts compared.
+    pub ref_variance: f64,
+    /// Whether the reference's noise was measured from a second course
+    /// render ([`RefNoise`]) rather than scaled from ours.
+    pub ref_measured: bool,
 }
 
 /// Rec. 709 luminance of an RGB triple; non-finite values count as 0.
-fn luminance(p: [f32; 3]) -> f64 {
+pub(super) fn luminance(p: [f32; 3]) -> f64 {
     let y = 0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2]);
     if y.is_finite() {
         y
@@ -213,28 +225,60 @@ fn finite(v: f32) -> f64 {
 }
 
 /// Judges `ours` against `reference` by the noise `second` (ours with the
-/// next seed) measures (see the module documentation). `None` when the
-/// sizes differ or no whole block fits.
+/// next seed) measures, the reference's taken as ours scaled by the model's
+/// `ref_ratio` (see the module documentation). `None` when the sizes differ
+/// or no whole block fits.
 pub fn block_z(
     ours: &Rgb32Image,
     second: &Rgb32Image,
     reference: &Rgb32Image,
     model: &NoiseModel,
 ) -> Option<BlockZ> {
+    judge(ours, Some(second), reference, model, None)
+}
+
+/// [`block_z`] with the reference's own noise measured from a second course
+/// render (see [`RefNoise`]) instead of scaled from ours. `None` also when
+/// `course` was measured on other blocks or another size.
+pub fn block_z_measured(
+    ours: &Rgb32Image,
+    second: &Rgb32Image,
+    reference: &Rgb32Image,
+    model: &NoiseModel,
+    course: &RefNoise,
+) -> Option<BlockZ> {
+    judge(ours, Some(second), reference, model, Some(course))
+}
+
+/// The judgement: our block variance from `second`, or, without it, from
+/// `course` (two images of the same renderer); the reference's from
+/// `course`, or ours times the model's ratio.
+pub(super) fn judge(
+    ours: &Rgb32Image,
+    second: Option<&Rgb32Image>,
+    reference: &Rgb32Image,
+    model: &NoiseModel,
+    course: Option<&RefNoise>,
+) -> Option<BlockZ> {
     let same = |b: &Rgb32Image| {
         (b.width, b.height) == (ours.width, ours.height) && b.pixels.len() == ours.pixels.len()
     };
     let k = model.block.max(1);
     let (bw, bh) = (ours.width / k, ours.height / k);
-    if !same(second) || !same(reference) || bw == 0 || bh == 0 {
+    let fits = course.is_none_or(|r| r.fits(ours.width, ours.height, k));
+    if !second.is_none_or(same) || !same(reference) || bw == 0 || bh == 0 || !fits {
+        return None;
+    }
+    if second.is_none() && course.is_none() {
         return None;
     }
     let n = f64::from(k * k);
     let (mut sum_z2, mut outliers, mut max_abs_z, mut count, mut left_out) =
         (0.0, 0usize, 0.0f64, 0usize, 0usize);
+    let (mut var_ours_sum, mut var_ref_sum) = (0.0, 0.0);
     // Luminance sums over the judged blocks: ours, the reference's, and the
-    // squared differences of our two renders.
-    let (mut lum_ours, mut lum_ref, mut lum_noise, mut pixels) = (0.0, 0.0, 0.0, 0usize);
+    // variances the two add to the sum of the luminance.
+    let (mut lum_ours, mut lum_ref, mut lum_var, mut pixels) = (0.0, 0.0, 0.0, 0usize);
     for by in 0..bh {
         for bx in 0..bw {
             let (mut diff, mut noise, mut sum_ref) = ([0.0f64; 3], [0.0f64; 3], [0.0f64; 3]);
@@ -245,30 +289,54 @@ pub fn block_z(
                     let i = (y * ours.width + x) as usize;
                     for c in 0..3 {
                         let (a, r) = (finite(ours.pixels[i][c]), finite(reference.pixels[i][c]));
-                        excluded |= r > model.left_out_above;
+                        // Two images of one renderer are judged alike: a
+                        // light (or a firefly) in either leaves the block out,
+                        // so that leaving it out cannot favour one of them.
+                        excluded |=
+                            r > model.left_out_above || (second.is_none() && a > model.left_out_above);
                         diff[c] += a - r;
                         sum_ref[c] += r;
-                        noise[c] += (a - finite(second.pixels[i][c])).powi(2);
+                        if let Some(s) = second {
+                            noise[c] += (a - finite(s.pixels[i][c])).powi(2);
+                        }
                     }
                     let a = luminance(ours.pixels[i]);
                     la += a;
                     lr += luminance(reference.pixels[i]);
-                    ln += (a - luminance(second.pixels[i])).powi(2);
+                    if let Some(s) = second {
+                        ln += (a - luminance(s.pixels[i])).powi(2);
+                    }
                 }
             }
+            let var_ours: [f64; 3] = std::array::from_fn(|c| match (second, course) {
+                (Some(_), _) => noise[c] / (2.0 * n * n),
+                (None, Some(r)) => r.variance(bx, by, c),
+                (None, None) => 0.0,
+            });
             // Where the reference is clipped (or a light) but our block is
             // the same in both renders, there is no noise to excuse a
             // difference, and none to bias it: judged as any block.
-            if excluded && noise.iter().any(|&v| v > 0.0) {
+            if excluded && var_ours.iter().any(|&v| v > 0.0) {
                 left_out += 1;
                 continue;
             }
-            (lum_ours, lum_ref, lum_noise, pixels) =
-                (lum_ours + la, lum_ref + lr, lum_noise + ln, pixels + k as usize * k as usize);
+            let lum_var_ours = if second.is_some() {
+                ln / 2.0
+            } else {
+                course.map_or(0.0, |r| r.luminance_variance(bx, by))
+            };
+            let lum_var_ref = course.map_or(lum_var_ours * model.ref_ratio, |r| r.luminance_variance(bx, by));
+            (lum_ours, lum_ref, lum_var, pixels) = (
+                lum_ours + la,
+                lum_ref + lr,
+                lum_var + lum_var_ours + lum_var_ref,
+                pixels + k as usize * k as usize,
+            );
             for c in 0..3 {
-                let var_ours = noise[c] / (2.0 * n * n);
+                let var_ref = course.map_or(var_ours[c] * model.ref_ratio, |r| r.variance(bx, by, c));
+                (var_ours_sum, var_ref_sum) = (var_ours_sum + var_ours[c], var_ref_sum + var_ref);
                 let floor = model.floor.max(model.relative_floor * (sum_ref[c] / n).abs());
-                let z = (diff[c] / n) / (var_ours * (1.0 + model.ref_ratio) + floor * floor).sqrt();
+                let z = (diff[c] / n) / (var_ours[c] + var_ref + floor * floor).sqrt();
                 sum_z2 += z * z;
                 outliers += usize::from(z.abs() > Z_OUTLIER);
                 max_abs_z = max_abs_z.max(z.abs());
@@ -279,7 +347,7 @@ pub fn block_z(
     let m = pixels.max(1) as f64;
     let (mean_ours, mean_ref) = (lum_ours / m, lum_ref / m);
     let floor = model.mean_floor.max(model.relative_mean_floor * mean_ref.abs());
-    let se = ((lum_noise / 2.0 * (1.0 + model.ref_ratio)).sqrt() / m).max(floor);
+    let se = (lum_var.sqrt() / m).max(floor);
     Some(BlockZ {
         space: model.space,
         block: k,
@@ -290,6 +358,8 @@ pub fn block_z(
         left_out,
         luminance_z: (mean_ours - mean_ref) / se,
         mean_luminance: [mean_ours, mean_ref],
+        ref_variance: if var_ours_sum > 0.0 { var_ref_sum / var_ours_sum } else { 0.0 },
+        ref_measured: course.is_some(),
     })
 }
 

@@ -153,8 +153,9 @@ impl std::fmt::Display for Rule {
             Rule::NoiseAware { floor_psnr, ceiling_flip, max_mean_z2, max_outliers, max_luminance_z } => write!(
                 f,
                 "noise-aware: block means against the reference's, in units of the noise our render \
-                 with the next seed measures at the same count (widened by the reference's, scaled \
-                 from ours by {REF_NOISE_PER_SAMPLE} × our spp / its spp): mean z² ≤ {max_mean_z2}, \
+                 with the next seed measures at the same count (widened by the reference's: measured \
+                 from the course's two years' renders where they agree, else scaled from ours by \
+                 {REF_NOISE_PER_SAMPLE} × our spp / its spp): mean z² ≤ {max_mean_z2}, \
                  at most {:.1}% of blocks with |z| > {Z_OUTLIER}, mean luminance within \
                  {max_luminance_z} standard errors; on 8-bit images {COARSE}×{COARSE} blocks (those clipped \
                  at white in the reference left out) and PSNR ≥ {floor_psnr} dB, FLIP ≤ {ceiling_flip} \

@@ -11,8 +11,10 @@
 //!   Carlo estimate and so is the course's: both are noisy, with other noise.
 //!   We render twice with different seeds, at the sample count being tested,
 //!   and judge block means and the mean luminance in units of the noise our
-//!   two renders measure, widened by the reference's own (scaled from ours by
-//!   the two sample counts): see [`noise`](super::noise), which also says
+//!   two renders measure, widened by the reference's own (measured from the
+//!   course's 2020 and 2022 renders where hw7 has both and they agree, else
+//!   scaled from ours by the two sample counts): see [`noise`](super::noise)
+//!   and [`ref_noise`](super::ref_noise); `noise` also says
 //!   when an image is judged in linear radiance against the course's `.exr`
 //!   rather than on its 8-bit `.png`. Noise alone gives z-scores of unit
 //!   variance whatever the count; a bias adds `(bias/σ)²` to z² where it is.
@@ -236,6 +238,8 @@ mod tests {
             left_out: 0,
             luminance_z,
             mean_luminance: [0.5, 0.5],
+            ref_variance: 0.3,
+            ref_measured: false,
         };
         assert!(b.accepts(&c, None, None, Some(&z(1.1, 0.0, 1.0))));
         assert!(
