@@ -113,12 +113,21 @@ fn shade(
     medium: Medium,
     st: &mut PathState,
 ) -> Vec3 {
-    let (material, ns) = match surface_at(scene, ray, hit, depth, st) {
-        Surface::Lit(m, ns) => (m, ns),
-        Surface::Unlit(c) => return c,
-        Surface::Failed => return Vec3::ZERO,
+    // A surface without maps is its scene material as it is: borrowed, not
+    // copied out through [`surface_at`].
+    let mapped;
+    let (m, ns) = if hit.textures.is_empty() {
+        (&scene.materials[hit.material as usize], hit.ns)
+    } else {
+        match surface_at(scene, ray, hit, depth, st) {
+            Surface::Lit(m, ns) => {
+                mapped = m;
+                (&mapped, ns)
+            }
+            Surface::Unlit(c) => return c,
+            Surface::Failed => return Vec3::ZERO,
+        }
     };
-    let m = &material;
     let entering = ray.d.dot(hit.ng) < 0.0;
     // Normals facing the side the ray came from.
     let (n, ng) = if entering { (ns, hit.ng) } else { (-ns, -hit.ng) };
@@ -209,7 +218,15 @@ pub(crate) fn direct(
     let (n, ng) = (ns, hit.ng);
     let eps = scene.shadow_epsilon;
     let origin = hit.p + ng * eps;
+    // A surface that reflects no direct light (clear glass) still draws each
+    // light's sample, so that later draws and the image stay as they were,
+    // but traces no shadow ray for it.
+    let reflects = m.brdf.is_some() || m.diffuse != Vec3::ZERO || m.specular != Vec3::ZERO;
     for light in &scene.lights {
+        if !reflects {
+            let _ = light.sample(origin, hit.p, Some(n), st.time, &mut st.sampler);
+            continue;
+        }
         if let Some((ls, cos, tr)) = light_reaching(scene, light, origin, hit.p, n, st) {
             color += reflectance(m, n, ls.wi, ray.d, cos) * (tr * ls.e);
         }
@@ -235,6 +252,11 @@ pub(crate) fn reflectance(m: &Material, n: Vec3, l: Vec3, d: Vec3, cos: f32) -> 
 /// along `-d`, with `cos = n · l` already known to be positive.
 #[inline]
 fn blinn_phong(m: &Material, n: Vec3, l: Vec3, d: Vec3, cos: f32) -> Vec3 {
+    // Most course materials have no specular part: skip its `powf` (the
+    // term is a finite number times zero, so the sum is the same).
+    if m.specular == Vec3::ZERO {
+        return m.diffuse * cos;
+    }
     let h = (l - d).normalize();
     m.diffuse * cos + m.specular * n.dot(h).max(0.0).powf(m.phong)
 }
