@@ -11,6 +11,13 @@
 //! has the table. Session 9 (bare `lua_pcall` from a call thread, octave
 //! lanes in the fractal noise), load 5: empty color 71 ns, marble 254 ns,
 //! height 97 ns.
+//!
+//! Since session 10 the run first prints CPU ns per call (`cpu_table`), with
+//! a floor measured in the same run: a bare `lua_pcall` of an empty Lua
+//! function in a tight C-API loop. Load 15–17, medians of three alternating
+//! runs, session 9's build against session 10's: floor 14.4 / 13.8 ns, empty
+//! color 52.2 / 44.3 ns, per point of `heights3` 27.4 / 16.2 ns.
+//! `cargo bench --bench shader -- cpu_only` prints only that table.
 
 use std::hint::black_box;
 use std::time::Duration;
