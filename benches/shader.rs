@@ -11,11 +11,18 @@
 //! has the table. Session 9 (bare `lua_pcall` from a call thread, octave
 //! lanes in the fractal noise), load 5: empty color 71 ns, marble 254 ns,
 //! height 97 ns.
+//!
+//! Since session 10 the run first prints CPU ns per call (`cpu_table`), with
+//! a floor measured in the same run: a bare `lua_pcall` of an empty Lua
+//! function in a tight C-API loop. Load 15–17, medians of three alternating
+//! runs, session 9's build against session 10's: floor 14.4 / 13.8 ns, empty
+//! color 52.2 / 44.3 ns, per point of `heights3` 27.4 / 16.2 ns.
+//! `cargo bench --bench shader -- cpu_only` prints only that table.
 
 use std::hint::black_box;
 use std::time::Duration;
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{criterion_group, Criterion};
 use luster::noise::fractal;
 use luster::shader::{ShadeInput, ShaderSet, ShaderSource, DEFAULT_TIMEOUT};
 
@@ -144,5 +151,117 @@ fn config() -> Criterion {
         .sample_size(30)
 }
 
+/// CPU time of this thread, in nanoseconds (load on a shared machine
+/// disturbs it far less than wall time).
+fn thread_cpu_ns() -> f64 {
+    let mut t = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+    // SAFETY: clock_gettime writes the timespec it is given.
+    unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
+    t.tv_sec as f64 * 1e9 + t.tv_nsec as f64
+}
+
+/// CPU nanoseconds per call of `f`, over `n` calls.
+fn cpu_per_call<R>(n: usize, mut f: impl FnMut(usize) -> R) -> f64 {
+    let t0 = thread_cpu_ns();
+    for k in 0..n {
+        black_box(f(k));
+    }
+    (thread_cpu_ns() - t0) / n as f64
+}
+
+/// The floor: a bare `lua_pcall` of an empty Lua function, in a tight loop
+/// on the C API (no shading point, no result, no Rust around it). CPU ns
+/// per call.
+fn bare_pcall_ns(n: usize) -> f64 {
+    let lua = mlua::Lua::new();
+    let f: mlua::Function = match lua.load("return function() end").eval() {
+        Ok(f) => f,
+        Err(e) => panic!("{e}"),
+    };
+    let mut ns = 0.0;
+    // SAFETY: exec_raw pushes `f` and runs the closure on a protected state
+    // with `f` on top; each pcall consumes the copy pushed before it.
+    let r = unsafe {
+        lua.exec_raw::<()>(f, |l| {
+            ns = cpu_per_call(n, |_| {
+                mlua::ffi::lua_pushvalue(l, -1);
+                mlua::ffi::lua_pcall(l, 0, 0, 0);
+            });
+        })
+    };
+    if let Err(e) = r {
+        panic!("{e}");
+    }
+    ns
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Per-call CPU time of the floor, the empty shader, `height`, the bump
+/// path (`heights3`, per point) and the marble, alternating the cases
+/// round by round (A B C … A B C …) and quoting medians.
+fn cpu_table() {
+    const N: usize = 400_000;
+    const ROUNDS: usize = 7;
+    let pts = points();
+    let empty = set(EMPTY);
+    let height = set(HEIGHT);
+    let height_empty = set("function height(s) return 0.5 end");
+    let marble = set(MARBLE);
+    let triples: Vec<[ShadeInput; 3]> =
+        (0..1024).map(|k| [pts[k], pts[(k + 1) & 1023], pts[(k + 2) & 1023]]).collect();
+    type Case<'a> = (&'a str, Box<dyn Fn() -> f64 + 'a>);
+    let cases: Vec<Case> = vec![
+        ("floor: bare lua_pcall of an empty Lua function", Box::new(|| bare_pcall_ns(N))),
+        (
+            "empty color(s) through ShaderSet::color",
+            Box::new(|| cpu_per_call(N, |k| empty.color(0, black_box(&pts[k & 1023])).ok())),
+        ),
+        (
+            "height(s) = 0.5 through ShaderSet::height",
+            Box::new(|| cpu_per_call(N, |k| height_empty.height(0, black_box(&pts[k & 1023])).ok())),
+        ),
+        (
+            "height(s) = 0.5, per point of heights3 (batched: 3 a call)",
+            Box::new(|| {
+                cpu_per_call(N / 3, |k| height_empty.heights3(0, black_box(&triples[k & 1023])).ok()) / 3.0
+            }),
+        ),
+        (
+            "height: scaled perlin3",
+            Box::new(|| cpu_per_call(N, |k| height.height(0, black_box(&pts[k & 1023])).ok())),
+        ),
+        (
+            "marble in Lua",
+            Box::new(|| cpu_per_call(N / 4, |k| marble.color(0, black_box(&pts[k & 1023])).ok())),
+        ),
+        ("marble in Rust", Box::new(|| cpu_per_call(N / 4, |k| marble_rust(black_box(&pts[k & 1023]))))),
+    ];
+    let mut times = vec![Vec::new(); cases.len()];
+    for _ in 0..ROUNDS {
+        for (t, (_, run)) in times.iter_mut().zip(&cases) {
+            t.push(run());
+        }
+    }
+    println!("shader call, CPU ns per call (median of {ROUNDS} alternating rounds):");
+    let floor = median(times[0].clone());
+    for ((name, _), t) in cases.iter().zip(times) {
+        let (m, lo, hi) = (
+            median(t.clone()),
+            t.iter().copied().fold(f64::MAX, f64::min),
+            t.iter().copied().fold(0.0, f64::max),
+        );
+        println!("  {m:8.1} ns  ({lo:.1}-{hi:.1}, {:.2}x floor)  {name}", m / floor);
+    }
+}
+
 criterion_group! { name = benches; config = config(); targets = bench_shaders, bench_call_scalars }
-criterion_main!(benches);
+
+fn main() {
+    cpu_table();
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+}

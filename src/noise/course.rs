@@ -100,6 +100,29 @@ pub fn noise_grad(x: f32, y: f32, z: f32) -> (f32, [f32; 3]) {
     (value, grad)
 }
 
+/// The course's `perlin` texture at `p` (object space), as the built-in map
+/// computes it: `octaves` octaves (at least one) at frequencies `scale · 2ⁱ`
+/// with weights `2⁻ⁱ`, each octave's absolute value when `absval`
+/// (turbulence), the sum divided by the weights' sum, and for the linear
+/// conversion mapped from [-1, 1] to [0, 1]. The Lua `course_perlin`
+/// built-in calls this, so a script reproduces the map bit for bit.
+pub fn texture_value(p: [f32; 3], scale: f32, octaves: u32, absval: bool) -> f32 {
+    let (mut sum, mut weight, mut total, mut freq) = (0.0f32, 1.0f32, 0.0f32, scale);
+    for _ in 0..octaves.max(1) {
+        let n = noise(p[0] * freq, p[1] * freq, p[2] * freq);
+        sum += weight * if absval { n.abs() } else { n };
+        total += weight;
+        weight *= 0.5;
+        freq *= 2.0;
+    }
+    let s = sum / total;
+    if absval {
+        s
+    } else {
+        (s + 1.0) * 0.5
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -197,6 +220,25 @@ mod tests {
             let n = noise(p[0], p[1], p[2]);
             assert_eq!(n, noise(p[0] + 16.0, p[1], p[2]), "{p:?}");
             assert_eq!(n, noise(p[0], p[1] - 16.0, p[2] + 32.0), "{p:?}");
+        }
+    }
+
+    #[test]
+    fn texture_value_is_the_perlin_map_bit_for_bit() {
+        use crate::math::Vec3;
+        use crate::scene::description::NoiseConversion;
+        let mut rng = Lcg::new(0x5eed);
+        for (conversion, absval) in [(NoiseConversion::AbsVal, true), (NoiseConversion::Linear, false)] {
+            for octaves in [0, 1, 4, 7] {
+                let map = crate::texture::Perlin { scale: 3.0, conversion, octaves };
+                for _ in 0..500 {
+                    let p =
+                        [rng.next_f32() * 8.0 - 4.0, rng.next_f32() * 8.0 - 4.0, rng.next_f32() * 8.0 - 4.0];
+                    let want = map.value(Vec3::from_array(p));
+                    let got = texture_value(p, 3.0, octaves, absval);
+                    assert_eq!(got.to_bits(), want.to_bits(), "{p:?} {octaves} {absval}");
+                }
+            }
         }
     }
 }

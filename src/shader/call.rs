@@ -84,25 +84,29 @@ impl Caller {
         Ok(Slot(self.base))
     }
 
-    /// Calls the function at `slot` with no arguments, discarding results.
-    #[inline]
-    pub(crate) fn call(&self, lua: &Lua, slot: Slot) -> mlua::Result<()> {
-        let l = self.l;
+    /// Calls the function at `slot` with no arguments, discarding results:
+    /// `LUA_OK`, or the status of a failed call, whose error
+    /// [`Caller::pop_error`] then takes. A bare status, not an
+    /// `mlua::Result`, so the hot path moves no error-sized value around.
+    #[inline(always)]
+    pub(crate) fn call(&self, slot: Slot) -> c_int {
         // SAFETY: see the module doc; `slot` came from `keep` on this caller,
         // and the headroom leaves space for the pushed copy.
         unsafe {
-            lua::lua_pushvalue(l, slot.0);
-            let status = lua::lua_pcall(l, 0, 0, 0);
-            if status == lua::LUA_OK {
-                return Ok(());
-            }
-            Err(self.pop_error(lua, status))
+            lua::lua_pushvalue(self.l, slot.0);
+            lua::lua_pcall(self.l, 0, 0, 0)
         }
     }
 
     /// The error a failed call left on the stack, which it pops.
     #[cold]
-    unsafe fn pop_error(&self, lua: &Lua, status: c_int) -> mlua::Error {
+    pub(crate) fn pop_error(&self, lua: &Lua, status: c_int) -> mlua::Error {
+        // SAFETY: a failed call left its error value on top of the stack
+        // (module doc); this pops it and restores the top to `base`.
+        unsafe { self.pop_error_raw(lua, status) }
+    }
+
+    unsafe fn pop_error_raw(&self, lua: &Lua, status: c_int) -> mlua::Error {
         let l = self.l;
         let err = if lua::lua_type(l, -1) == lua::LUA_TSTRING {
             let mut len = 0usize;

@@ -156,6 +156,7 @@ pub(crate) struct Builtins {
     clock_check: extern "C" fn(*mut Clock) -> i32,
     course_noise: extern "C" fn(f64, f64, f64) -> f64,
     texture: extern "C" fn(*const c_void, i32, f64, f64, i32, *mut Vec3) -> i32,
+    course_perlin: extern "C" fn(f64, f64, f64, f64, i32, i32) -> f64,
 }
 
 // SAFETY: the record is immutable after construction and holds only function
@@ -183,6 +184,7 @@ pub(crate) static BUILTINS: Builtins = Builtins {
     clock_check,
     course_noise,
     texture,
+    course_perlin,
 };
 
 /// The address of [`BUILTINS`], as the prelude's light userdata wants it.
@@ -237,6 +239,11 @@ extern "C" fn perlin3(x: f64, y: f64, z: f64) -> f64 {
 /// The CENG795 lecture's noise, so a script can reproduce the `perlin` texture.
 extern "C" fn course_noise(x: f64, y: f64, z: f64) -> f64 {
     guard(|| course::noise(x as f32, y as f32, z as f32))
+}
+/// The course's `perlin` texture map, octaves and conversion included
+/// (`absval` non-zero: turbulence), computed as the built-in map does.
+extern "C" fn course_perlin(x: f64, y: f64, z: f64, scale: f64, oct: i32, absval: i32) -> f64 {
+    guard(|| course::texture_value([x as f32, y as f32, z as f32], scale as f32, octaves(oct), absval != 0))
 }
 extern "C" fn perlin4(x: f64, y: f64, z: f64, w: f64) -> f64 {
     guard(|| perlin::noise4(x as f32, y as f32, z as f32, w as f32))
@@ -364,8 +371,8 @@ extern "C" fn clock_check(c: *mut Clock) -> i32 {
 /// pointers stay valid).
 pub(crate) struct IoBlock {
     shade: *mut Shade,
-    /// The three points of a bump evaluation (`luster_shade[3]`).
-    shade3: *mut [Shade; 3],
+    /// The three points of a bump evaluation: `shade`, `shade_b`, `shade_c`.
+    shade3: [*mut Shade; 3],
     out: *mut Out,
     material: *mut MaterialOut,
     clock: *mut Clock,
@@ -377,7 +384,8 @@ impl IoBlock {
     /// matching C types.
     pub(crate) fn new(
         shade: usize,
-        shade3: usize,
+        shade_b: usize,
+        shade_c: usize,
         out: usize,
         material: usize,
         clock: usize,
@@ -387,7 +395,8 @@ impl IoBlock {
             a != 0 && a % std::mem::align_of::<T>() == 0
         }
         if !(ok::<Shade>(shade)
-            && ok::<[Shade; 3]>(shade3)
+            && ok::<Shade>(shade_b)
+            && ok::<Shade>(shade_c)
             && ok::<Out>(out)
             && ok::<MaterialOut>(material)
             && ok::<Clock>(clock))
@@ -396,7 +405,7 @@ impl IoBlock {
         }
         let block = IoBlock {
             shade: shade as *mut Shade,
-            shade3: shade3 as *mut [Shade; 3],
+            shade3: [shade as *mut Shade, shade_b as *mut Shade, shade_c as *mut Shade],
             out: out as *mut Out,
             material: material as *mut MaterialOut,
             clock: clock as *mut Clock,
@@ -439,11 +448,14 @@ impl IoBlock {
     /// Writes the three points of a bump evaluation and arms the clock: the
     /// time limit covers the three `height` calls together.
     #[inline]
-    pub(crate) fn begin3(&self, fill: impl FnOnce(&mut [Shade; 3])) {
+    pub(crate) fn begin3(&self, mut fill: impl FnMut(usize, &mut Shade)) {
         // SAFETY: see the module doc; no Lua code runs during these writes,
-        // and no other reference to the records exists while `fill` runs.
+        // and no other reference to the records exists while `fill` runs
+        // (the three are distinct allocations).
         unsafe {
-            fill(&mut *self.shade3);
+            for (k, &s) in self.shade3.iter().enumerate() {
+                fill(k, &mut *s);
+            }
             *self.out = Out::default();
             (*self.clock).start_ns = 0;
             (*self.clock).expired = 0;

@@ -419,25 +419,30 @@ impl ShaderSet {
 
     /// The density of volume shader `id` at `input` (a number; the caller
     /// treats negative values as empty space).
+    #[inline]
     pub fn density(&self, id: usize, input: &ShadeInput) -> Result<f32, ShaderError> {
         self.call(id, Entry::Density, input).map(|c| c[0] as f32)
     }
 
     /// The emitted radiance per unit length of volume shader `id` at `input`.
+    #[inline]
     pub fn emission(&self, id: usize, input: &ShadeInput) -> Result<[f32; 3], ShaderError> {
         self.call(id, Entry::Emission, input).map(|c| c.map(|x| x as f32))
     }
 
+    #[inline]
     fn call(&self, id: usize, entry: Entry, input: &ShadeInput) -> Result<[f64; 3], ShaderError> {
         threads::with_state(&self.shared, |state| state.call(id, entry, input))
     }
 
     /// The diffuse color of shader `id` at `input`.
+    #[inline]
     pub fn color(&self, id: usize, input: &ShadeInput) -> Result<[f32; 3], ShaderError> {
         self.call(id, Entry::Color, input).map(|c| c.map(|x| x as f32))
     }
 
     /// The bump height of shader `id` at `input` (the renderer differentiates it).
+    #[inline]
     pub fn height(&self, id: usize, input: &ShadeInput) -> Result<f32, ShaderError> {
         self.call(id, Entry::Height, input).map(|c| c[0] as f32)
     }
@@ -445,11 +450,13 @@ impl ShaderSet {
     /// The bump heights of shader `id` at three points, in one call into Lua
     /// (a third of the call overhead of three [`ShaderSet::height`] calls).
     /// The time limit covers the three together.
+    #[inline]
     pub fn heights3(&self, id: usize, inputs: &[ShadeInput; 3]) -> Result<[f32; 3], ShaderError> {
         threads::with_state(&self.shared, |state| state.call_height3(id, inputs)).map(|h| h.map(|x| x as f32))
     }
 
     /// The reflective color of shader `id` at `input`.
+    #[inline]
     pub fn reflect(&self, id: usize, input: &ShadeInput) -> Result<[f32; 3], ShaderError> {
         self.call(id, Entry::Reflect, input).map(|c| c.map(|x| x as f32))
     }

@@ -50,15 +50,16 @@ typedef struct {
   int32_t (*clock_check)(luster_clock *);
   double (*course_noise)(double, double, double);
   int32_t (*texture)(const void *, int32_t, double, double, int32_t, luster_vec3 *);
+  double (*course_perlin)(double, double, double, double, int32_t, int32_t);
 } luster_builtins;
 ]]
 
 local B = ffi.cast("const luster_builtins *", builtins_address)
 local shade = ffi.new("luster_shade")
--- Three shading points for one bump: height() at a point and at two steps
--- along the surface, in one call from Rust (see height3_entry).
-local shade3 = ffi.new("luster_shade[3]")
-local shade_size = ffi.sizeof("luster_shade")
+-- The second and third shading points of one bump (the first is `shade`):
+-- height() at a point and at two steps along the surface, in one call from
+-- Rust (see height3_entry).
+local shade_b, shade_c = ffi.new("luster_shade"), ffi.new("luster_shade")
 local out = ffi.new("luster_out")
 local material = ffi.new("luster_material")
 local clock = ffi.new("luster_clock")
@@ -194,6 +195,21 @@ end
 local function course_noise(x, y, z)
   if type(x) ~= "number" then x, y, z = xyz(x, "course_noise") end
   return B.course_noise(x, y, z)
+end
+-- The course's perlin texture map, octaves and conversion included, in one
+-- native call: course_perlin(x, y, z, [scale], [octaves], [conversion]) or
+-- course_perlin(p, [scale], [octaves], [conversion]).
+local CONVERSIONS = { linear = 0, absval = 1 }
+local function course_perlin(x, y, z, scale, octaves, conversion)
+  if type(x) ~= "number" then
+    scale, octaves, conversion = y, z, scale
+    x, y, z = xyz(x, "course_perlin")
+  end
+  local c = CONVERSIONS[conversion or "linear"]
+  if c == nil then
+    error(format("course_perlin: unknown conversion %s (use \"linear\" or \"absval\")", tostring(conversion)), 2)
+  end
+  return B.course_perlin(x, y, z, scale or 1, octaves or 1, c)
 end
 local function perlin3_grad(x, y, z)
   if type(x) ~= "number" then x, y, z = xyz(x, "perlin3_grad") end
@@ -560,6 +576,7 @@ local BUILTINS = {
   vec3 = vec3, dot = dot, cross = cross, length = length, normalize = normalize,
   perlin1 = perlin1, perlin2 = perlin2, perlin3 = perlin3, perlin4 = perlin4,
   perlin3_grad = perlin3_grad, pperlin3 = pperlin3, course_noise = course_noise,
+  course_perlin = course_perlin,
   simplex2 = simplex2, simplex3 = simplex3, simplex4 = simplex4, simplex3_grad = simplex3_grad,
   fbm = fbm, fbm_grad = fbm_grad, turbulence = turbulence, ridged = ridged,
   voronoi = voronoi, voronoi2 = voronoi2, texture = texture, vperlin = vperlin, vfbm = vfbm,
@@ -837,20 +854,23 @@ local function scalar_entry(f, shader_name, entry)
     bad(shader_name, entry, describe(h) .. " (expected a finite number)")
   end
 end
--- The bump wrapper: height() at the three points of shade3, into out.r, g, b.
--- One call from Rust instead of three cuts the call overhead of bump mapping
--- to a third. Each evaluation gets a fresh copy, so a script that writes to s
--- cannot change the next one.
+-- The bump wrapper: height() at the three points shade, shade_b and shade_c,
+-- into out.r, g, b. One call from Rust instead of three cuts the call overhead
+-- of bump mapping to a third. Each point has its own record, all written by
+-- Rust before the call, so a script that writes to s cannot change the next
+-- point (and no record is copied: a 344-byte ffi.copy is a memcpy call).
 local function height3_entry(f, shader_name)
-  return function()
-    for i = 0, 2 do
-      ffi.copy(shade, shade3[i], shade_size)
-      local v = f(shade)
-      if not finite(v) then
-        bad(shader_name, "height", describe(v) .. " (expected a finite number)")
-      end
-      if i == 0 then out.r = v elseif i == 1 then out.g = v else out.b = v end
+  local function one(s)
+    local v = f(s)
+    if not finite(v) then
+      bad(shader_name, "height", describe(v) .. " (expected a finite number)")
     end
+    return v
+  end
+  return function()
+    out.r = one(shade)
+    out.g = one(shade_b)
+    out.b = one(shade_c)
   end
 end
 local function make_height3(env, shader_name)
@@ -923,11 +943,12 @@ return {
   ctypes = { vec3 = tostring(ffi.typeof("luster_vec3")), ["shading point"] = tostring(shade_t),
     uv = tostring(vec2_t) },
   shade = address(shade),
-  shade3 = address(shade3),
+  shade_b = address(shade_b),
+  shade_c = address(shade_c),
   out = address(out),
   material = address(material),
   clock = address(clock),
-  sizes = { shade = ffi.sizeof("luster_shade"), shade3 = ffi.sizeof("luster_shade[3]"), out = ffi.sizeof("luster_out"),
+  sizes = { shade = ffi.sizeof("luster_shade"), out = ffi.sizeof("luster_out"),
     material = ffi.sizeof("luster_material"),
     clock = ffi.sizeof("luster_clock"), cell = ffi.sizeof("luster_cell") },
 }

@@ -121,7 +121,6 @@ impl ThreadState {
         let sizes: Table = api.get("sizes").map_err(internal)?;
         for (k, size) in [
             ("shade", std::mem::size_of::<Shade>()),
-            ("shade3", std::mem::size_of::<[Shade; 3]>()),
             ("out", std::mem::size_of::<ffi::Out>()),
             ("material", std::mem::size_of::<ffi::MaterialOut>()),
             ("clock", std::mem::size_of::<ffi::Clock>()),
@@ -136,7 +135,8 @@ impl ThreadState {
         let timeout_ns = u64::try_from(timeout.as_nanos()).unwrap_or(u64::MAX);
         let io = IoBlock::new(
             addr("shade")?,
-            addr("shade3")?,
+            addr("shade_b")?,
+            addr("shade_c")?,
             addr("out")?,
             addr("material")?,
             addr("clock")?,
@@ -314,30 +314,40 @@ impl ThreadState {
     }
 
     /// Calls one entry point; the result's channels (a height in `[0]`).
+    ///
+    /// The common case (a defined entry, a clean return within the time
+    /// limit, no `--debug-pixel` on this pixel) is inlined into the caller
+    /// and moves no error-sized value; everything else is out of line.
+    #[inline]
     pub(crate) fn call(&self, id: usize, entry: Entry, input: &ShadeInput) -> Result<[f64; 3], ShaderError> {
-        let Some(shader) = self.shaders.get(id) else {
-            return Err(ShaderError::new(
-                ShaderErrorKind::Usage,
-                &format!("#{id}"),
-                format!("no shader with id {id} (the set has {})", self.shaders.len()),
-            ));
-        };
-        let Some(f) = shader.entries[entry as usize] else {
-            return Err(ShaderError::new(
-                ShaderErrorKind::Usage,
-                &shader.name,
-                format!("the script defines no {}() function", entry.name()),
-            ));
+        let Some(f) = self.shaders.get(id).and_then(|s| s.entries[entry as usize]) else {
+            return Err(self.no_entry(id, entry.name()));
         };
         self.io.begin(|s| write_shade(s, input));
-        let result = match self.caller.call(&self.lua, f) {
-            Ok(()) => {
-                self.check_deadline(&shader.name)?;
-                let o = self.io.out();
-                Ok([o.r, o.g, o.b])
-            }
-            Err(e) => Err(self.error(&shader.name, &e)),
-        };
+        let status = self.caller.call(f);
+        if status == mlua::ffi::LUA_OK && !self.io.timed_out() && super::debug_pixel().is_none() {
+            let o = self.io.out();
+            return Ok([o.r, o.g, o.b]);
+        }
+        self.finish_call(id, entry, input, status)
+    }
+
+    /// [`ThreadState::call`] past its fast path: an error, a timeout the
+    /// script caught, or a call to show for `--debug-pixel`.
+    #[cold]
+    #[inline(never)]
+    fn finish_call(
+        &self,
+        id: usize,
+        entry: Entry,
+        input: &ShadeInput,
+        status: std::os::raw::c_int,
+    ) -> Result<[f64; 3], ShaderError> {
+        let shader = &self.shaders[id];
+        let result = self.outcome(&shader.name, status).map(|()| {
+            let o = self.io.out();
+            [o.r, o.g, o.b]
+        });
         if super::debug_pixel() == Some(input.pixel) {
             let out = match &result {
                 Ok(c)
@@ -363,15 +373,38 @@ impl ThreadState {
         result
     }
 
-    /// The shader `id` of this state, or a usage error.
-    fn shader(&self, id: usize) -> Result<&Compiled, ShaderError> {
-        self.shaders.get(id).ok_or_else(|| {
-            ShaderError::new(
+    /// What a finished call amounts to: its error (popped off the call
+    /// thread), a caught timeout, or success.
+    fn outcome(&self, shader: &str, status: std::os::raw::c_int) -> Result<(), ShaderError> {
+        if status != mlua::ffi::LUA_OK {
+            let e = self.caller.pop_error(&self.lua, status);
+            return Err(self.error(shader, &e));
+        }
+        self.check_deadline(shader)
+    }
+
+    /// The usage error for a missing shader or entry point.
+    #[cold]
+    #[inline(never)]
+    fn no_entry(&self, id: usize, entry: &str) -> ShaderError {
+        match self.shaders.get(id) {
+            None => ShaderError::new(
                 ShaderErrorKind::Usage,
                 &format!("#{id}"),
                 format!("no shader with id {id} (the set has {})", self.shaders.len()),
-            )
-        })
+            ),
+            Some(shader) if entry == "material" => ShaderError::new(
+                ShaderErrorKind::Usage,
+                &shader.name,
+                "the script defines none of the material outputs (color, specular, roughness, metalness, \
+                 emission, reflect)",
+            ),
+            Some(shader) => ShaderError::new(
+                ShaderErrorKind::Usage,
+                &shader.name,
+                format!("the script defines no {entry}() function"),
+            ),
+        }
     }
 
     /// Calls every material output shader `id` defines, in one Lua call.
@@ -380,20 +413,13 @@ impl ThreadState {
         id: usize,
         input: &ShadeInput,
     ) -> Result<ffi::MaterialOut, ShaderError> {
-        let shader = self.shader(id)?;
-        let Some(f) = shader.material else {
-            return Err(ShaderError::new(
-                ShaderErrorKind::Usage,
-                &shader.name,
-                "the script defines none of the material outputs (color, specular, roughness, metalness, \
-                 emission, reflect)",
-            ));
+        let Some(f) = self.shaders.get(id).and_then(|s| s.material) else {
+            return Err(self.no_entry(id, "material"));
         };
         self.io.begin_material(|s| write_shade(s, input));
-        let result = match self.caller.call(&self.lua, f) {
-            Ok(()) => self.check_deadline(&shader.name).map(|()| self.io.material()),
-            Err(e) => Err(self.error(&shader.name, &e)),
-        };
+        let status = self.caller.call(f);
+        let shader = &self.shaders[id];
+        let result = self.outcome(&shader.name, status).map(|()| self.io.material());
         if super::debug_pixel() == Some(input.pixel) {
             let out = match &result {
                 Ok(m) => format!("{m:?}"),
@@ -411,28 +437,27 @@ impl ThreadState {
     }
 
     /// Calls `height` at three points in one Lua call (bump mapping).
+    #[inline]
     pub(crate) fn call_height3(&self, id: usize, inputs: &[ShadeInput; 3]) -> Result<[f64; 3], ShaderError> {
-        let shader = self.shader(id)?;
-        let Some(f) = shader.height3 else {
-            return Err(ShaderError::new(
-                ShaderErrorKind::Usage,
-                &shader.name,
-                "the script defines no height() function",
-            ));
+        let Some(f) = self.shaders.get(id).and_then(|s| s.height3) else {
+            return Err(self.no_entry(id, "height"));
         };
-        self.io.begin3(|s| {
-            for (dst, input) in s.iter_mut().zip(inputs) {
-                write_shade(dst, input);
-            }
-        });
-        match self.caller.call(&self.lua, f) {
-            Ok(()) => {
-                self.check_deadline(&shader.name)?;
-                let o = self.io.out();
-                Ok([o.r, o.g, o.b])
-            }
-            Err(e) => Err(self.error(&shader.name, &e)),
+        self.io.begin3(|k, s| write_shade(s, &inputs[k]));
+        let status = self.caller.call(f);
+        if status == mlua::ffi::LUA_OK && !self.io.timed_out() {
+            let o = self.io.out();
+            return Ok([o.r, o.g, o.b]);
         }
+        self.finish_height3(id, status)
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn finish_height3(&self, id: usize, status: std::os::raw::c_int) -> Result<[f64; 3], ShaderError> {
+        self.outcome(&self.shaders[id].name, status).map(|()| {
+            let o = self.io.out();
+            [o.r, o.g, o.b]
+        })
     }
 }
 

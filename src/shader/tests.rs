@@ -482,3 +482,25 @@ fn infinite_results_are_refused() {
     let e = set.height(0, &input([0.0; 3])).unwrap_err();
     assert!(e.message.contains("height() returned -inf (expected a finite number)"), "{e}");
 }
+
+#[test]
+fn course_perlin_is_the_perlin_maps_value() {
+    use crate::noise::course;
+    let set = set_of(
+        "function color(s)
+           return course_perlin(s.P.x, s.P.y, s.P.z, 3, 4, 'absval'), course_perlin(s.P, 2, 3),
+             course_perlin(s.P)
+         end",
+    )
+    .unwrap();
+    for k in 0..200 {
+        let f = k as f32;
+        let p = [f * 0.173 % 5.0 - 2.5, f * 0.291 % 3.0 - 1.5, f * 0.0731 % 2.0];
+        let c = set.color(0, &input(p)).unwrap();
+        assert_eq!(c[0].to_bits(), course::texture_value(p, 3.0, 4, true).to_bits());
+        assert_eq!(c[1].to_bits(), course::texture_value(p, 2.0, 3, false).to_bits());
+        assert_eq!(c[2].to_bits(), course::texture_value(p, 1.0, 1, false).to_bits());
+    }
+    let e = color_err("function color(s) local v = course_perlin(s.P, 1, 4, 'abs') return v, v, v end");
+    assert!(e.message.contains("test.lua:1") && e.message.contains("unknown conversion"), "{}", e.message);
+}

@@ -30,12 +30,14 @@ thread_local! {
     static SLOTS: RefCell<Vec<Slot>> = const { RefCell::new(Vec::new()) };
 }
 
+#[cold]
 fn internal(shared: &Shared, what: &str) -> ShaderError {
     let name = shared.sources.first().map_or("(none)", |s| s.name.as_str());
     ShaderError::new(ShaderErrorKind::Internal, name, format!("shader runtime: {what}"))
 }
 
 /// Runs `f` on this thread's state for `shared`, creating it if needed.
+#[inline]
 pub(crate) fn with_state<R>(
     shared: &Arc<Shared>,
     f: impl FnOnce(&ThreadState) -> Result<R, ShaderError>,
@@ -48,19 +50,24 @@ pub(crate) fn with_state<R>(
                 cell.try_borrow_mut().map_err(|_| internal(shared, "shader called re-entrantly"))?;
             let index = match slots.iter().position(|s| s.id == shared.id) {
                 Some(i) => i,
-                None => {
-                    slots.retain(|s| s.owner.strong_count() > 0);
-                    if slots.len() >= MAX_SETS_PER_THREAD {
-                        slots.remove(0);
-                    }
-                    let state = ThreadState::new(shared)?;
-                    slots.push(Slot { id: shared.id, owner: Arc::downgrade(shared), state });
-                    slots.len() - 1
-                }
+                None => create(&mut slots, shared)?,
             };
             f(&slots[index].state)
         })
         .unwrap_or_else(|_| Err(internal(shared, "thread is shutting down")))
+}
+
+/// Builds this thread's state for `shared`, making room for it; its index.
+#[cold]
+#[inline(never)]
+fn create(slots: &mut Vec<Slot>, shared: &Arc<Shared>) -> Result<usize, ShaderError> {
+    slots.retain(|s| s.owner.strong_count() > 0);
+    if slots.len() >= MAX_SETS_PER_THREAD {
+        slots.remove(0);
+    }
+    let state = ThreadState::new(shared)?;
+    slots.push(Slot { id: shared.id, owner: Arc::downgrade(shared), state });
+    Ok(slots.len() - 1)
 }
 
 /// Stores a state this thread already built (the one [`ShaderSet::new`]
