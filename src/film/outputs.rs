@@ -111,25 +111,47 @@ pub fn first_ldr(image_name: &str, tonemaps: &[Tonemap], display: Display) -> Op
     plan_outputs(image_name, tonemaps, display).ok()?.into_iter().find(|o| o.kind != OutputKind::Hdr)
 }
 
-/// Writes every output of `film` under `outdir`; returns the paths written.
-/// Tone mapping runs before any file is opened, so a failure to write one
-/// file is the only way to end with some of them.
+/// Writes every output of `film` under `outdir`; returns the paths written,
+/// in the order of `outputs`. Each file appears whole or not at all, but a
+/// failure to write one does not stop the others.
+///
+/// The HDR files are encoded and written on threads of their own while the
+/// 8-bit ones are tone-mapped and encoded on rayon's pool. An HDR writer
+/// spends most of its time in the kernel, copying 12 bytes a pixel into
+/// the page cache and then, when the rename replaces an older image, waiting
+/// while the file system frees that image's blocks (several milliseconds on
+/// ext4, with no CPU used): on a rayon worker that wait would take a core
+/// from the tone mapping.
 pub fn write_outputs(film: &Film, outdir: &Path, outputs: &[Output]) -> Result<Vec<PathBuf>, WriteError> {
     use rayon::prelude::*;
-    // All at once: the EXR's encoding and file write are serial, and the
-    // tone mapping beside it keeps the other cores busy.
-    let results: Vec<Result<PathBuf, WriteError>> = outputs
-        .par_iter()
+    let write = |o: &Output| -> Result<PathBuf, WriteError> {
+        let path = outdir.join(&o.name);
+        match rgb8(film, &o.kind) {
+            None => write_rgb32f(&path, film.width, film.height, &film.pixels)?,
+            Some(rgb) => write_rgb8(&path, film.width, film.height, &rgb)?,
+        }
+        Ok(path)
+    };
+    let is_hdr = |o: &&Output| o.kind == OutputKind::Hdr;
+    let (hdr, ldr): (Vec<&Output>, Vec<&Output>) = outputs.iter().partition(is_hdr);
+    let (hdr_results, ldr_results) = std::thread::scope(|s| {
+        let writers: Vec<_> = hdr.iter().map(|o| s.spawn(|| write(o))).collect();
+        let ldr_results: Vec<Result<PathBuf, WriteError>> = ldr.par_iter().map(|o| write(o)).collect();
+        let hdr_results: Vec<Result<PathBuf, WriteError>> = writers
+            .into_iter()
+            .map(|w| w.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)))
+            .collect();
+        (hdr_results, ldr_results)
+    });
+    // Back into the order of `outputs`.
+    let (mut hdr_results, mut ldr_results) = (hdr_results.into_iter(), ldr_results.into_iter());
+    outputs
+        .iter()
         .map(|o| {
-            let path = outdir.join(&o.name);
-            match rgb8(film, &o.kind) {
-                None => write_rgb32f(&path, film.width, film.height, &film.pixels)?,
-                Some(rgb) => write_rgb8(&path, film.width, film.height, &rgb)?,
-            }
-            Ok(path)
+            let next = if is_hdr(&o) { hdr_results.next() } else { ldr_results.next() };
+            next.unwrap_or_else(|| unreachable!("one result per output"))
         })
-        .collect();
-    results.into_iter().collect()
+        .collect()
 }
 
 /// The first file name that two outputs (of one camera or of several) share,
