@@ -216,6 +216,46 @@ mod tests {
     }
 
     #[test]
+    fn every_output_is_written_and_reported_in_plan_order() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut film = Film::new(7, 3);
+        for (i, p) in film.pixels.iter_mut().enumerate() {
+            *p = crate::math::Vec3::new(i as f32 * 40.0, 300.0 - i as f32, (i % 4) as f32 * 90.0);
+        }
+        let t = |operator| Tonemap { operator, ..Tonemap::COURSE_DEFAULT };
+        let maps = [t(Operator::Photographic), t(Operator::Aces)];
+        // The HDR files come first and last, so their results must be put
+        // back in place around the 8-bit ones.
+        let mut plan = plan_outputs("a.exr", &maps, Display::Course).unwrap();
+        plan.extend(plan_outputs("b.hdr", &[], Display::Course).unwrap().into_iter().rev());
+        let paths = write_outputs(&film, dir.path(), &plan).unwrap();
+        let want: Vec<PathBuf> = plan.iter().map(|o| dir.path().join(&o.name)).collect();
+        assert_eq!(paths, want);
+        for (o, path) in plan.iter().zip(&paths) {
+            let back = image::open(path).unwrap();
+            match rgb8(&film, &o.kind) {
+                Some(rgb) => assert!(back.to_rgb8().into_raw() == rgb, "{}", path.display()),
+                None => assert_eq!(back.to_rgb32f().dimensions(), (7, 3), "{}", path.display()),
+            }
+        }
+        let exr = image::open(&paths[0]).unwrap().to_rgb32f().into_raw();
+        assert!(exr == film.pixels.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>());
+    }
+
+    #[test]
+    fn a_failed_hdr_write_is_the_error() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("sub"), b"a file, not a folder").unwrap();
+        let plan = [
+            Output { name: PathBuf::from("ok.png"), kind: OutputKind::Course },
+            Output { name: PathBuf::from("sub/x.exr"), kind: OutputKind::Hdr },
+        ];
+        let e = write_outputs(&Film::new(2, 2), dir.path(), &plan).unwrap_err();
+        assert!(e.path.ends_with("sub/x.exr"), "{e}");
+        assert!(dir.path().join("ok.png").is_file(), "the other output is still written");
+    }
+
+    #[test]
     fn other_extensions_are_refused() {
         let e = plan_outputs("x.bmp", &[], Display::Srgb).unwrap_err();
         assert!(e.contains("x.bmp") && e.contains(".exr"), "{e}");
