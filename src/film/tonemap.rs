@@ -242,20 +242,32 @@ impl Quantizer {
         packed
     }
 
-    /// [`Quantizer::code`] of each value: with the packed table, the clamp
-    /// and bin arithmetic run over all lanes at once and only the table
-    /// loads are one at a time.
+    /// The codes of `rgb`'s first `out.len() / 3` values per channel, into
+    /// `out` as RGB triples: with the packed table, the clamp and bin
+    /// arithmetic run over the batch at once and only the table loads go
+    /// one value at a time.
     #[inline(always)]
-    fn codes<const N: usize>(&self, c: &[f32; N]) -> [u8; N] {
+    fn codes_into(&self, rgb: &[[f32; BATCH]; 3], out: &mut [u8]) {
+        let n = out.len() / 3;
         if self.packed.is_empty() {
-            return std::array::from_fn(|i| self.code(c[i]));
+            for (k, o) in out.chunks_exact_mut(3).enumerate() {
+                o.copy_from_slice(&[self.code(rgb[0][k]), self.code(rgb[1][k]), self.code(rgb[2][k])]);
+            }
+            return;
         }
-        let bits: [u32; N] =
-            std::array::from_fn(|i| c[i].max(f32::from_bits(LOW_BITS)).min(1.0).to_bits() - LOW_BITS);
-        std::array::from_fn(|i| {
-            let e = self.packed[(bits[i] >> BIN_SHIFT) as usize];
-            ((e >> 16) + u32::from((bits[i] & IN_BIN) >= (e & 0xFFFF))) as u8
-        })
+        let mut bits = [[0u32; BATCH]; 3];
+        for (bits, c) in bits.iter_mut().zip(rgb) {
+            for (b, &c) in bits[..n].iter_mut().zip(&c[..n]) {
+                *b = c.max(f32::from_bits(LOW_BITS)).min(1.0).to_bits() - LOW_BITS;
+            }
+        }
+        let code = |b: u32| {
+            let e = self.packed[(b >> BIN_SHIFT) as usize];
+            ((e >> 16) + u32::from((b & IN_BIN) >= (e & 0xFFFF))) as u8
+        };
+        for (k, o) in out.chunks_exact_mut(3).enumerate() {
+            o.copy_from_slice(&[code(bits[0][k]), code(bits[1][k]), code(bits[2][k])]);
+        }
     }
 
     #[inline]
@@ -364,14 +376,20 @@ impl Tonemap {
     }
 }
 
-/// Pixels taken together in the passes over the image: plain arrays of this
-/// many lanes, which the compiler turns into vector instructions. Each lane
-/// does exactly the arithmetic of the one-pixel-at-a-time formula, so the
-/// codes are the same bit for bit.
+/// Pixels whose log-luminances share one of the log-average's partial sums:
+/// pixel `i` of a block adds to sum `i % LANES`, in order. Fixed, so the
+/// sum's bits do not depend on how the passes are vectorized.
 const LANES: usize = 8;
 
-/// Rows of pixels per parallel task of the mapping pass.
-const MAP_CHUNK: usize = 1024;
+/// Pixels handled together in the passes over the image: each step runs
+/// over the whole batch in a plain loop of its own over one array per
+/// channel, which the compiler turns into vector instructions. Each value
+/// goes through exactly the arithmetic of the one-pixel formula, so the
+/// codes are the same bit for bit. A multiple of [`LANES`].
+const BATCH: usize = 256;
+
+/// Pixels per parallel task of the mapping pass.
+const MAP_CHUNK: usize = 4096;
 
 /// The mapping pass: `pixels` to 8-bit codes in `out`, with the luminance
 /// scale, the saturation exponent (`None` for 1) and the operator's `curve`.
@@ -383,53 +401,144 @@ fn map_pass(
     q: &Quantizer,
     curve: impl Fn(f32) -> f32 + Sync,
 ) {
+    let avx2 = vector::avx2();
     out.par_chunks_mut(3 * MAP_CHUNK).zip(pixels.par_chunks(MAP_CHUNK)).for_each(|(out, px)| {
-        let mut lanes = px.chunks_exact(LANES);
-        let mut outs = out.chunks_exact_mut(3 * LANES);
-        for (p, o) in (&mut lanes).zip(&mut outs) {
-            let mut a = [Vec3::ZERO; LANES];
-            a.copy_from_slice(p);
-            o.copy_from_slice(&map_lanes(&a, scale, sat, q, &curve));
-        }
-        let rest = lanes.remainder();
-        if !rest.is_empty() {
-            let mut a = [Vec3::ZERO; LANES];
-            a[..rest.len()].copy_from_slice(rest);
-            let codes = map_lanes(&a, scale, sat, q, &curve);
-            outs.into_remainder().copy_from_slice(&codes[..3 * rest.len()]);
+        for (o, p) in out.chunks_mut(3 * BATCH).zip(px.chunks(BATCH)) {
+            if avx2 {
+                // SAFETY: `vector::avx2` found AVX2 on this processor.
+                unsafe { map_batch_avx2(p, o, scale, sat, q, &curve) }
+            } else {
+                map_batch(p, o, scale, sat, q, &curve)
+            }
         }
     });
 }
 
-/// [`LANES`] pixels mapped: for each, with `Y` its luminance,
-/// `max(C / Y, 0)^s · curve(Y · scale)`, quantized; black where `Y` is 0.
+/// Up to [`BATCH`] pixels mapped into `out`: for each, with `Y` its
+/// luminance, `max(C / Y, 0)^s · curve(Y · scale)`, quantized; black where
+/// `Y` is 0.
 #[inline(always)]
-fn map_lanes(
-    a: &[Vec3; LANES],
+fn map_batch(
+    px: &[Vec3],
+    out: &mut [u8],
     scale: f32,
     sat: Option<f32>,
     q: &Quantizer,
     curve: &impl Fn(f32) -> f32,
-) -> [u8; 3 * LANES] {
-    let y: [f32; LANES] = std::array::from_fn(|i| luminance(a[i]));
-    let yo: [f32; LANES] = std::array::from_fn(|i| curve(y[i] * scale));
-    let inv: [f32; LANES] = std::array::from_fn(|i| 1.0 / y[i]);
-    // Channel ratios, NaN (a zero channel over an infinite reciprocal) to 0.
-    let mut c: [f32; 3 * LANES] = std::array::from_fn(|j| {
-        let r = a[j / 3][j % 3] * inv[j / 3];
-        if r > 0.0 {
-            r
-        } else {
-            0.0
+) {
+    let n = px.len();
+    let mut rgb = [[0.0f32; BATCH]; 3];
+    let mut y = [0.0f32; BATCH];
+    split_batch(px, &mut rgb);
+    luminance_batch(&rgb, &mut y[..n]);
+    let mut yo = [0.0f32; BATCH];
+    let mut inv = [0.0f32; BATCH];
+    for ((yo, inv), &y) in yo[..n].iter_mut().zip(&mut inv[..n]).zip(&y[..n]) {
+        *yo = curve(y * scale);
+        *inv = 1.0 / y;
+    }
+    for ch in &mut rgb {
+        for (c, &inv) in ch[..n].iter_mut().zip(&inv[..n]) {
+            // Channel ratios, NaN (a zero channel over an infinite reciprocal) to 0.
+            let r = *c * inv;
+            *c = if r > 0.0 { r } else { 0.0 };
         }
-    });
+    }
     if let Some(s) = sat {
-        c.iter_mut().for_each(|r| *r = r.powf(s));
+        rgb.iter_mut().for_each(|ch| ch[..n].iter_mut().for_each(|r| *r = r.powf(s)));
     }
-    for (j, v) in c.iter_mut().enumerate() {
-        *v = if y[j / 3] > 0.0 { *v * yo[j / 3] } else { 0.0 };
+    for ch in &mut rgb {
+        for ((c, &yo), &y) in ch[..n].iter_mut().zip(&yo[..n]).zip(&y[..n]) {
+            *c = if y > 0.0 { *c * yo } else { 0.0 };
+        }
     }
-    q.codes(&c)
+    q.codes_into(&rgb, &mut out[..3 * n]);
+}
+
+/// The red, green and blue values of up to [`BATCH`] pixels, one array each.
+#[inline(always)]
+fn split_batch(px: &[Vec3], rgb: &mut [[f32; BATCH]; 3]) {
+    let [r, g, b] = rgb;
+    for (((p, r), g), b) in px.iter().zip(r.iter_mut()).zip(g.iter_mut()).zip(b.iter_mut()) {
+        (*r, *g, *b) = (p.x, p.y, p.z);
+    }
+}
+
+/// [`luminance`] of the first `y.len()` pixels of `rgb`, with the same arithmetic.
+#[inline(always)]
+fn luminance_batch(rgb: &[[f32; BATCH]; 3], y: &mut [f32]) {
+    let [r, g, b] = rgb;
+    for (((y, &r), &g), &b) in y.iter_mut().zip(r).zip(g).zip(b) {
+        *y = luminance(Vec3::new(r, g, b));
+    }
+}
+
+/// The [`luminance`]s of `px` (at most [`BATCH`] pixels) into `y[..px.len()]`.
+#[inline(always)]
+fn luminances(px: &[Vec3], y: &mut [f32; BATCH]) {
+    let mut rgb = [[0.0f32; BATCH]; 3];
+    split_batch(px, &mut rgb);
+    luminance_batch(&rgb, &mut y[..px.len()]);
+}
+
+/// Running the passes' batches with wider vector instructions where the
+/// processor has them: each batch function has an `*_avx2` twin, the same
+/// code compiled for AVX2. Only the instruction set differs, and without
+/// fused multiply-adds (Rust never contracts `a * b + c`, and FMA is not
+/// enabled) every operation rounds as in the portable build, so the results
+/// are the same bits.
+mod vector {
+    /// Tests set it to run the portable build on a processor with AVX2.
+    #[cfg(test)]
+    pub(super) static PORTABLE_ONLY: std::sync::atomic::AtomicBool =
+        std::sync::atomic::AtomicBool::new(false);
+
+    /// Whether the `*_avx2` twins may run: the processor has AVX2.
+    #[inline]
+    pub(super) fn avx2() -> bool {
+        #[cfg(test)]
+        if PORTABLE_ONLY.load(std::sync::atomic::Ordering::Relaxed) {
+            return false;
+        }
+        #[cfg(target_arch = "x86_64")]
+        return std::arch::is_x86_feature_detected!("avx2");
+        #[cfg(not(target_arch = "x86_64"))]
+        false
+    }
+}
+
+/// [`map_batch`] compiled for AVX2.
+///
+/// # Safety
+/// The processor must have AVX2 ([`vector::avx2`]).
+#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2"))]
+unsafe fn map_batch_avx2(
+    px: &[Vec3],
+    out: &mut [u8],
+    scale: f32,
+    sat: Option<f32>,
+    q: &Quantizer,
+    curve: &impl Fn(f32) -> f32,
+) {
+    map_batch(px, out, scale, sat, q, curve);
+}
+
+/// [`block_stats`] compiled for AVX2.
+///
+/// # Safety
+/// The processor must have AVX2 ([`vector::avx2`]).
+#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2"))]
+unsafe fn block_stats_avx2(block: &[Vec3], hist: Option<&mut [u32]>) -> f64 {
+    block_stats(block, hist)
+}
+
+/// [`bucket_values`] compiled for AVX2.
+///
+/// # Safety
+/// The processor must have AVX2 ([`vector::avx2`]).
+#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2"))]
+unsafe fn bucket_values_avx2(block: &[Vec3], bucket: u32) -> Vec<f32> {
+    bucket_values(block, bucket)
 }
 
 /// Pixels per block of the log-average's partial sums. The blocks are fixed
@@ -440,9 +549,10 @@ const LOG_BLOCK: usize = 4096;
 /// non-negative numbers the bit patterns order like the values, so a bucket
 /// holds a contiguous range of luminance. Coarser buckets (12 bits) made the
 /// selection inside the percentile's bucket cost more than the histogram
-/// saved on the film bench.
+/// saved on the film bench. [`luminance`] is never negative (nor -0), so
+/// the sign bit is clear and half the buckets are enough.
 const BUCKET_SHIFT: u32 = 16;
-const BUCKETS: usize = 1 << (32 - BUCKET_SHIFT);
+const BUCKETS: usize = 1 << (31 - BUCKET_SHIFT);
 
 /// What the mapping needs from the whole image, gathered in one pass.
 struct Stats {
@@ -455,26 +565,21 @@ struct Stats {
 impl Stats {
     fn of(pixels: &[Vec3], with_hist: bool) -> Stats {
         type Part = (Vec<(usize, f64)>, Vec<u32>);
+        let avx2 = vector::avx2();
         let (mut sums, hist) = pixels
             .par_chunks(LOG_BLOCK)
             .enumerate()
             .fold(
                 || -> Part { (Vec::new(), if with_hist { vec![0u32; BUCKETS] } else { Vec::new() }) },
                 |(mut sums, mut hist), (i, block)| {
-                    let mut acc = [0.0f64; LANES];
-                    for_lanes(block, |y, n| {
-                        let logs =
-                            ln_lanes(&std::array::from_fn(
-                                |i| if i < n { LOG_DELTA as f32 + y[i] } else { 1.0 },
-                            ));
-                        acc.iter_mut().zip(logs).for_each(|(a, l)| *a += l);
-                        if with_hist {
-                            for &y in &y[..n] {
-                                hist[(y.to_bits() >> BUCKET_SHIFT) as usize] += 1;
-                            }
-                        }
-                    });
-                    sums.push((i, acc.iter().sum()));
+                    let hist_of_block = with_hist.then_some(hist.as_mut_slice());
+                    let sum = if avx2 {
+                        // SAFETY: `vector::avx2` found AVX2 on this processor.
+                        unsafe { block_stats_avx2(block, hist_of_block) }
+                    } else {
+                        block_stats(block, hist_of_block)
+                    };
+                    sums.push((i, sum));
                     (sums, hist)
                 },
             )
@@ -495,76 +600,99 @@ impl Stats {
     }
 }
 
-/// Calls `f` with the [`luminance`]s of `pixels`, [`LANES`] at a time, and
-/// how many of them are real (the last call may pad with zeros).
+/// One block's `Σ ln(δ + Y)`, as [`LANES`] running sums added up at the end;
+/// counts the block's luminances into `hist` when given.
 #[inline(always)]
-fn for_lanes(pixels: &[Vec3], mut f: impl FnMut(&[f32; LANES], usize)) {
-    let mut lanes = pixels.chunks_exact(LANES);
-    for p in &mut lanes {
-        f(&std::array::from_fn(|i| luminance(p[i])), LANES);
+fn block_stats(block: &[Vec3], mut hist: Option<&mut [u32]>) -> f64 {
+    let mut acc = [0.0f64; LANES];
+    let mut y = [0.0f32; BATCH];
+    let mut logs = [0.0f64; BATCH];
+    for px in block.chunks(BATCH) {
+        let n = px.len();
+        luminances(px, &mut y);
+        for (l, &y) in logs[..n].iter_mut().zip(&y[..n]) {
+            *l = ln(LOG_DELTA as f32 + y);
+        }
+        // Batches start at multiples of LANES, so lane k of each group of
+        // LANES is pixel i with i % LANES == k.
+        for group in logs[..n].chunks(LANES) {
+            acc.iter_mut().zip(group).for_each(|(a, l)| *a += l);
+        }
+        if let Some(hist) = hist.as_deref_mut() {
+            for &y in &y[..n] {
+                hist[(y.to_bits() >> BUCKET_SHIFT) as usize] += 1;
+            }
+        }
     }
-    let rest = lanes.remainder();
-    if !rest.is_empty() {
-        f(&std::array::from_fn(|i| rest.get(i).map_or(0.0, |&p| luminance(p))), rest.len());
-    }
+    acc.iter().sum()
 }
 
 /// `ln x` for positive, finite, normal `x`, in `f64`, within 1e-12 of the
-/// exact value: branch-free, so [`LANES`] of them run as vector code
-/// (the libm `logf` call per pixel was a fifth of the tone mapping). `x` is
+/// exact value: branch-free, so a batch of them runs as vector code (the
+/// libm `logf` call per pixel was a fifth of the tone mapping). `x` is
 /// `2^e · m` with `m` in [√½, √2), and `ln m = 2 atanh t`, `t = (m − 1) / (m + 1)`,
 /// `|t| ≤ 0.172`, by its series to `t¹³` (the next term is below 6e-13).
 #[inline(always)]
-fn ln_lanes(x: &[f32; LANES]) -> [f64; LANES] {
+fn ln(x: f32) -> f64 {
     /// The bits of √½ as an `f32`: where the mantissa range starts.
     const SQRT_HALF: u32 = 0x3F35_04F3;
-    std::array::from_fn(|i| {
-        let u = x[i].to_bits().wrapping_sub(SQRT_HALF);
-        let e = (u as i32) >> 23;
-        let m = f64::from(f32::from_bits((u & 0x007F_FFFF) + SQRT_HALF));
-        let t = (m - 1.0) / (m + 1.0);
-        let t2 = t * t;
-        let series = 1.0
-            + t2 * (1.0 / 3.0
-                + t2 * (1.0 / 5.0
-                    + t2 * (1.0 / 7.0 + t2 * (1.0 / 9.0 + t2 * (1.0 / 11.0 + t2 * (1.0 / 13.0))))));
-        f64::from(e) * std::f64::consts::LN_2 + 2.0 * t * series
-    })
+    let u = x.to_bits().wrapping_sub(SQRT_HALF);
+    let e = (u as i32) >> 23;
+    let m = f64::from(f32::from_bits((u & 0x007F_FFFF) + SQRT_HALF));
+    let t = (m - 1.0) / (m + 1.0);
+    let t2 = t * t;
+    let series = 1.0
+        + t2 * (1.0 / 3.0
+            + t2 * (1.0 / 5.0 + t2 * (1.0 / 7.0 + t2 * (1.0 / 9.0 + t2 * (1.0 / 11.0 + t2 * (1.0 / 13.0))))));
+    f64::from(e) * std::f64::consts::LN_2 + 2.0 * t * series
 }
 
 /// The `at`-th smallest [`luminance`] of `pixels` (in `f32::total_cmp`
 /// order), as a full sort would give it: `hist` (see [`Stats`]) finds the
 /// bucket holding rank `at`, and only that bucket's values are selected in.
 fn nth_luminance(pixels: &[Vec3], hist: &[u32], at: usize) -> f32 {
-    let (mut below, mut bucket) = (0usize, 0usize);
+    let (mut below, mut bucket) = (0usize, 0u32);
     for (i, &c) in hist.iter().enumerate() {
         if below + c as usize > at {
-            bucket = i;
+            bucket = i as u32;
             break;
         }
         below += c as usize;
     }
+    let avx2 = vector::avx2();
     let parts: Vec<Vec<f32>> = pixels
         .par_chunks(LOG_BLOCK)
         .map(|block| {
-            let mut inside = Vec::new();
-            for_lanes(block, |y, n| {
-                for &y in &y[..n] {
-                    if (y.to_bits() >> BUCKET_SHIFT) as usize == bucket {
-                        inside.push(y);
-                    }
-                }
-            });
-            inside
+            if avx2 {
+                // SAFETY: `vector::avx2` found AVX2 on this processor.
+                unsafe { bucket_values_avx2(block, bucket) }
+            } else {
+                bucket_values(block, bucket)
+            }
         })
         .collect();
     let mut inside: Vec<f32> = parts.concat();
     *inside.select_nth_unstable_by(at - below, f32::total_cmp).1
 }
 
+/// The luminances of `block` whose top bits are `bucket`.
+#[inline(always)]
+fn bucket_values(block: &[Vec3], bucket: u32) -> Vec<f32> {
+    let mut inside = Vec::new();
+    let mut y = [0.0f32; BATCH];
+    for px in block.chunks(BATCH) {
+        luminances(px, &mut y);
+        let y = &y[..px.len()];
+        if y.iter().any(|y| y.to_bits() >> BUCKET_SHIFT == bucket) {
+            inside.extend(y.iter().filter(|y| y.to_bits() >> BUCKET_SHIFT == bucket));
+        }
+    }
+    inside
+}
+
 /// Luminance of linear sRGB primaries (Rec. 709 weights), non-finite and
 /// negative values counted as 0.
-#[inline]
+#[inline(always)]
 pub fn luminance(p: Vec3) -> f32 {
     let y = 0.2126 * p.x + 0.7152 * p.y + 0.0722 * p.z;
     if y.is_finite() && y > 0.0 {

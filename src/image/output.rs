@@ -133,8 +133,9 @@ struct ExrPixels<'a> {
     width: usize,
 }
 
-/// The channels in the order the file stores them, and the RGB component each holds.
-const EXR_CHANNELS: [(&str, usize); 3] = [("B", 2), ("G", 1), ("R", 0)];
+/// The channels in the order the file stores them (the blue, green and red
+/// components: see `extract_uncompressed_block`).
+const EXR_CHANNELS: [&str; 3] = ["B", "G", "R"];
 
 impl<'a> exr::image::write::channels::WritableChannels<'a> for ExrPixels<'a> {
     type Writer = &'a ExrPixels<'a>;
@@ -142,7 +143,7 @@ impl<'a> exr::image::write::channels::WritableChannels<'a> for ExrPixels<'a> {
     fn infer_channel_list(&self) -> exr::meta::attribute::ChannelList {
         use exr::prelude::{ChannelDescription, SampleType};
         exr::meta::attribute::ChannelList::new(
-            EXR_CHANNELS.iter().map(|(name, _)| ChannelDescription::named(*name, SampleType::F32)).collect(),
+            EXR_CHANNELS.iter().map(|name| ChannelDescription::named(*name, SampleType::F32)).collect(),
         )
     }
 
@@ -169,13 +170,24 @@ impl exr::image::write::channels::ChannelsWriter for &ExrPixels<'_> {
         let lines = out.chunks_exact_mut(4 * 3 * w);
         for (y, line) in (y0..y0 + h).zip(lines) {
             let row = &self.pixels[y * self.width + x0..][..w];
-            for ((_, c), samples) in EXR_CHANNELS.iter().zip(line.chunks_exact_mut(4 * w)) {
-                for (s, p) in samples.chunks_exact_mut(4).zip(row) {
-                    s.copy_from_slice(&clean(p[*c]).to_ne_bytes());
-                }
-            }
+            let (b, gr) = line.split_at_mut(4 * w);
+            let (g, r) = gr.split_at_mut(4 * w);
+            // One loop per channel with the component fixed, so each is a
+            // straight copy the compiler vectorizes (indexing a `Vec3` by a
+            // variable component is a branch per sample).
+            lay_out(b, row, |p| p.z);
+            lay_out(g, row, |p| p.y);
+            lay_out(r, row, |p| p.x);
         }
         out
+    }
+}
+
+/// `component` of each pixel of `row`, cleaned, as native-endian `f32` samples.
+#[inline(always)]
+fn lay_out(samples: &mut [u8], row: &[Vec3], component: impl Fn(&Vec3) -> f32) {
+    for (s, p) in samples.chunks_exact_mut(4).zip(row) {
+        s.copy_from_slice(&clean(component(p)).to_ne_bytes());
     }
 }
 
