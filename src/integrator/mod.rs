@@ -18,6 +18,8 @@ pub mod whitted;
 pub use path::PathParams;
 pub use state::{PathState, RayStats, MIN_WEIGHT, SECONDARY_BUDGET};
 
+use std::borrow::Cow;
+
 use crate::light::{Light, LightSample};
 use crate::material::Material;
 use crate::math::{Ray, Vec3};
@@ -60,9 +62,11 @@ impl Integrator {
 
 /// What a surface is at a hit once its texture maps (and shaders) have
 /// acted: its material and shading normal, or the colour an unlit map gives.
-pub(crate) enum Surface {
-    /// The material and unit shading normal (on the side of `ng`).
-    Lit(Material, Vec3),
+pub(crate) enum Surface<'a> {
+    /// The material and unit shading normal (on the side of `ng`). A hit
+    /// without maps borrows its scene material rather than copying it:
+    /// most hits have none.
+    Lit(Cow<'a, Material>, Vec3),
     /// A colour to show as it is.
     Unlit(Vec3),
     /// A shader failed; the failure is recorded in the path state.
@@ -70,33 +74,41 @@ pub(crate) enum Surface {
 }
 
 /// Applies the hit object's texture maps to its material (see [`Surface`]).
-pub(crate) fn surface_at(scene: &Scene, ray: &Ray, hit: &Hit, depth: u32, st: &mut PathState) -> Surface {
-    let mut material = scene.materials[hit.material as usize];
+pub(crate) fn surface_at<'a>(
+    scene: &'a Scene,
+    ray: &Ray,
+    hit: &Hit,
+    depth: u32,
+    st: &mut PathState,
+) -> Surface<'a> {
+    let material = &scene.materials[hit.material as usize];
+    if hit.textures.is_empty() {
+        return Surface::Lit(Cow::Borrowed(material), hit.ns);
+    }
+    let mut material = *material;
     let mut ns = hit.ns;
-    if !hit.textures.is_empty() {
-        // The ray cone's width here, widened by the slant of the surface.
-        let cos = ray.d.dot(hit.ns).abs().max(0.05);
-        let footprint = st.spread * st.travelled / cos;
-        let mut frame = scene.tex_frame(hit, ray, st.time, footprint);
-        let (object, instance) = scene.object_ids(hit);
-        let (incident, ng, pixel, view) = (ray.d.normalize(), hit.ng, st.pixel, st.view);
-        frame.ctx = ShadeCtx { incident, ng, object, instance, depth, pixel, view, ..ShadeCtx::default() };
-        frame.ctx.set_footprint(st.spread * st.travelled);
-        match scene.textures.apply(hit.textures, &frame, &mut material, &mut ns) {
-            Ok(Applied::Lit) => {}
-            Ok(Applied::Unlit(c)) => return Surface::Unlit(c),
-            Err(e) => {
-                if st.error.is_none() {
-                    st.error = Some(Box::new((*e).with_object(scene.object_label(hit))));
-                }
-                return Surface::Failed;
+    // The ray cone's width here, widened by the slant of the surface.
+    let cos = ray.d.dot(hit.ns).abs().max(0.05);
+    let footprint = st.spread * st.travelled / cos;
+    let mut frame = scene.tex_frame(hit, ray, st.time, footprint);
+    let (object, instance) = scene.object_ids(hit);
+    let (incident, ng, pixel, view) = (ray.d.normalize(), hit.ng, st.pixel, st.view);
+    frame.ctx = ShadeCtx { incident, ng, object, instance, depth, pixel, view, ..ShadeCtx::default() };
+    frame.ctx.set_footprint(st.spread * st.travelled);
+    match scene.textures.apply(hit.textures, &frame, &mut material, &mut ns) {
+        Ok(Applied::Lit) => {}
+        Ok(Applied::Unlit(c)) => return Surface::Unlit(c),
+        Err(e) => {
+            if st.error.is_none() {
+                st.error = Some(Box::new((*e).with_object(scene.object_label(hit))));
             }
-        }
-        if ns.dot(hit.ng) < 0.0 {
-            ns = -ns;
+            return Surface::Failed;
         }
     }
-    Surface::Lit(material, ns)
+    if ns.dot(hit.ng) < 0.0 {
+        ns = -ns;
+    }
+    Surface::Lit(Cow::Owned(material), ns)
 }
 
 /// What `light` sends to the surface point `p` with normal `n`, shadow rays

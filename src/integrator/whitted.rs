@@ -113,21 +113,12 @@ fn shade(
     medium: Medium,
     st: &mut PathState,
 ) -> Vec3 {
-    // A surface without maps is its scene material as it is: borrowed, not
-    // copied out through [`surface_at`].
-    let mapped;
-    let (m, ns) = if hit.textures.is_empty() {
-        (&scene.materials[hit.material as usize], hit.ns)
-    } else {
-        match surface_at(scene, ray, hit, depth, st) {
-            Surface::Lit(m, ns) => {
-                mapped = m;
-                (&mapped, ns)
-            }
-            Surface::Unlit(c) => return c,
-            Surface::Failed => return Vec3::ZERO,
-        }
+    let (m, ns) = match surface_at(scene, ray, hit, depth, st) {
+        Surface::Lit(m, ns) => (m, ns),
+        Surface::Unlit(c) => return c,
+        Surface::Failed => return Vec3::ZERO,
     };
+    let m: &Material = &m;
     let entering = ray.d.dot(hit.ng) < 0.0;
     // Normals facing the side the ray came from.
     let (n, ng) = if entering { (ns, hit.ng) } else { (-ns, -hit.ng) };
