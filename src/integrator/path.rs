@@ -31,7 +31,7 @@ use super::whitted::{glossy, reflect, reflectance};
 use super::{light_reaching, surface_at, PathState, Surface};
 use crate::bsdf::fresnel;
 use crate::bsdf::sampling::{power_cosine, power_cosine_pdf};
-use crate::bsdf::Frame;
+use crate::bsdf::{Brdf, Frame};
 use crate::light::{Light, ShadedLight};
 use crate::material::{Material, Specular};
 use crate::math::{Ray, Vec3};
@@ -146,7 +146,11 @@ fn shade(
     let eps = scene.shadow_epsilon;
     let mut color = Vec3::ZERO;
 
-    if let Some((li_index, le)) = scene.emitted(hit, ray.d) {
+    // Under the course's next-event estimation an object light that a
+    // random bounce hits counts nothing (its samples counted it): skip the
+    // lookup of which light it is.
+    let counted = p.mis || !p.next_event || matches!(came, Came::Direct);
+    if let Some((li_index, le)) = scene.emitted(hit, ray.d).filter(|_| counted) {
         color += le * hit_weight(scene, li_index, came, ray, hit, p, st.time);
     }
     // A shader's emission is weighed like an object light's where the object
@@ -338,20 +342,31 @@ struct At {
 #[inline]
 fn light_terms(m: &Material, at: &At, wi: Vec3, cos: f32, p: &PathParams) -> (Vec3, f32) {
     match &m.brdf {
-        Some(b) => {
+        Some(b) if p.mis => {
             let local = at.frame.to_local(wi);
             let f = b.eval(m.diffuse, m.specular, local, at.wo) * cos;
-            let pdf = match p.mis {
-                true => b.pdf(m.diffuse, m.specular, at.wo, local),
-                false => 0.0,
-            };
-            (f, pdf)
+            (f, b.pdf(m.diffuse, m.specular, at.wo, local))
         }
+        Some(b) => (brdf_cos(b, m, at, wi, cos), 0.0),
         None => {
             let e = if p.importance || p.mis { 1.0 } else { 0.0 };
             (reflectance(m, at.n, wi, at.d, cos), power_cosine_pdf(e, cos))
         }
     }
+}
+
+/// `f(wi, wo) cos` for a world direction `wi` with `cos = n·wi > 0`. A
+/// Phong-family BRDF without a specular colour (every material of the
+/// course's path-traced boxes) is its diffuse term whatever `wi`, which it
+/// only checks for `wi.z > 0`: the local `z` is `wi·n`, the same bits as
+/// `cos`, so `wi` need not be brought into the frame.
+#[inline]
+fn brdf_cos(b: &Brdf, m: &Material, at: &At, wi: Vec3, cos: f32) -> Vec3 {
+    let local = match b {
+        Brdf::Phong(_) if m.specular == Vec3::ZERO => Vec3::new(0.0, 0.0, cos),
+        _ => at.frame.to_local(wi),
+    };
+    b.eval(m.diffuse, m.specular, local, at.wo) * cos
 }
 
 /// The random bounce: a direction drawn as the variant says, the light it
@@ -391,7 +406,7 @@ fn bounce(
     let f_cos = match (f, &m.brdf) {
         (Some(f), _) => f * cos,
         // The frame and view direction [`reflectance`] would build again.
-        (None, Some(b)) => b.eval(m.diffuse, m.specular, frame.to_local(wi), at.wo) * cos,
+        (None, Some(b)) => brdf_cos(b, m, at, wi, cos),
         (None, None) => reflectance(m, n, wi, at.d, cos),
     };
     let weight = f_cos / pdf;
