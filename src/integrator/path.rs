@@ -150,7 +150,8 @@ fn shade(
     // random bounce hits counts nothing (its samples counted it): skip the
     // lookup of which light it is.
     let counted = p.mis || !p.next_event || matches!(came, Came::Direct);
-    if let Some((li_index, le)) = scene.emitted(hit, ray.d).filter(|_| counted) {
+    let emitter = if counted { scene.emitted(hit, ray.d) } else { None };
+    if let Some((li_index, le)) = emitter {
         color += le * hit_weight(scene, li_index, came, ray, hit, p, st.time);
     }
     // A shader's emission is weighed like an object light's where the object
