@@ -107,6 +107,28 @@ fn mis_choosing_lights_by_power_keeps_the_known_radiance() {
 }
 
 #[test]
+fn mis_counts_light_samples_in_full_where_no_bounce_follows() {
+    // At the depth limit no bounce follows, so a light sample weighed
+    // against one would lose the bounce's share. A sphere of radius 1.5 at
+    // height 2 fills so wide a cone (1 − cos θmax = 0.34) that its density,
+    // 0.47, is near the cosine bounce's: the power heuristic gives the light
+    // sample about three quarters of the weight. With no bounce the floor
+    // must still get ρ L R²/d² = 0.5 · 10 · 2.25 / 4.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let text = floor_scene("<Renderer>PathTracing</Renderer><RendererParams>MIS</RendererParams>")
+        .replace("<MaxRecursionDepth>1</MaxRecursionDepth>", "<MaxRecursionDepth>0</MaxRecursionDepth>")
+        .replace("<Radius>0.5</Radius>", "<Radius>1.5</Radius>");
+    let expected = 0.5 * 10.0 * 2.25 / 4.0;
+    let img = render(&load(dir.path(), &text), &RenderOptions { spp: Some(64), ..Default::default() });
+    let (m, se) = mean_and_se(&img);
+    println!("MIS at the depth limit: {m:.4} ± {se:.4} (expected {expected:.4})");
+    assert!(
+        (m - expected).abs() <= 4.0 * se + 0.01 * expected,
+        "mean {m:.4} ± {se:.4}, expected {expected:.4}"
+    );
+}
+
+#[test]
 fn next_event_estimation_does_not_count_an_emitter_twice() {
     // Two bounces: an emitter seen by the bounce ray would add the direct
     // light a second time (a 100% excess) if next-event estimation did not

@@ -172,12 +172,12 @@ fn shade(
     let reflects = m.diffuse.max_element() > 0.0 || m.specular.max_element() > 0.0;
     let origin = hit.p + ng * eps;
     if reflects && !inside_dielectric {
+        let more = depth < MAX_BOUNCES && (p.russian_roulette || depth < scene.max_depth);
         let frame = Frame::new(n);
-        let at = At { n, wo: frame.to_local(-ray.d), frame, d: ray.d };
+        let at = At { n, wo: frame.to_local(-ray.d), frame, d: ray.d, weigh: p.mis && more };
         if p.next_event || p.mis {
             color += next_event(scene, m, hit, &at, origin, depth, p, st);
         }
-        let more = depth < MAX_BOUNCES && (p.russian_roulette || depth < scene.max_depth);
         if more {
             color += bounce(scene, m, &at, origin, depth, beta, p, st);
         }
@@ -223,8 +223,11 @@ fn next_event(
         }
         let Some((ls, cos, tr)) = light_reaching(scene, light, origin, hit.p, at.n, st) else { continue };
         let (f, bsdf_pdf) = light_terms(m, at, ls.wi, cos, p);
-        let w =
-            if p.mis && hittable(light) { power_heuristic(ls.pdf / scale, bsdf_pdf) * scale } else { scale };
+        let w = if at.weigh && hittable(light) {
+            power_heuristic(ls.pdf / scale, bsdf_pdf) * scale
+        } else {
+            scale
+        };
         color += f * (tr * ls.e) * w;
     }
     color
@@ -279,7 +282,7 @@ fn shaded_sample(
         return Vec3::ZERO;
     }
     let (f, bsdf_pdf) = light_terms(m, at, wi, cos, p);
-    let w = if p.mis { power_heuristic(pdf / scale, bsdf_pdf) * scale } else { scale };
+    let w = if at.weigh { power_heuristic(pdf / scale, bsdf_pdf) * scale } else { scale };
     f * (tr * e.emission) * (w / pdf)
 }
 
@@ -329,21 +332,26 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
 
 /// The shading point's frame, shared by its light samples and its bounce:
 /// the facing shading normal `n`, the frame around it, the direction to the
-/// viewer in that frame, and the incoming ray's direction `d`.
+/// viewer in that frame, the incoming ray's direction `d`, and whether MIS
+/// weighs the light samples against a bounce (`weigh`). Where no bounce
+/// follows (the depth limit) the bounce's share of the light would be lost:
+/// the light samples then count in full, as they do for lights no bounce
+/// can hit.
 struct At {
     n: Vec3,
     frame: Frame,
     wo: Vec3,
     d: Vec3,
+    weigh: bool,
 }
 
 /// For a light sample from `wi` (`cos = n·wi > 0`): the reflectance times
 /// the cosine, and the density with which [`bounce`] would draw `wi` (zero
-/// unless MIS needs it), the BRDF's local directions worked out once.
+/// unless MIS weighs the sample), the BRDF's local directions worked out once.
 #[inline]
 fn light_terms(m: &Material, at: &At, wi: Vec3, cos: f32, p: &PathParams) -> (Vec3, f32) {
     match &m.brdf {
-        Some(b) if p.mis => {
+        Some(b) if at.weigh => {
             let local = at.frame.to_local(wi);
             let f = b.eval(m.diffuse, m.specular, local, at.wo) * cos;
             (f, b.pdf(m.diffuse, m.specular, at.wo, local))
