@@ -17,6 +17,8 @@
 //! function in a tight C-API loop. Load 15–17, medians of three alternating
 //! runs, session 9's build against session 10's: floor 14.4 / 13.8 ns, empty
 //! color 52.2 / 44.3 ns, per point of `heights3` 27.4 / 16.2 ns.
+//! Session 11, load 9–12, three pairs: floor 22.7 / 21.1 ns, empty color
+//! 58.6 / 45.9 ns (the result in a register instead of an 80-byte `Result`).
 //! `cargo bench --bench shader -- cpu_only` prints only that table.
 
 use std::hint::black_box;

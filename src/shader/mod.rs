@@ -432,7 +432,29 @@ impl ShaderSet {
 
     #[inline]
     fn call(&self, id: usize, entry: Entry, input: &ShadeInput) -> Result<[f64; 3], ShaderError> {
-        threads::with_state(&self.shared, |state| state.call(id, entry, input))
+        let mut rgb = [0.0; 3];
+        match threads::with_state_fast(&self.shared, |state| state.call_fast(id, entry, input, &mut rgb)) {
+            0 => Ok(rgb),
+            code => self.call_slow(id, entry, input, code),
+        }
+    }
+
+    /// A call past its fast path: an error, a caught timeout, `--debug-pixel`
+    /// output, or a thread whose state is not built yet (`threads::MISS`:
+    /// the call did not run, so it runs here).
+    #[cold]
+    #[inline(never)]
+    fn call_slow(
+        &self,
+        id: usize,
+        entry: Entry,
+        input: &ShadeInput,
+        code: u32,
+    ) -> Result<[f64; 3], ShaderError> {
+        threads::with_state(&self.shared, |state| match code {
+            threads::MISS => state.call(id, entry, input),
+            code => state.finish(id, entry, input, code),
+        })
     }
 
     /// The diffuse color of shader `id` at `input`.
@@ -452,7 +474,22 @@ impl ShaderSet {
     /// The time limit covers the three together.
     #[inline]
     pub fn heights3(&self, id: usize, inputs: &[ShadeInput; 3]) -> Result<[f32; 3], ShaderError> {
-        threads::with_state(&self.shared, |state| state.call_height3(id, inputs)).map(|h| h.map(|x| x as f32))
+        let mut h = [0.0; 3];
+        match threads::with_state_fast(&self.shared, |state| state.call_height3_fast(id, inputs, &mut h)) {
+            0 => Ok(h.map(|x| x as f32)),
+            code => self.heights3_slow(id, inputs, code),
+        }
+    }
+
+    /// [`ShaderSet::heights3`] past its fast path (see `call_slow`).
+    #[cold]
+    #[inline(never)]
+    fn heights3_slow(&self, id: usize, inputs: &[ShadeInput; 3], code: u32) -> Result<[f32; 3], ShaderError> {
+        threads::with_state(&self.shared, |state| match code {
+            threads::MISS => state.call_height3(id, inputs),
+            code => state.finish_height3(id, code),
+        })
+        .map(|h| h.map(|x| x as f32))
     }
 
     /// The reflective color of shader `id` at `input`.

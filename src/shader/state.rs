@@ -6,11 +6,15 @@ use std::time::Duration;
 
 use mlua::{Function, LightUserData, Lua, LuaOptions, StdLib, Table, Value};
 
+use std::cell::Cell;
+use std::os::raw::c_int;
+
 use super::call::{Caller, Slot};
 use super::error::{ShaderError, ShaderErrorKind};
 use super::ffi::{self, IoBlock, Shade};
 use super::instrument::{instrument, ScanError};
 use super::params;
+use super::threads::MISS;
 use super::{Entry, ImageSampler, ParamValue, ShadeInput, ShaderSource, Shared, ENTRIES};
 use std::sync::Arc;
 
@@ -56,6 +60,8 @@ pub(crate) struct ThreadState {
     _images: Option<Box<Arc<dyn ImageSampler>>>,
     /// LuaJIT's names for the records (`struct 97`) and luster's (`vec3`).
     ctype_names: Vec<(String, String)>,
+    /// The last object id and its `s.random` (see [`ThreadState::random`]).
+    last_random: Cell<(u32, f64)>,
 }
 
 impl ThreadState {
@@ -164,6 +170,7 @@ impl ThreadState {
             lua,
             _images: images,
             ctype_names,
+            last_random: Cell::new((0, object_random(0))),
         };
         let make_env: Function = api.get("make_env").map_err(internal)?;
         let make_entry: Function = api.get("make_entry").map_err(internal)?;
@@ -314,22 +321,62 @@ impl ThreadState {
     }
 
     /// Calls one entry point; the result's channels (a height in `[0]`).
-    ///
-    /// The common case (a defined entry, a clean return within the time
-    /// limit, no `--debug-pixel` on this pixel) is inlined into the caller
-    /// and moves no error-sized value; everything else is out of line.
-    #[inline]
     pub(crate) fn call(&self, id: usize, entry: Entry, input: &ShadeInput) -> Result<[f64; 3], ShaderError> {
+        let mut rgb = [0.0; 3];
+        match self.call_fast(id, entry, input, &mut rgb) {
+            0 => Ok(rgb),
+            code => self.finish(id, entry, input, code),
+        }
+    }
+
+    /// The common case of a call (a defined entry, a clean return within
+    /// the time limit, no `--debug-pixel`): 0, with the result's channels in
+    /// `rgb`. Otherwise a code for [`ThreadState::finish`]: [`MISS`] when
+    /// the call did not run (no such entry), or [`RAN`] with the call's
+    /// status. A bare code, so the hot path moves no error-sized value.
+    #[inline]
+    pub(crate) fn call_fast(&self, id: usize, entry: Entry, input: &ShadeInput, rgb: &mut [f64; 3]) -> u32 {
         let Some(f) = self.shaders.get(id).and_then(|s| s.entries[entry as usize]) else {
-            return Err(self.no_entry(id, entry.name()));
+            return MISS;
         };
-        self.io.begin(|s| write_shade(s, input));
+        let random = self.random(input.instance_id);
+        self.io.begin(|s| write_shade(s, input, random));
         let status = self.caller.call(f);
         if status == mlua::ffi::LUA_OK && !self.io.timed_out() && super::debug_pixel().is_none() {
             let o = self.io.out();
-            return Ok([o.r, o.g, o.b]);
+            *rgb = [o.r, o.g, o.b];
+            return 0;
         }
-        self.finish_call(id, entry, input, status)
+        ran(status)
+    }
+
+    /// What a code from [`ThreadState::call_fast`] amounts to.
+    #[cold]
+    #[inline(never)]
+    pub(crate) fn finish(
+        &self,
+        id: usize,
+        entry: Entry,
+        input: &ShadeInput,
+        code: u32,
+    ) -> Result<[f64; 3], ShaderError> {
+        match status_of(code) {
+            Some(status) => self.finish_call(id, entry, input, status),
+            None => Err(self.no_entry(id, entry.name())),
+        }
+    }
+
+    /// [`object_random`] of `id`, remembered for the next call: a pixel's
+    /// points mostly lie on one object.
+    #[inline]
+    fn random(&self, id: u32) -> f64 {
+        let (last, r) = self.last_random.get();
+        if last == id {
+            return r;
+        }
+        let r = object_random(id);
+        self.last_random.set((id, r));
+        r
     }
 
     /// [`ThreadState::call`] past its fast path: an error, a timeout the
@@ -341,7 +388,7 @@ impl ThreadState {
         id: usize,
         entry: Entry,
         input: &ShadeInput,
-        status: std::os::raw::c_int,
+        status: c_int,
     ) -> Result<[f64; 3], ShaderError> {
         let shader = &self.shaders[id];
         let result = self.outcome(&shader.name, status).map(|()| {
@@ -375,7 +422,7 @@ impl ThreadState {
 
     /// What a finished call amounts to: its error (popped off the call
     /// thread), a caught timeout, or success.
-    fn outcome(&self, shader: &str, status: std::os::raw::c_int) -> Result<(), ShaderError> {
+    fn outcome(&self, shader: &str, status: c_int) -> Result<(), ShaderError> {
         if status != mlua::ffi::LUA_OK {
             let e = self.caller.pop_error(&self.lua, status);
             return Err(self.error(shader, &e));
@@ -416,7 +463,7 @@ impl ThreadState {
         let Some(f) = self.shaders.get(id).and_then(|s| s.material) else {
             return Err(self.no_entry(id, "material"));
         };
-        self.io.begin_material(|s| write_shade(s, input));
+        self.io.begin_material(|s| write_shade(s, input, self.random(input.instance_id)));
         let status = self.caller.call(f);
         let shader = &self.shaders[id];
         let result = self.outcome(&shader.name, status).map(|()| self.io.material());
@@ -437,23 +484,38 @@ impl ThreadState {
     }
 
     /// Calls `height` at three points in one Lua call (bump mapping).
-    #[inline]
     pub(crate) fn call_height3(&self, id: usize, inputs: &[ShadeInput; 3]) -> Result<[f64; 3], ShaderError> {
+        let mut h = [0.0; 3];
+        match self.call_height3_fast(id, inputs, &mut h) {
+            0 => Ok(h),
+            code => self.finish_height3(id, code),
+        }
+    }
+
+    /// [`ThreadState::call_fast`] for [`ThreadState::call_height3`].
+    #[inline]
+    pub(crate) fn call_height3_fast(&self, id: usize, inputs: &[ShadeInput; 3], h: &mut [f64; 3]) -> u32 {
         let Some(f) = self.shaders.get(id).and_then(|s| s.height3) else {
-            return Err(self.no_entry(id, "height"));
+            return MISS;
         };
-        self.io.begin3(|k, s| write_shade(s, &inputs[k]));
+        let random = inputs.map(|i| self.random(i.instance_id));
+        self.io.begin3(|k, s| write_shade(s, &inputs[k], random[k]));
         let status = self.caller.call(f);
         if status == mlua::ffi::LUA_OK && !self.io.timed_out() {
             let o = self.io.out();
-            return Ok([o.r, o.g, o.b]);
+            *h = [o.r, o.g, o.b];
+            return 0;
         }
-        self.finish_height3(id, status)
+        ran(status)
     }
 
+    /// What a code from [`ThreadState::call_height3_fast`] amounts to.
     #[cold]
     #[inline(never)]
-    fn finish_height3(&self, id: usize, status: std::os::raw::c_int) -> Result<[f64; 3], ShaderError> {
+    pub(crate) fn finish_height3(&self, id: usize, code: u32) -> Result<[f64; 3], ShaderError> {
+        let Some(status) = status_of(code) else {
+            return Err(self.no_entry(id, "height"));
+        };
         self.outcome(&self.shaders[id].name, status).map(|()| {
             let o = self.io.out();
             [o.r, o.g, o.b]
@@ -461,11 +523,24 @@ impl ThreadState {
     }
 }
 
+/// A code from a fast call (`call_fast`) that ran and needs finishing: the
+/// call's status, marked so that it differs from 0 and from [`MISS`].
+pub(crate) const RAN: u32 = 1 << 31;
+
+fn ran(status: c_int) -> u32 {
+    RAN | (status as u32 & 0xffff)
+}
+
+/// The Lua status in a [`RAN`] code; `None` for [`MISS`].
+fn status_of(code: u32) -> Option<c_int> {
+    (code != MISS && code & RAN != 0).then_some((code & 0xffff) as c_int)
+}
+
 /// Writes one shading point into the record the prelude reads, in place.
 /// The record is destructured whole so that a field added to it cannot be
 /// left unwritten.
 #[inline(always)]
-fn write_shade(s: &mut Shade, i: &ShadeInput) {
+fn write_shade(s: &mut Shade, i: &ShadeInput, random_value: f64) {
     let v = |a: [f32; 3]| ffi::Vec3 { x: a[0].into(), y: a[1].into(), z: a[2].into() };
     let int = |x: u32| i32::try_from(x).unwrap_or(i32::MAX);
     let Shade {
@@ -505,7 +580,7 @@ fn write_shade(s: &mut Shade, i: &ShadeInput) {
     *uv = ffi::Vec2 { u: i.uv[0].into(), v: i.uv[1].into() };
     *time = i.time.into();
     *filterwidth = i.filterwidth.into();
-    *random = object_random(i.instance_id);
+    *random = random_value;
     *object_id = int(i.object_id);
     *instance_id = int(i.instance_id);
     *depth = int(i.depth);
