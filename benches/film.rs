@@ -9,7 +9,9 @@
 //! (`CLOCK_PROCESS_CPUTIME_ID`, every thread of rayon's pool included). On a
 //! loaded machine wall time swings with the other jobs while CPU time moves
 //! much less, so the CPU ratio is the figure to trust there; on a quiet one
-//! the two agree. Run: `cargo bench --bench film` (`-- --reps N` for more
+//! the two agree. A second pair of sides writes every file under a new name,
+//! to show what replacing the previous images costs (a separate figure, not
+//! the target's). Run: `cargo bench --bench film` (`-- --reps N` for more
 //! repetitions, `-- --outputs-only` to loop B's output stage for a profiler,
 //! `-- --exr-compression` for what each EXR compression costs on this film).
 
@@ -98,22 +100,14 @@ fn main() {
     // Both sides write into the same folder every repetition, so from the
     // second on each file replaces the one before, as a user re-rendering a
     // scene under the same name sees it.
-    let (mut a, mut b) = (Side::default(), Side::default());
-    for _ in 0..reps {
-        for (plan, side) in [(&ldr, &mut a), (&hdr, &mut b)] {
-            let t0 = Stamp::now();
-            let img = render::render(&scene, 0, &|_| {});
-            let t1 = Stamp::now();
-            write_outputs(&img.film, dir.path(), plan).expect("the outputs are written");
-            let t2 = Stamp::now();
-            let (w, c) = t0.since(t2);
-            let (ow, oc) = t1.since(t2);
-            side.wall.push(w);
-            side.cpu.push(c);
-            side.out_wall.push(ow);
-            side.out_cpu.push(oc);
-        }
-    }
+    let (mut a, mut b) = alternate(&scene, [&ldr, &hdr], reps, |_| dir.path().to_path_buf());
+    // The same with every file under a new name (a folder per repetition,
+    // made before the clock starts): what the replacing renames cost.
+    let (mut fa, mut fb) = alternate(&scene, [&ldr, &hdr], reps, |i| {
+        let d = dir.path().join(format!("fresh{i}"));
+        std::fs::create_dir(&d).expect("a fresh folder");
+        d
+    });
     // Where the output stage's time goes.
     let img = render::render(&scene, 0, &|_| {});
     let tonemap = luster::film::Tonemap { burn_percent: 1.0, ..luster::film::Tonemap::COURSE_DEFAULT };
@@ -155,6 +149,44 @@ fn main() {
         t_png * 1e3
     );
     println!("B / A = {:.3} wall, {:.3} CPU  (target <= 1.05)", bw / aw, bc / ac);
+    let [faw, fac, ..] = fa.medians();
+    let [fbw, fbc, fbow, fboc] = fb.medians();
+    println!(
+        "to fresh names (no file replaced; not the target's figure): B / A = {:.3} wall, {:.3} CPU  \
+         (B's output stage {:5.1} ms / {:5.1} ms CPU)",
+        fbw / faw,
+        fbc / fac,
+        fbow * 1e3,
+        fboc * 1e3
+    );
+}
+
+/// Renders and writes `plans[0]` (A) then `plans[1]` (B), `reps` times,
+/// into the folder `folder(repetition)` gives; the figures of each side.
+fn alternate(
+    scene: &Scene,
+    plans: [&[luster::film::outputs::Output]; 2],
+    reps: usize,
+    folder: impl Fn(usize) -> std::path::PathBuf,
+) -> (Side, Side) {
+    let (mut a, mut b) = (Side::default(), Side::default());
+    for i in 0..reps {
+        let dir = folder(i);
+        for (plan, side) in [(plans[0], &mut a), (plans[1], &mut b)] {
+            let t0 = Stamp::now();
+            let img = render::render(scene, 0, &|_| {});
+            let t1 = Stamp::now();
+            write_outputs(&img.film, &dir, plan).expect("the outputs are written");
+            let t2 = Stamp::now();
+            let (w, c) = t0.since(t2);
+            let (ow, oc) = t1.since(t2);
+            side.wall.push(w);
+            side.cpu.push(c);
+            side.out_wall.push(ow);
+            side.out_cpu.push(oc);
+        }
+    }
+    (a, b)
 }
 
 /// The encoding cost (into memory, no file) and size of the film's EXR under

@@ -16,7 +16,8 @@
 //! film; `srgb` keeps every value below 1 exactly as the linear render has
 //! it. Exact curves and sources are in docs/hdr.md.
 
-use super::tonemap::{aces_fit, hable_filmic, Quantizer};
+use super::quantize::Quantizer;
+use super::tonemap::{aces_fit, hable_filmic};
 use super::Gamma;
 use crate::math::Vec3;
 use rayon::prelude::*;
@@ -85,7 +86,7 @@ impl Display {
         if self == Display::Course {
             return super::tonemap::course_rgb8(pixels);
         }
-        let q = Quantizer::rounding(Gamma::Srgb);
+        let q = Quantizer::shared(Gamma::Srgb, true);
         let mut out = vec![0u8; 3 * pixels.len()];
         const ROWS: usize = 1024;
         out.par_chunks_mut(3 * ROWS).zip(pixels.par_chunks(ROWS)).for_each(|(out, px)| {

@@ -5,7 +5,9 @@
 //!   weighted mean of the pixel's samples. Tiles accumulate into a [`Tile`]
 //!   and are merged when done, so the render loop never sees 8 bits.
 //! - [`tonemap`]: the course's photographic operator (hw5), ACES and Filmic,
-//!   saturation and gamma; and the course's plain clamp for LDR scenes.
+//!   saturation and gamma; and the course's plain clamp for LDR scenes. Its
+//!   whole-image statistics (log-average, burn-out percentile) are in
+//!   `stats`, its table-driven gamma and quantization in `quantize`.
 //! - [`display`]: the display transform of scenes that opt out of the
 //!   course's 8-bit semantics (`<Display>`, `--display`).
 //! - [`outputs`]: which files a camera's `ImageName` and `Tonemap`s ask for
@@ -18,6 +20,8 @@
 
 pub mod display;
 pub mod outputs;
+mod quantize;
+mod stats;
 pub mod tonemap;
 
 pub use display::Display;

@@ -219,7 +219,7 @@ pub(crate) fn direct(
             continue;
         }
         if let Some((ls, cos, tr)) = light_reaching(scene, light, origin, hit.p, n, st) {
-            color += reflectance(m, n, ls.wi, ray.d, cos) * (tr * ls.e);
+            color += reflectance_out_of_line(m, n, ls.wi, ray.d, cos) * (tr * ls.e);
         }
     }
     color
@@ -237,6 +237,17 @@ pub(crate) fn reflectance(m: &Material, n: Vec3, l: Vec3, d: Vec3, cos: f32) -> 
             brdf.eval(m.diffuse, m.specular, frame.to_local(l), frame.to_local(-d)) * cos
         }
     }
+}
+
+/// [`reflectance`] as a call. `direct` is inlined into the recursive
+/// `traced`, and whether `reflectance` (with every BRDF's `eval` and their
+/// `powf`s) went in too was up to how thin LTO split the crate: when it did,
+/// `traced` doubled in code and stack frame and whole renders of
+/// `benches/scenes/film.xml` took 10–17% more CPU (docs/performance.md,
+/// session 12).
+#[inline(never)]
+fn reflectance_out_of_line(m: &Material, n: Vec3, l: Vec3, d: Vec3, cos: f32) -> Vec3 {
+    reflectance(m, n, l, d, cos)
 }
 
 /// Diffuse plus Blinn-Phong specular reflectance towards `l` for a viewer
