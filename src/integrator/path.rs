@@ -392,7 +392,14 @@ fn bounce(
     st: &mut PathState,
 ) -> Vec3 {
     let (n, frame) = (at.n, &at.frame);
-    let choice = st.sampler.next_1d();
+    // Only an MIS bounce off a BRDF chooses a lobe; the others skip the
+    // draw (a stratified one at the first hit), keeping the later ones.
+    let choice = if p.mis && m.brdf.is_some() {
+        st.sampler.next_1d()
+    } else {
+        st.sampler.skip();
+        0.0
+    };
     let u = st.sampler.next_2d();
     // The BRDF's sample carries its value: no second evaluation.
     let (wi, pdf, f) = match (&m.brdf, p.mis) {

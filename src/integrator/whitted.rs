@@ -209,13 +209,13 @@ pub(crate) fn direct(
     let (n, ng) = (ns, hit.ng);
     let eps = scene.shadow_epsilon;
     let origin = hit.p + ng * eps;
-    // A surface that reflects no direct light (clear glass) still draws each
-    // light's sample, so that later draws and the image stay as they were,
-    // but traces no shadow ray for it.
+    // A surface that reflects no direct light (clear glass) skips each
+    // light's draw, so that later draws and the image stay as they were,
+    // and traces no shadow ray for it.
     let reflects = m.brdf.is_some() || m.diffuse != Vec3::ZERO || m.specular != Vec3::ZERO;
     for light in &scene.lights {
         if !reflects {
-            let _ = light.sample(origin, hit.p, Some(n), st.time, &mut st.sampler);
+            light.skip_sample(&mut st.sampler);
             continue;
         }
         if let Some((ls, cos, tr)) = light_reaching(scene, light, origin, hit.p, n, st) {

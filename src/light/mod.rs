@@ -256,6 +256,15 @@ impl Light {
             Light::Shaded(_) => None,
         }
     }
+
+    /// Moves `sampler` past the draw [`sample`](Self::sample) would make,
+    /// without making it (for a surface that reflects no direct light).
+    #[inline]
+    pub fn skip_sample(&self, sampler: &mut PixelSampler) {
+        if matches!(self, Light::Area(_) | Light::Mesh(_) | Light::Sphere(_) | Light::Environment(_)) {
+            sampler.skip();
+        }
+    }
 }
 
 #[cfg(test)]
