@@ -91,11 +91,13 @@ fn li(
     st: &mut PathState,
 ) -> Vec3 {
     let hit = volumes::trace(scene, ray, depth == 0, st);
-    let (t, color) = match hit {
+    // Borrowed in place: moving the hit out of the slot `trace` filled
+    // copied it in wide loads that waited on its narrow stores.
+    let (t, color) = match &hit {
         Some(hit) => {
             let before = st.travelled;
             st.travelled += hit.t;
-            let c = shade(scene, ray, &hit, depth, beta, came, p, st);
+            let c = shade(scene, ray, hit, depth, beta, came, p, st);
             st.travelled = before;
             (hit.t, c)
         }
@@ -135,12 +137,14 @@ fn shade(
     p: &PathParams,
     st: &mut PathState,
 ) -> Vec3 {
-    let (m, ns) = match surface_at(scene, ray, hit, depth, st) {
-        Surface::Lit(m, ns) => (m, ns),
-        Surface::Unlit(c) => return c,
+    // Matched in place, not moved out: a move copies the whole `Cow`, room
+    // for an owned material, even when it borrows.
+    let surface = surface_at(scene, ray, hit, depth, st);
+    let (m, ns): (&Material, Vec3) = match &surface {
+        Surface::Lit(m, ns) => (m, *ns),
+        Surface::Unlit(c) => return *c,
         Surface::Failed => return Vec3::ZERO,
     };
-    let m: &Material = &m;
     let entering = ray.d.dot(hit.ng) < 0.0;
     let (n, ng) = if entering { (ns, hit.ng) } else { (-ns, -hit.ng) };
     let eps = scene.shadow_epsilon;
@@ -392,7 +396,14 @@ fn bounce(
     st: &mut PathState,
 ) -> Vec3 {
     let (n, frame) = (at.n, &at.frame);
-    let choice = st.sampler.next_1d();
+    // Only an MIS bounce off a BRDF chooses a lobe; the others skip the
+    // draw (a stratified one at the first hit), keeping the later ones.
+    let choice = if p.mis && m.brdf.is_some() {
+        st.sampler.next_1d()
+    } else {
+        st.sampler.skip();
+        0.0
+    };
     let u = st.sampler.next_2d();
     // The BRDF's sample carries its value: no second evaluation.
     let (wi, pdf, f) = match (&m.brdf, p.mis) {

@@ -82,11 +82,13 @@ enum Medium {
 
 fn traced(scene: &Scene, ray: &Ray, depth: u32, weight: f32, medium: Medium, st: &mut PathState) -> Vec3 {
     let hit = volumes::trace(scene, ray, medium == Medium::Outside, st);
-    let (t, color) = match hit {
+    // Borrowed in place: moving the hit out of the slot `trace` filled
+    // copied it in wide loads that waited on its narrow stores.
+    let (t, color) = match &hit {
         Some(hit) => {
             let before = st.travelled;
             st.travelled += hit.t;
-            let c = shade(scene, ray, &hit, depth, weight, medium, st);
+            let c = shade(scene, ray, hit, depth, weight, medium, st);
             st.travelled = before;
             (hit.t, c)
         }
@@ -113,12 +115,14 @@ fn shade(
     medium: Medium,
     st: &mut PathState,
 ) -> Vec3 {
-    let (m, ns) = match surface_at(scene, ray, hit, depth, st) {
-        Surface::Lit(m, ns) => (m, ns),
-        Surface::Unlit(c) => return c,
+    // Matched in place, not moved out: a move copies the whole `Cow`, room
+    // for an owned material, even when it borrows.
+    let surface = surface_at(scene, ray, hit, depth, st);
+    let (m, ns): (&Material, Vec3) = match &surface {
+        Surface::Lit(m, ns) => (m, *ns),
+        Surface::Unlit(c) => return *c,
         Surface::Failed => return Vec3::ZERO,
     };
-    let m: &Material = &m;
     let entering = ray.d.dot(hit.ng) < 0.0;
     // Normals facing the side the ray came from.
     let (n, ng) = if entering { (ns, hit.ng) } else { (-ns, -hit.ng) };
@@ -209,13 +213,13 @@ pub(crate) fn direct(
     let (n, ng) = (ns, hit.ng);
     let eps = scene.shadow_epsilon;
     let origin = hit.p + ng * eps;
-    // A surface that reflects no direct light (clear glass) still draws each
-    // light's sample, so that later draws and the image stay as they were,
-    // but traces no shadow ray for it.
+    // A surface that reflects no direct light (clear glass) skips each
+    // light's draw, so that later draws and the image stay as they were,
+    // and traces no shadow ray for it.
     let reflects = m.brdf.is_some() || m.diffuse != Vec3::ZERO || m.specular != Vec3::ZERO;
     for light in &scene.lights {
         if !reflects {
-            let _ = light.sample(origin, hit.p, Some(n), st.time, &mut st.sampler);
+            light.skip_sample(&mut st.sampler);
             continue;
         }
         if let Some((ls, cos, tr)) = light_reaching(scene, light, origin, hit.p, n, st) {

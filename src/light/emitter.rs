@@ -77,7 +77,7 @@ impl LightMesh {
     }
 
     /// A point drawn uniformly by area from `(u1, u2)`, and its unit normal.
-    #[inline]
+    #[inline(always)]
     pub fn point(&self, (u1, u2): (f32, f32)) -> (Vec3, Vec3) {
         let total = self.area();
         let target = u1 * total;

@@ -196,6 +196,7 @@ fn render_tiles(
     let (w, h) = (camera.width, camera.height);
     let spread = camera.pixel_spread();
     let view = camera.view();
+    let uses_time = scene.uses_shutter_time();
     let mut origins = tile_origins(w, h);
     if let Some(sel) = opts.tiles {
         origins = origins
@@ -237,13 +238,21 @@ fn render_tiles(
                     break;
                 }
                 for x in x0..x1 {
+                    let pixel = PixelSampler::new(opts.seed, x, y, 0, spp);
                     for s in samples.clone() {
-                        let mut sampler = PixelSampler::new(opts.seed, x, y, s, spp);
+                        let mut sampler = pixel.at(s);
                         let (jx, jy) = if spp == 1 { (0.5, 0.5) } else { sampler.next_2d() };
                         // A pinhole ignores the lens: its draw would cost a
                         // stratified dimension for nothing.
                         let lens = if camera.has_lens() { sampler.next_2d() } else { (0.5, 0.5) };
-                        let time = sampler.next_1d();
+                        // A scene where the time changes nothing skips its
+                        // draw; the later draws stay where they were.
+                        let time = if uses_time {
+                            sampler.next_1d()
+                        } else {
+                            sampler.skip();
+                            0.0
+                        };
                         let ray = camera.lens_ray(x as f32 + jx, y as f32 + jy, lens);
                         let screen = Vec2::new((x as f32 + jx) / w as f32, (y as f32 + jy) / h as f32);
                         let mut st = PathState::new(*stats, time, sampler).for_pixel(screen, spread);

@@ -75,6 +75,21 @@ impl PixelSampler {
         }
     }
 
+    /// Sample `index` of the same pixel and count: what [`new`](Self::new)
+    /// gives, without its per-pixel set-up (the pixel's hash, the grid, the
+    /// reciprocals), which a pixel's samples share.
+    #[inline]
+    pub fn at(&self, index: u32) -> Self {
+        PixelSampler { index, dim: 0, slot: self.n.rem(index), stratified: u32::MAX, ..*self }
+    }
+
+    /// Passes over the next call without drawing it, for a value that would
+    /// go unused: the later calls keep the values they would have had.
+    #[inline]
+    pub fn skip(&mut self) {
+        self.dim += 1;
+    }
+
     /// Stratifies only the first `calls` calls (counted from the sampler's
     /// creation); the later ones are independent uniform draws, far cheaper.
     #[inline]

@@ -77,6 +77,30 @@ fn dimensions_differ_and_samples_repeat_exactly() {
     assert_ne!(c.next_2d(), p0);
 }
 
+/// A pixel's sampler moved to another sample, and a skipped call, give
+/// the draws of a sampler made for that sample and of a call made and
+/// discarded, for every kind of call (stratified, independent, one sample).
+#[test]
+fn samples_of_a_pixel_and_skipped_calls_keep_their_draws() {
+    for count in [1u32, 2, 7, 16, 100, 900] {
+        let pixel = PixelSampler::new(5, 17, 3, 0, count);
+        for index in [0, 1, count / 2, count - 1, count, count + 3] {
+            let (mut a, mut b) = (pixel.at(index), PixelSampler::new(5, 17, 3, index, count));
+            a.stratify_first(5);
+            b.stratify_first(5);
+            for call in 0..8 {
+                if call % 3 == 1 {
+                    a.skip();
+                    b.next_1d();
+                } else {
+                    assert_eq!(a.next_2d(), b.next_2d(), "count {count} sample {index} call {call}");
+                }
+            }
+            assert_eq!(a.next_1d(), b.next_1d());
+        }
+    }
+}
+
 #[test]
 fn calls_past_the_stratified_ones_are_uniform_and_repeatable() {
     // 4096 draws of a late call over samples and pixels: each of 16 bins

@@ -190,6 +190,28 @@ impl Scene {
         object.and_then(|o| self.object_labels.get(o as usize)).map_or("an object", String::as_str)
     }
 
+    /// Whether a camera sample's shutter time can change what it sees:
+    /// something moves, or a shader or a volume (whose scripts may read
+    /// `s.time`) is present. Without any, every time gives the same bits
+    /// (`p − 0·t` is `p`), and the render loop need not draw one.
+    pub fn uses_shutter_time(&self) -> bool {
+        let moves = |m: Vec3| m != Vec3::ZERO;
+        let light_moves = |l: &Light| match l {
+            Light::Mesh(m) => moves(m.motion),
+            Light::Sphere(s) => moves(s.motion),
+            Light::Shaded(s) => match &s.shape {
+                crate::light::ShadedShape::Mesh(m) => moves(m.motion),
+                crate::light::ShadedShape::Sphere(s) => moves(s.motion),
+            },
+            _ => false,
+        };
+        self.prims.iter().any(|p| moves(p.motion))
+            || self.lights.iter().any(light_moves)
+            || self.textures.shaders.is_some()
+            || !self.volumes.media.is_empty()
+            || !self.volumes.surfaces.is_empty()
+    }
+
     /// The indices a shader sees as `s.object_id` and `s.instance_id`: the
     /// geometry's object (an instance's mesh) and the object hit itself.
     pub fn object_ids(&self, hit: &Hit) -> (u32, u32) {
