@@ -5,10 +5,11 @@
 //! The same [`Bvh`] serves both levels of the renderer: triangles inside a
 //! mesh (see [`super::MeshAccel`]) and instances or analytic shapes at the top.
 //! It knows only boxes; what a primitive *is* stays with the caller, who gets
-//! leaf ranges into [`Bvh::prim_order`] and intersects them in a closure.
-//! Because the traversal is generic over that closure it is monomorphized per
-//! primitive type and the leaf test inlines into the loop, the way a
-//! hand-written traversal would.
+//! leaf ranges into [`Bvh::prim_order`] and intersects them in a closure
+//! ([`Bvh::closest`], [`Bvh::any`]) or, on the renderer's hot paths, in a
+//! `ClosestLeaf`/`AnyLeaf` implementation. Because the traversal is
+//! generic over the leaf test it is monomorphized per primitive type and the
+//! leaf test inlines into the loop, the way a hand-written traversal would.
 //!
 //! # Design
 //! - **Why 8-wide**: a node holds its eight children's boxes side by side
