@@ -19,7 +19,7 @@ use rayon::prelude::*;
 
 #[cfg(target_arch = "x86_64")]
 use super::bvh::fused_available;
-use super::bvh::Bvh;
+use super::bvh::{AnyLeaf, Bvh, ClosestLeaf};
 use super::tri_block::TriBlock;
 use super::triangle::{Triangle, WatertightRay};
 use crate::math::{Aabb, Ray};
@@ -145,8 +145,11 @@ impl MeshAccel {
         self.intersect_with::<true>(ray, wr, t_min, t_max, cull)
     }
 
+    /// [`MeshAccel::intersect_prepared`] for a caller compiled for AVX2 and
+    /// FMA (`AVX`, after checking `fused_available`) or not: the traversal
+    /// and leaf tests inline into the caller's own code.
     #[inline(always)]
-    fn intersect_with<const AVX: bool>(
+    pub(crate) fn intersect_with<const AVX: bool>(
         &self,
         ray: &Ray,
         wr: &WatertightRay,
@@ -164,11 +167,8 @@ impl MeshAccel {
                 leaf_closest::<AVX>(&blocks[range], ray, wr, t_min, &mut t, cull, &mut best);
             }
             None => {
-                // The leaf test is called in this one place, so it inlines
-                // into the traversal loop.
-                self.bvh.closest_with::<AVX, _>(ray, t_max, |range, t_max| {
-                    leaf_closest::<AVX>(&blocks[range], ray, wr, t_min, t_max, cull, &mut best)
-                });
+                let leaf = Closest::<AVX> { blocks, ray, wr, t_min, cull, best: &mut best };
+                self.bvh.closest_with::<AVX, _>(ray, t_max, leaf);
             }
         }
         best
@@ -203,14 +203,20 @@ impl MeshAccel {
         self.occluded_with::<true>(ray, wr, t_min, t_max)
     }
 
+    /// [`MeshAccel::occluded_prepared`] as [`MeshAccel::intersect_with`] is
+    /// to [`MeshAccel::intersect_prepared`].
     #[inline(always)]
-    fn occluded_with<const AVX: bool>(&self, ray: &Ray, wr: &WatertightRay, t_min: f32, t_max: f32) -> bool {
+    pub(crate) fn occluded_with<const AVX: bool>(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+        t_min: f32,
+        t_max: f32,
+    ) -> bool {
         let blocks = &self.blocks[..];
         match self.bvh.single_leaf() {
             Some(range) => leaf_any::<AVX>(&blocks[range], wr, t_min, t_max),
-            None => self.bvh.any_with::<AVX, _>(ray, t_max, |range, t_max| {
-                leaf_any::<AVX>(&blocks[range], wr, t_min, t_max)
-            }),
+            None => self.bvh.any_with::<AVX, _>(ray, t_max, Any::<AVX> { blocks, wr, t_min }),
         }
     }
 
@@ -238,6 +244,37 @@ impl MeshAccel {
     /// Heap memory held by the accelerator.
     pub fn memory_bytes(&self) -> usize {
         self.bvh.memory_bytes() + self.blocks.capacity() * size_of::<TriBlock>()
+    }
+}
+
+/// The closest-hit leaf test of a mesh's traversal.
+struct Closest<'a, const AVX: bool> {
+    blocks: &'a [TriBlock],
+    ray: &'a Ray,
+    wr: &'a WatertightRay,
+    t_min: f32,
+    cull: f32,
+    best: &'a mut Option<TriHit>,
+}
+
+impl<const AVX: bool> ClosestLeaf for Closest<'_, AVX> {
+    #[inline(always)]
+    fn test(&mut self, range: std::ops::Range<usize>, t_max: &mut f32) -> bool {
+        leaf_closest::<AVX>(&self.blocks[range], self.ray, self.wr, self.t_min, t_max, self.cull, self.best)
+    }
+}
+
+/// The any-hit leaf test of a mesh's traversal.
+struct Any<'a, const AVX: bool> {
+    blocks: &'a [TriBlock],
+    wr: &'a WatertightRay,
+    t_min: f32,
+}
+
+impl<const AVX: bool> AnyLeaf for Any<'_, AVX> {
+    #[inline(always)]
+    fn test(&mut self, range: std::ops::Range<usize>, t_max: f32) -> bool {
+        leaf_any::<AVX>(&self.blocks[range], self.wr, self.t_min, t_max)
     }
 }
 

@@ -5,10 +5,11 @@
 //! The same [`Bvh`] serves both levels of the renderer: triangles inside a
 //! mesh (see [`super::MeshAccel`]) and instances or analytic shapes at the top.
 //! It knows only boxes; what a primitive *is* stays with the caller, who gets
-//! leaf ranges into [`Bvh::prim_order`] and intersects them in a closure.
-//! Because the traversal is generic over that closure it is monomorphized per
-//! primitive type and the leaf test inlines into the loop, the way a
-//! hand-written traversal would.
+//! leaf ranges into [`Bvh::prim_order`] and intersects them in a closure
+//! ([`Bvh::closest`], [`Bvh::any`]) or, on the renderer's hot paths, in a
+//! `ClosestLeaf`/`AnyLeaf` implementation. Because the traversal is
+//! generic over the leaf test it is monomorphized per primitive type and the
+//! leaf test inlines into the loop, the way a hand-written traversal would.
 //!
 //! # Design
 //! - **Why 8-wide**: a node holds its eight children's boxes side by side
@@ -55,6 +56,42 @@ pub const MAX_PRIMS: usize = 1 << 28;
 /// children, and the wide tree is no deeper than the binary one. Left
 /// uninitialised, so its size costs nothing per ray.
 const STACK: usize = (WIDTH - 1) * (SAH_MAX_DEPTH + 33) + 1;
+
+/// A closest-hit leaf test: `test(range, &mut t_max)` tests the primitives
+/// at `range`, lowers `t_max` to the nearest hit closer than it and returns
+/// whether it found one. A trait and not a closure so that an implementation
+/// can mark its body `#[inline(always)]`: a closure's body is its own
+/// function, compiled for the CPU features of the function it is written
+/// in, and once LLVM stops inlining it into a bigger AVX2 caller its SIMD
+/// code stays out of line (see `docs/performance.md`, session 11).
+pub(crate) trait ClosestLeaf {
+    /// Tests one leaf.
+    fn test(&mut self, range: Range<usize>, t_max: &mut f32) -> bool;
+}
+
+/// An any-hit leaf test: `test(range, t_max)` returns whether some primitive
+/// at `range` blocks the ray before `t_max` (see [`ClosestLeaf`]).
+pub(crate) trait AnyLeaf {
+    /// Tests one leaf.
+    fn test(&mut self, range: Range<usize>, t_max: f32) -> bool;
+}
+
+/// A closure as a leaf test, for callers off the hot paths.
+struct FnLeaf<F>(F);
+
+impl<F: FnMut(Range<usize>, &mut f32) -> bool> ClosestLeaf for FnLeaf<F> {
+    #[inline(always)]
+    fn test(&mut self, range: Range<usize>, t_max: &mut f32) -> bool {
+        (self.0)(range, t_max)
+    }
+}
+
+impl<F: FnMut(Range<usize>, f32) -> bool> AnyLeaf for FnLeaf<F> {
+    #[inline(always)]
+    fn test(&mut self, range: Range<usize>, t_max: f32) -> bool {
+        (self.0)(range, t_max)
+    }
+}
 
 /// A bounding-volume hierarchy. See the module documentation.
 #[derive(Clone, Debug, PartialEq)]
@@ -268,9 +305,9 @@ impl Bvh {
         #[cfg(target_arch = "x86_64")]
         if fused_available() {
             // SAFETY: the CPU has AVX2 and FMA.
-            return unsafe { self.closest_fused(ray, t_max, leaf) };
+            return unsafe { self.closest_fused(ray, t_max, FnLeaf(leaf)) };
         }
-        self.closest_plain::<false, F>(ray, t_max, leaf)
+        self.closest_plain::<false, _>(ray, t_max, FnLeaf(leaf))
     }
 
     /// [`Bvh::closest`] compiled for AVX2 and FMA, leaf test included (which
@@ -281,13 +318,8 @@ impl Bvh {
     /// The CPU must have AVX2 and FMA.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    unsafe fn closest_fused<F: FnMut(Range<usize>, &mut f32) -> bool>(
-        &self,
-        ray: &Ray,
-        t_max: f32,
-        leaf: F,
-    ) -> bool {
-        self.closest_plain::<true, F>(ray, t_max, leaf)
+    unsafe fn closest_fused<L: ClosestLeaf>(&self, ray: &Ray, t_max: f32, leaf: L) -> bool {
+        self.closest_plain::<true, L>(ray, t_max, leaf)
     }
 
     /// [`Bvh::closest`] for a caller that has itself been compiled for AVX2
@@ -295,32 +327,27 @@ impl Bvh {
     /// the traversal, and the caller's leaf test with it, inline into the
     /// caller's own AVX2 code (see [`super::MeshAccel`]).
     #[inline(always)]
-    pub(crate) fn closest_with<const FUSED: bool, F: FnMut(Range<usize>, &mut f32) -> bool>(
+    pub(crate) fn closest_with<const FUSED: bool, L: ClosestLeaf>(
         &self,
         ray: &Ray,
         t_max: f32,
-        leaf: F,
+        leaf: L,
     ) -> bool {
-        self.closest_plain::<FUSED, F>(ray, t_max, leaf)
+        self.closest_plain::<FUSED, L>(ray, t_max, leaf)
     }
 
     /// [`Bvh::any`] as [`Bvh::closest_with`] is to [`Bvh::closest`].
     #[inline(always)]
-    pub(crate) fn any_with<const FUSED: bool, F: FnMut(Range<usize>, f32) -> bool>(
-        &self,
-        ray: &Ray,
-        t_max: f32,
-        leaf: F,
-    ) -> bool {
-        self.any_plain::<FUSED, F>(ray, t_max, leaf)
+    pub(crate) fn any_with<const FUSED: bool, L: AnyLeaf>(&self, ray: &Ray, t_max: f32, leaf: L) -> bool {
+        self.any_plain::<FUSED, L>(ray, t_max, leaf)
     }
 
     #[inline(always)]
-    fn closest_plain<const FUSED: bool, F: FnMut(Range<usize>, &mut f32) -> bool>(
+    fn closest_plain<const FUSED: bool, L: ClosestLeaf>(
         &self,
         ray: &Ray,
         mut t_max: f32,
-        mut leaf: F,
+        mut leaf: L,
     ) -> bool {
         let r = RayPre::new(ray);
         let mut cur = self.root;
@@ -347,7 +374,7 @@ impl Bvh {
                 // An unused slot is never a leaf, even if the box test let it
                 // through (a NaN ray passes every comparison as a hit).
                 if cur != EMPTY {
-                    hit |= leaf(leaf_range(cur), &mut t_max);
+                    hit |= leaf.test(leaf_range(cur), &mut t_max);
                 }
             } else {
                 let n = &nodes[cur as usize];
@@ -417,9 +444,9 @@ impl Bvh {
         #[cfg(target_arch = "x86_64")]
         if fused_available() {
             // SAFETY: the CPU has AVX2 and FMA.
-            return unsafe { self.any_fused(ray, t_max, leaf) };
+            return unsafe { self.any_fused(ray, t_max, FnLeaf(leaf)) };
         }
-        self.any_plain::<false, F>(ray, t_max, leaf)
+        self.any_plain::<false, _>(ray, t_max, FnLeaf(leaf))
     }
 
     /// [`Bvh::any`] compiled for AVX2 and FMA (see [`Bvh::closest_fused`]).
@@ -428,17 +455,12 @@ impl Bvh {
     /// The CPU must have AVX2 and FMA.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    unsafe fn any_fused<F: FnMut(Range<usize>, f32) -> bool>(&self, ray: &Ray, t_max: f32, leaf: F) -> bool {
-        self.any_plain::<true, F>(ray, t_max, leaf)
+    unsafe fn any_fused<L: AnyLeaf>(&self, ray: &Ray, t_max: f32, leaf: L) -> bool {
+        self.any_plain::<true, L>(ray, t_max, leaf)
     }
 
     #[inline(always)]
-    fn any_plain<const FUSED: bool, F: FnMut(Range<usize>, f32) -> bool>(
-        &self,
-        ray: &Ray,
-        t_max: f32,
-        mut leaf: F,
-    ) -> bool {
+    fn any_plain<const FUSED: bool, L: AnyLeaf>(&self, ray: &Ray, t_max: f32, mut leaf: L) -> bool {
         let r = RayPre::new(ray);
         let mut cur = self.root;
         if cur & LEAF != 0 && (cur == EMPTY || !r.hit_box(&self.bounds, t_max)) {
@@ -451,7 +473,7 @@ impl Bvh {
         let mut sp = 0;
         loop {
             if cur & LEAF != 0 {
-                if cur != EMPTY && leaf(leaf_range(cur), t_max) {
+                if cur != EMPTY && leaf.test(leaf_range(cur), t_max) {
                     return true;
                 }
             } else {

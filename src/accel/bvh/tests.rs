@@ -359,9 +359,9 @@ fn fused_node_test_is_conservative_and_traversals_agree() {
             };
             // SAFETY: AVX2 and FMA were detected.
             let hit = if fused {
-                unsafe { bvh.closest_fused(&ray, t_max, leaf) }
+                unsafe { bvh.closest_fused(&ray, t_max, FnLeaf(leaf)) }
             } else {
-                bvh.closest_plain::<false, _>(&ray, t_max, leaf)
+                bvh.closest_plain::<false, _>(&ray, t_max, FnLeaf(leaf))
             };
             (hit, best)
         };
@@ -370,8 +370,8 @@ fn fused_node_test_is_conservative_and_traversals_agree() {
             bvh.prim_order()[range].iter().any(|&p| boxes[p as usize].hit(ray.o, inv, t).is_some())
         };
         // SAFETY: AVX2 and FMA were detected.
-        let any_fused = unsafe { bvh.any_fused(&ray, t_max, blocked) };
-        assert_eq!(any_fused, bvh.any_plain::<false, _>(&ray, t_max, blocked), "ray {k}");
+        let any_fused = unsafe { bvh.any_fused(&ray, t_max, FnLeaf(blocked)) };
+        assert_eq!(any_fused, bvh.any_plain::<false, _>(&ray, t_max, FnLeaf(blocked)), "ray {k}");
     }
     assert!(plain_hits > 10_000, "{plain_hits}");
     // The margin is a few ulps: it should almost never matter.
