@@ -447,11 +447,16 @@ fn bounce(
             return Vec3::ZERO;
         }
     }
+    let ray = Ray::new(origin, wi);
+    // Past the depth limit the bounce looks for emitters alone.
+    if past_limit(scene, depth + 1, p) && !scene.may_find_emission(&ray) {
+        return Vec3::ZERO;
+    }
     if !st.spawn(next.max_element()) {
         return Vec3::ZERO;
     }
     let came = Came::Bounce { pdf, n };
-    weight * li(scene, &Ray::new(origin, wi), depth + 1, next, came, p, st) / q
+    weight * li(scene, &ray, depth + 1, next, came, p, st) / q
 }
 
 /// Mirror, conductor and dielectric rays, as the recursive ray tracer sends
