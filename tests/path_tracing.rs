@@ -107,13 +107,13 @@ fn mis_choosing_lights_by_power_keeps_the_known_radiance() {
 }
 
 #[test]
-fn mis_counts_light_samples_in_full_where_no_bounce_follows() {
-    // At the depth limit no bounce follows, so a light sample weighed
-    // against one would lose the bounce's share. A sphere of radius 1.5 at
-    // height 2 fills so wide a cone (1 − cos θmax = 0.34) that its density,
-    // 0.47, is near the cosine bounce's: the power heuristic gives the light
-    // sample about three quarters of the weight. With no bounce the floor
-    // must still get ρ L R²/d² = 0.5 · 10 · 2.25 / 4.
+fn mis_keeps_the_last_bounces_share_of_the_light() {
+    // At the depth limit MIS still weighs each light sample against a
+    // bounce, so that bounce must be traced (for the light it hits, nothing
+    // more) or its share is lost. A sphere of radius 1.5 at height 2 fills
+    // so wide a cone (1 − cos θmax = 0.34) that its density, 0.47, is near
+    // the cosine bounce's: the power heuristic gives the bounce about a
+    // quarter of the weight. The floor must get ρ L R²/d² = 0.5 · 10 · 2.25 / 4.
     let dir = tempfile::tempdir().expect("temp dir");
     let text = floor_scene("<Renderer>PathTracing</Renderer><RendererParams>MIS</RendererParams>")
         .replace("<MaxRecursionDepth>1</MaxRecursionDepth>", "<MaxRecursionDepth>0</MaxRecursionDepth>")
@@ -126,6 +126,49 @@ fn mis_counts_light_samples_in_full_where_no_bounce_follows() {
         (m - expected).abs() <= 4.0 * se + 0.01 * expected,
         "mean {m:.4} ± {se:.4}, expected {expected:.4}"
     );
+}
+
+/// Per-pixel variance of the green channel, from two seeds' differences.
+fn two_seed_variance(scene: &Scene, spp: u32) -> f64 {
+    let img =
+        |seed| render_with(scene, 0, &RenderOptions { spp: Some(spp), seed, ..Default::default() }, &|_| {});
+    let (a, b) = (img(1), img(2));
+    let d2: f64 = a.pixels.iter().zip(&b.pixels).map(|(x, y)| f64::from(x.y - y.y).powi(2)).sum();
+    d2 / 2.0 / a.pixels.len() as f64
+}
+
+#[test]
+fn mis_at_the_depth_limit_is_less_noisy_than_light_samples_alone() {
+    // The floor beside a wall-like 1×1 `LightMesh` standing 0.05 from the
+    // point the camera sees, at depth 0. Area samples of the light near its
+    // foot carry cos·cos/d² terms that make next-event estimation noisy;
+    // MIS weighs them against the bounce, which finds those directions with
+    // a bounded weight. If MIS counted its light samples in full at the last
+    // vertex (no bounce traced there), its noise would be next-event
+    // estimation's.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = |params: &str| {
+        let text = floor_scene(&format!("<Renderer>PathTracing</Renderer><RendererParams>{params}</RendererParams>"))
+            .replace("<MaxRecursionDepth>1</MaxRecursionDepth>", "<MaxRecursionDepth>0</MaxRecursionDepth>")
+            .replace(
+                "<VertexData>0 0 0  0 2 0</VertexData>",
+                "<VertexData>0 0 0  0.05 0 -0.5  0.05 1 -0.5  0.05 1 0.5  0.05 0 0.5</VertexData>",
+            )
+            .replace(
+                r#"<LightSphere id="1"><Material>2</Material><Center>2</Center><Radius>0.5</Radius><Radiance>10 10 10</Radiance></LightSphere>"#,
+                r#"<LightMesh id="1"><Material>2</Material><Faces>2 3 4  2 4 5</Faces><Radiance>10 10 10</Radiance></LightMesh>"#,
+            );
+        Scene::build(&load(dir.path(), &text)).expect("scene builds")
+    };
+    let (mis, nee) = (scene("MIS"), scene("NextEventEstimation"));
+    let (vm, vn) = (two_seed_variance(&mis, 16), two_seed_variance(&nee, 16));
+    println!("per-pixel variance at depth 0: MIS {vm:.5}, next-event estimation {vn:.5}");
+    assert!(vn > 0.0, "next-event estimation shows no noise to compare with");
+    assert!(vm < 0.5 * vn, "MIS variance {vm:.5} is not below half of next-event estimation's {vn:.5}");
+    let all: Vec<usize> = (0..16 * 16).collect();
+    let ((a, sa), (b, sb)) = (two_seed_mean(&mis, 16, &all), two_seed_mean(&nee, 16, &all));
+    let z = (a - b) / (sa * sa + sb * sb).sqrt();
+    assert!(z.abs() <= 4.0, "MIS {a:.4} ± {sa:.4} and next-event estimation {b:.4} ± {sb:.4} disagree");
 }
 
 #[test]

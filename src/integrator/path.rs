@@ -103,7 +103,30 @@ fn li(
         }
         None => (f32::INFINITY, escaped(scene, ray, came, p, st)),
     };
+    if past_limit(scene, depth, p) {
+        // The light found past the depth limit arrives dimmed by the media
+        // on the way; scattering there would be one bounce too many.
+        if color == Vec3::ZERO {
+            return color;
+        }
+        return color * volumes::media_transmittance(scene, ray, t, st);
+    }
     volumes::through_media(scene, ray, t, color, st)
+}
+
+/// Whether a vertex at `depth` lies past the path's depth limit. Only MIS
+/// traces a ray there: the last vertex's bounce, which finds the light its
+/// direction hits so that the light samples drawn at that vertex can be
+/// weighed against it (as Mitsuba's path tracer does). Counting those light
+/// samples in full instead has the same mean but not the same noise: near
+/// an area light, light samples alone have a variance that grows as 1/d².
+#[inline]
+fn past_limit(scene: &Scene, depth: u32, p: &PathParams) -> bool {
+    if p.russian_roulette {
+        depth > MAX_BOUNCES
+    } else {
+        depth > scene.max_depth
+    }
 }
 
 /// What a ray that leaves the scene brings: the environment (weighed against
@@ -172,17 +195,22 @@ fn shade(
         color += m.emission * w;
     }
 
+    if past_limit(scene, depth, p) {
+        return color;
+    }
     let inside_dielectric = !entering && matches!(m.kind, Specular::Dielectric { .. });
     let reflects = m.diffuse.max_element() > 0.0 || m.specular.max_element() > 0.0;
     let origin = hit.p + ng * eps;
     if reflects && !inside_dielectric {
         let more = depth < MAX_BOUNCES && (p.russian_roulette || depth < scene.max_depth);
         let frame = Frame::new(n);
-        let at = At { n, wo: frame.to_local(-ray.d), frame, d: ray.d, weigh: p.mis && more };
+        let at = At { n, wo: frame.to_local(-ray.d), frame, d: ray.d };
         if p.next_event || p.mis {
             color += next_event(scene, m, hit, &at, origin, depth, p, st);
         }
-        if more {
+        // Under MIS the last vertex's bounce is traced too, for emission
+        // only (see [`past_limit`]).
+        if more || p.mis {
             color += bounce(scene, m, &at, origin, depth, beta, p, st);
         }
     }
@@ -227,11 +255,8 @@ fn next_event(
         }
         let Some((ls, cos, tr)) = light_reaching(scene, light, origin, hit.p, at.n, st) else { continue };
         let (f, bsdf_pdf) = light_terms(m, at, ls.wi, cos, p);
-        let w = if at.weigh && hittable(light) {
-            power_heuristic(ls.pdf / scale, bsdf_pdf) * scale
-        } else {
-            scale
-        };
+        let w =
+            if p.mis && hittable(light) { power_heuristic(ls.pdf / scale, bsdf_pdf) * scale } else { scale };
         color += f * (tr * ls.e) * w;
     }
     color
@@ -286,7 +311,7 @@ fn shaded_sample(
         return Vec3::ZERO;
     }
     let (f, bsdf_pdf) = light_terms(m, at, wi, cos, p);
-    let w = if at.weigh { power_heuristic(pdf / scale, bsdf_pdf) * scale } else { scale };
+    let w = if p.mis { power_heuristic(pdf / scale, bsdf_pdf) * scale } else { scale };
     f * (tr * e.emission) * (w / pdf)
 }
 
@@ -336,26 +361,21 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
 
 /// The shading point's frame, shared by its light samples and its bounce:
 /// the facing shading normal `n`, the frame around it, the direction to the
-/// viewer in that frame, the incoming ray's direction `d`, and whether MIS
-/// weighs the light samples against a bounce (`weigh`). Where no bounce
-/// follows (the depth limit) the bounce's share of the light would be lost:
-/// the light samples then count in full, as they do for lights no bounce
-/// can hit.
+/// viewer in that frame, and the incoming ray's direction `d`.
 struct At {
     n: Vec3,
     frame: Frame,
     wo: Vec3,
     d: Vec3,
-    weigh: bool,
 }
 
 /// For a light sample from `wi` (`cos = n·wi > 0`): the reflectance times
 /// the cosine, and the density with which [`bounce`] would draw `wi` (zero
-/// unless MIS weighs the sample), the BRDF's local directions worked out once.
+/// unless MIS needs it), the BRDF's local directions worked out once.
 #[inline]
 fn light_terms(m: &Material, at: &At, wi: Vec3, cos: f32, p: &PathParams) -> (Vec3, f32) {
     match &m.brdf {
-        Some(b) if at.weigh => {
+        Some(b) if p.mis => {
             let local = at.frame.to_local(wi);
             let f = b.eval(m.diffuse, m.specular, local, at.wo) * cos;
             (f, b.pdf(m.diffuse, m.specular, at.wo, local))
@@ -438,11 +458,16 @@ fn bounce(
             return Vec3::ZERO;
         }
     }
+    let ray = Ray::new(origin, wi);
+    // Past the depth limit the bounce looks for emitters alone.
+    if past_limit(scene, depth + 1, p) && !scene.may_find_emission(&ray) {
+        return Vec3::ZERO;
+    }
     if !st.spawn(next.max_element()) {
         return Vec3::ZERO;
     }
     let came = Came::Bounce { pdf, n };
-    weight * li(scene, &Ray::new(origin, wi), depth + 1, next, came, p, st) / q
+    weight * li(scene, &ray, depth + 1, next, came, p, st) / q
 }
 
 /// Mirror, conductor and dielectric rays, as the recursive ray tracer sends

@@ -97,8 +97,14 @@ pub fn shadow(scene: &Scene, ray: &Ray, t_max: f32, st: &mut PathState) -> Vec3 
             }
         }
     }
+    media_transmittance(scene, ray, t_max, st)
+}
+
+/// The transmittance of every medium along `ray` up to `t_max`, without
+/// scattering: what reaches the ray's origin of light from `t_max`.
+pub fn media_transmittance(scene: &Scene, ray: &Ray, t_max: f32, st: &mut PathState) -> Vec3 {
     let mut tr = Vec3::ONE;
-    for v in &vols.media {
+    for v in &scene.volumes.media {
         tr *= transmittance(scene, v, ray, 0.0, t_max, st);
         if tr.max_element() < MIN_TRANSMITTANCE {
             return Vec3::ZERO;

@@ -196,8 +196,10 @@ impl Scene {
                 .collect(),
             integrators: desc.cameras.iter().map(|c| Integrator::from_desc(&c.renderer)).collect(),
             warnings,
+            emitting_bounds: None,
         };
         scene.add_shaded_lights();
+        scene.emitting_bounds = scene.emitting_boxes(|p| prim_bounds(p, &scene.meshes, &scene.ellipsoids));
         let bounds = scene.tlas.bounds();
         let radius = 0.5 * (bounds.max - bounds.min).length();
         scene.light_pick = LightPick::by_power(&scene.lights, radius);

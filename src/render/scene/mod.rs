@@ -18,7 +18,7 @@ use crate::accel::{Bvh, TriHit};
 use crate::geometry::{Ellipsoid, Mesh, Plane, Sphere};
 use crate::light::{Environment, Light, LightPick};
 use crate::material::Material;
-use crate::math::{Ray, Transform, Vec2, Vec3};
+use crate::math::{Aabb, Ray, Transform, Vec2, Vec3};
 use crate::render::camera::Camera;
 use crate::scene::Warning;
 use crate::texture::{TexFrame, TexList, Textures};
@@ -177,6 +177,8 @@ pub struct Scene {
     pub integrators: Vec<crate::integrator::Integrator>,
     /// Notes from building (e.g. degenerate triangles a PLY file had).
     pub warnings: Vec<Warning>,
+    /// Boxes around everything that can emit ([`Scene::emitting_boxes`]).
+    emitting_bounds: Option<Vec<Aabb>>,
 }
 
 impl Scene {

@@ -11,12 +11,14 @@
 //! too fine for the probes to see then reaches the image through bounces
 //! alone, at full weight as before: unbiased either way, only noisier.
 
-use super::{Geom, Scene, NO_LIGHT};
+use super::{Geom, Prim, Scene, NO_LIGHT};
 use crate::integrator::{surface_at, PathState, RayStats, Surface};
 use crate::light::{Light, LightMesh, LightSphere, ShadedLight, ShadedShape};
-use crate::math::{Ray, Transform, Vec3};
+use crate::math::{Aabb, Ray, Transform, Vec3};
 use crate::render::sampler::PixelSampler;
 use crate::scene::description::DecalMode;
+use crate::shader::ShaderSet;
+use crate::texture::TexList;
 use crate::texture::Texture;
 use std::sync::Arc;
 
@@ -30,11 +32,7 @@ impl Scene {
         let Some(shaders) = &self.textures.shaders else { return };
         let mut found = Vec::new();
         for (pi, p) in self.prims.iter().enumerate() {
-            let emits = self.textures.maps_of(p.textures).any(|m| match (m.texture, m.decal) {
-                (Texture::Shader { id }, DecalMode::Material) => shaders.has_emission(id as usize),
-                _ => false,
-            });
-            if !emits || p.light != NO_LIGHT {
+            if !self.shader_emits(shaders, p.textures) || p.light != NO_LIGHT {
                 continue;
             }
             let xf = p.xf.as_deref().copied().unwrap_or(Transform::IDENTITY);
@@ -62,6 +60,55 @@ impl Scene {
                 self.emitters += 1;
             }
         }
+    }
+
+    /// Whether the maps `tex` hold a material shader that defines `emission(s)`.
+    fn shader_emits(&self, shaders: &ShaderSet, tex: TexList) -> bool {
+        self.textures.maps_of(tex).any(|m| match (m.texture, m.decal) {
+            (Texture::Shader { id }, DecalMode::Material) => shaders.has_emission(id as usize),
+            _ => false,
+        })
+    }
+
+    /// The world boxes (swept over the shutter, by `bounds_of`) of every
+    /// object a ray can find emitting: object lights and objects whose
+    /// shader defines `emission(s)`, whether or not the probes saw it. `None`
+    /// where light can come from anywhere a ray goes: an environment,
+    /// volumes, or an infinite plane whose shader emits.
+    pub(super) fn emitting_boxes(&self, bounds_of: impl Fn(&Prim) -> Aabb) -> Option<Vec<Aabb>> {
+        if self.environment.is_some() || !self.volumes.surfaces.is_empty() || !self.volumes.media.is_empty() {
+            return None;
+        }
+        let shaders = self.textures.shaders.as_ref();
+        let emits = |tex: TexList| shaders.is_some_and(|s| self.shader_emits(s, tex));
+        if self.planes.iter().any(|p| emits(p.2)) {
+            return None;
+        }
+        let boxes = self.prims.iter().filter(|p| p.light != NO_LIGHT || emits(p.textures)).map(|p| {
+            let b = bounds_of(p);
+            // Wider by more than rounding, so that no ray the full trace
+            // would find on an emitter's edge misses its box.
+            let pad = Vec3::splat(1e-4 * (b.max - b.min).max_element() + 4.0 * self.intersection_epsilon);
+            Aabb::new(b.min - pad, b.max + pad)
+        });
+        Some(boxes.collect())
+    }
+
+    /// Whether `ray` could meet an emitting surface: false only when every
+    /// such surface is bounded ([`Scene::emitting_boxes`]) and the ray
+    /// misses all their boxes. The MIS path tracer's bounce past the depth
+    /// limit looks for nothing else, so it skips its trace then.
+    #[inline]
+    pub fn may_find_emission(&self, ray: &Ray) -> bool {
+        let Some(boxes) = &self.emitting_bounds else { return true };
+        let inv = Vec3::ONE / ray.d;
+        boxes.iter().any(|b| {
+            // A ray in a slab's plane gives NaN there, which min/max drop:
+            // that axis then does not rule the box out.
+            let (t0, t1) = ((b.min - ray.o) * inv, (b.max - ray.o) * inv);
+            let (near, far) = (t0.min(t1).max_element().max(0.0), t0.max(t1).min_element());
+            near <= far
+        })
     }
 
     /// The largest emission component the shader gives at the probe points
