@@ -67,6 +67,22 @@ impl Prim {
         self.xf.is_none() && self.motion == Vec3::ZERO
     }
 
+    /// The watertight form of the object-space ray `local`: the world ray's,
+    /// shared, where [`Prim::in_world`]; else made in `own`.
+    #[inline(always)]
+    fn watertight<'a>(
+        &self,
+        world: &'a WatertightRay,
+        local: &Ray,
+        own: &'a mut Option<WatertightRay>,
+    ) -> &'a WatertightRay {
+        if self.in_world() {
+            world
+        } else {
+            own.insert(WatertightRay::new(local))
+        }
+    }
+
     /// The ray at `time` in the primitive's object space (same `t` as in
     /// world space): motion blur undoes the object's translation at that time,
     /// then the inverse transform.
@@ -504,14 +520,8 @@ impl<const AVX: bool> ClosestLeaf for TopClosest<'_, AVX> {
             let local = p.to_local(self.ray, self.time);
             match p.geom {
                 Geom::Mesh(m) => {
-                    let own;
-                    let wr = match p.in_world() {
-                        true => self.world,
-                        false => {
-                            own = WatertightRay::new(&local);
-                            &own
-                        }
-                    };
+                    let mut own = None;
+                    let wr = p.watertight(self.world, &local, &mut own);
                     let accel = scene.meshes[m as usize].accel();
                     if let Some(h) = accel.intersect_with::<AVX>(&local, wr, t_min, *t_max, self.cull) {
                         *t_max = h.t;
@@ -563,14 +573,8 @@ impl<const AVX: bool> AnyLeaf for TopAny<'_, AVX> {
             let local = p.to_local(self.ray, self.time);
             let blocked = match p.geom {
                 Geom::Mesh(m) => {
-                    let own;
-                    let wr = match p.in_world() {
-                        true => self.world,
-                        false => {
-                            own = WatertightRay::new(&local);
-                            &own
-                        }
-                    };
+                    let mut own = None;
+                    let wr = p.watertight(self.world, &local, &mut own);
                     scene.meshes[m as usize].accel().occluded_with::<AVX>(&local, wr, t_min, t_max)
                 }
                 Geom::Sphere(s) => s.intersect(&local, t_min, t_max).is_some(),
