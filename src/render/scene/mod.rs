@@ -12,7 +12,6 @@
 
 #[cfg(target_arch = "x86_64")]
 use crate::accel::bvh::fused_available;
-use crate::accel::bvh::{AnyLeaf, ClosestLeaf};
 use crate::accel::triangle::WatertightRay;
 use crate::accel::{Bvh, TriHit};
 use crate::geometry::{Ellipsoid, Mesh, Plane, Sphere};
@@ -23,11 +22,11 @@ use crate::render::camera::Camera;
 use crate::scene::Warning;
 use crate::texture::{TexFrame, TexList, Textures};
 use crate::volume::Volumes;
-use std::ops::Range;
 use std::sync::Arc;
 
 mod build;
 mod shaded_lights;
+mod traverse;
 pub use build::BuildOptions;
 
 /// What a top-level primitive is.
@@ -416,175 +415,6 @@ impl Scene {
             footprint,
             ctx: Default::default(),
         }
-    }
-
-    /// Whether anything lies on `ray` at `time` between the intersection
-    /// epsilon and `t_max`.
-    pub fn occluded(&self, ray: &Ray, t_max: f32, time: f32) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        if fused_available() {
-            // SAFETY: the CPU has AVX2 and FMA.
-            return unsafe { self.occluded_avx2(ray, t_max, time) };
-        }
-        self.occluded_with::<false>(ray, t_max, time)
-    }
-
-    /// The nearest surface along `ray` and its distance ([`Scene::intersect`]
-    /// without the shading frame), with the whole two-level traversal
-    /// compiled for AVX2 and FMA: the top-level and mesh traversals and the
-    /// leaf tests inline into this one function (the leaf tests are
-    /// `#[inline(always)]` trait methods, not closures, for that). The results
-    /// are bit for bit those of the plain path: Rust never fuses on its own.
-    ///
-    /// # Safety
-    /// The CPU must have AVX2 and FMA.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn closest_avx2(&self, ray: &Ray, time: f32, cull: f32) -> (f32, Option<Closest>) {
-        self.closest_with::<true>(ray, time, cull)
-    }
-
-    #[inline(always)]
-    fn closest_with<const AVX: bool>(&self, ray: &Ray, time: f32, cull: f32) -> (f32, Option<Closest>) {
-        let t_min = self.intersection_epsilon;
-        let mut best_t = f32::INFINITY;
-        let mut best = None;
-        for (i, (pl, _, _, _)) in self.planes.iter().enumerate() {
-            if let Some(t) = pl.intersect(ray, t_min, best_t) {
-                best_t = t;
-                best = Some(Closest::Plane(i));
-            }
-        }
-        // The shear of the watertight triangle test, shared by every mesh
-        // that needs no transform.
-        let world = WatertightRay::new(ray);
-        let leaf = TopClosest::<AVX> {
-            scene: self,
-            ray,
-            world: &world,
-            time,
-            t_min,
-            cull,
-            best_t: &mut best_t,
-            best: &mut best,
-        };
-        let t_max = *leaf.best_t;
-        self.tlas.closest_with::<AVX, _>(ray, t_max, leaf);
-        (best_t, best)
-    }
-
-    /// [`Scene::occluded`] compiled for AVX2 and FMA (see
-    /// [`Scene::closest_avx2`]).
-    ///
-    /// # Safety
-    /// The CPU must have AVX2 and FMA.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn occluded_avx2(&self, ray: &Ray, t_max: f32, time: f32) -> bool {
-        self.occluded_with::<true>(ray, t_max, time)
-    }
-
-    #[inline(always)]
-    fn occluded_with<const AVX: bool>(&self, ray: &Ray, t_max: f32, time: f32) -> bool {
-        let t_min = self.intersection_epsilon;
-        if self.planes.iter().any(|(pl, _, _, _)| pl.intersect(ray, t_min, t_max).is_some()) {
-            return true;
-        }
-        let world = WatertightRay::new(ray);
-        let leaf = TopAny::<AVX> { scene: self, ray, world: &world, time, t_min };
-        self.tlas.any_with::<AVX, _>(ray, t_max, leaf)
-    }
-}
-
-/// The closest-hit leaf test of the top level: each primitive of the leaf,
-/// in order, against the nearest hit so far.
-struct TopClosest<'a, const AVX: bool> {
-    scene: &'a Scene,
-    ray: &'a Ray,
-    world: &'a WatertightRay,
-    time: f32,
-    t_min: f32,
-    cull: f32,
-    best_t: &'a mut f32,
-    best: &'a mut Option<Closest>,
-}
-
-impl<const AVX: bool> ClosestLeaf for TopClosest<'_, AVX> {
-    #[inline(always)]
-    fn test(&mut self, range: Range<usize>, t_max: &mut f32) -> bool {
-        let scene = self.scene;
-        let t_min = self.t_min;
-        let mut hit = false;
-        for pi in range {
-            let p = &scene.prims[pi];
-            let local = p.to_local(self.ray, self.time);
-            match p.geom {
-                Geom::Mesh(m) => {
-                    let mut own = None;
-                    let wr = p.watertight(self.world, &local, &mut own);
-                    let accel = scene.meshes[m as usize].accel();
-                    if let Some(h) = accel.intersect_with::<AVX>(&local, wr, t_min, *t_max, self.cull) {
-                        *t_max = h.t;
-                        *self.best = Some(Closest::Triangle(pi, h));
-                        hit = true;
-                    }
-                }
-                Geom::Sphere(s) => {
-                    if let Some(t) = s.intersect(&local, t_min, *t_max) {
-                        *t_max = t;
-                        *self.best = Some(Closest::Sphere(pi));
-                        hit = true;
-                    }
-                }
-                Geom::Ellipsoid(e) => {
-                    if let Some(t) = scene.ellipsoids[e as usize].intersect(&local, t_min, *t_max) {
-                        *t_max = t;
-                        *self.best = Some(Closest::Ellipsoid(pi));
-                        hit = true;
-                    }
-                }
-            }
-        }
-        if hit {
-            *self.best_t = *t_max;
-        }
-        hit
-    }
-}
-
-/// The any-hit leaf test of the top level.
-struct TopAny<'a, const AVX: bool> {
-    scene: &'a Scene,
-    ray: &'a Ray,
-    world: &'a WatertightRay,
-    time: f32,
-    t_min: f32,
-}
-
-impl<const AVX: bool> AnyLeaf for TopAny<'_, AVX> {
-    #[inline(always)]
-    fn test(&mut self, range: Range<usize>, t_max: f32) -> bool {
-        let scene = self.scene;
-        let t_min = self.t_min;
-        // A loop, not `Iterator::any`: a closure would be compiled apart
-        // from the AVX2 caller (see `ClosestLeaf`).
-        for pi in range {
-            let p = &scene.prims[pi];
-            let local = p.to_local(self.ray, self.time);
-            let blocked = match p.geom {
-                Geom::Mesh(m) => {
-                    let mut own = None;
-                    let wr = p.watertight(self.world, &local, &mut own);
-                    scene.meshes[m as usize].accel().occluded_with::<AVX>(&local, wr, t_min, t_max)
-                }
-                Geom::Sphere(s) => s.intersect(&local, t_min, t_max).is_some(),
-                Geom::Ellipsoid(e) => scene.ellipsoids[e as usize].intersect(&local, t_min, t_max).is_some(),
-            };
-            if blocked {
-                return true;
-            }
-        }
-        false
     }
 }
 
