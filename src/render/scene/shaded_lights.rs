@@ -97,18 +97,14 @@ impl Scene {
     /// Whether `ray` could meet an emitting surface: false only when every
     /// such surface is bounded ([`Scene::emitting_boxes`]) and the ray
     /// misses all their boxes. The MIS path tracer's bounce past the depth
-    /// limit looks for nothing else, so it skips its trace then.
+    /// limit looks for nothing else, so it skips its trace then. (A ray in
+    /// a slab's plane gives NaN there, which the slab test's min/max drop:
+    /// that axis then does not rule the box out.)
     #[inline]
     pub fn may_find_emission(&self, ray: &Ray) -> bool {
         let Some(boxes) = &self.emitting_bounds else { return true };
         let inv = Vec3::ONE / ray.d;
-        boxes.iter().any(|b| {
-            // A ray in a slab's plane gives NaN there, which min/max drop:
-            // that axis then does not rule the box out.
-            let (t0, t1) = ((b.min - ray.o) * inv, (b.max - ray.o) * inv);
-            let (near, far) = (t0.min(t1).max_element().max(0.0), t0.max(t1).min_element());
-            near <= far
-        })
+        boxes.iter().any(|b| b.hit(ray.o, inv, f32::INFINITY).is_some())
     }
 
     /// The largest emission component the shader gives at the probe points
