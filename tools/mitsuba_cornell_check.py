@@ -313,6 +313,33 @@ def noise_floor(a, work, verts, cam, meshes, lights, spheres, point, flip):
     print(f"  luster against Mitsuba (two seeds each): {100 * ((lum['luster0'] + lum['luster1']) / 2 / m - 1):+.2f}%"
           f" (seed to seed: Mitsuba {100 * (lum['mitsuba1'] / lum['mitsuba0'] - 1):+.2f}%, "
           f"luster {100 * (lum['luster1'] / lum['luster0'] - 1):+.2f}%)")
+    noise_structure(imgs, flip)
+
+
+def noise_structure(imgs, flip):
+    """What sets the seed-to-seed FLIP besides the amount of noise: the
+    per-pixel variance of each renderer (from its two seeds), the correlation
+    of the noise between horizontal and vertical neighbours, and the FLIP of
+    each seed pair again after the noise's sign is flipped at random pixels
+    (one ±1 field for both renderers, applied about the pair's mean): that
+    keeps every pixel's error and colour and removes only its correlation
+    with the neighbours. FLIP filters the images as the eye does (contrast
+    sensitivity), so noise that alternates between neighbours is seen less
+    than white noise of the same variance."""
+    r = np.random.default_rng(7).choice([-1.0, 1.0], size=imgs["mitsuba0"].shape[:2])[..., None]
+    var = {}
+    print("  noise structure (seed 0 minus seed 1):")
+    for who in ("mitsuba", "luster"):
+        a, b = imgs[f"{who}0"], imgs[f"{who}1"]
+        e = (a - b) @ W
+        var[who] = np.mean(e ** 2) / 2
+        cx = np.corrcoef(e[:, :-1].ravel(), e[:, 1:].ravel())[0, 1]
+        cy = np.corrcoef(e[:-1, :].ravel(), e[1:, :].ravel())[0, 1]
+        m = (a + b) / 2
+        hdr, ldr = flips(flip, m + (a - m) * r, m + (b - m) * r)
+        print(f"    {who:<8} neighbour correlation x {cx:+.3f}, y {cy:+.3f}; with the signs shuffled "
+              f"HDR-FLIP {hdr:.4f}, LDR-FLIP {ldr:.4f}")
+    print(f"    per-pixel variance of the luminance, luster / Mitsuba: {var['luster'] / var['mitsuba']:.3f}")
 
 
 if __name__ == "__main__":
