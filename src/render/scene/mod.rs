@@ -66,17 +66,20 @@ impl Prim {
         self.xf.is_none() && self.motion == Vec3::ZERO
     }
 
-    /// The watertight form of the object-space ray `local`: the world ray's,
-    /// shared, where [`Prim::in_world`]; else made in `own`.
+    /// The watertight form of the object-space ray `local`: the world ray's
+    /// (`ray`'s), shared, where [`Prim::in_world`], made in `world` on first
+    /// use (a shadow ray that meets no mesh never needs it); else made in
+    /// `own`.
     #[inline(always)]
     fn watertight<'a>(
         &self,
-        world: &'a WatertightRay,
+        world: &'a mut Option<WatertightRay>,
+        ray: &Ray,
         local: &Ray,
         own: &'a mut Option<WatertightRay>,
     ) -> &'a WatertightRay {
         if self.in_world() {
-            world
+            world.get_or_insert_with(|| WatertightRay::new(ray))
         } else {
             own.insert(WatertightRay::new(local))
         }

@@ -57,14 +57,14 @@ impl Scene {
                 best = Some(Closest::Plane(i));
             }
         }
-        // The shear of the watertight triangle test and the node test's
-        // constants, shared by every mesh that needs no transform.
-        let world = WatertightRay::new(ray);
+        // The node test's constants and the shear of the watertight
+        // triangle test (made when first needed), shared by every mesh that
+        // needs no transform.
         let tr = Traversal::new::<AVX>(ray);
         let leaf = TopClosest::<AVX> {
             scene: self,
             ray,
-            world: &world,
+            world: None,
             tr: &tr,
             time,
             t_min,
@@ -94,9 +94,8 @@ impl Scene {
         if self.planes.iter().any(|(pl, _, _, _)| pl.intersect(ray, t_min, t_max).is_some()) {
             return true;
         }
-        let world = WatertightRay::new(ray);
         let tr = Traversal::new::<AVX>(ray);
-        let leaf = TopAny::<AVX> { scene: self, ray, world: &world, tr: &tr, time, t_min };
+        let leaf = TopAny::<AVX> { scene: self, ray, world: None, tr: &tr, time, t_min };
         self.tlas.any_prepared(&tr, t_max, leaf)
     }
 }
@@ -106,7 +105,8 @@ impl Scene {
 struct TopClosest<'a, const AVX: bool> {
     scene: &'a Scene,
     ray: &'a Ray,
-    world: &'a WatertightRay,
+    /// The world ray's watertight form, once a mesh in world space needs it.
+    world: Option<WatertightRay>,
     tr: &'a Traversal,
     time: f32,
     t_min: f32,
@@ -127,7 +127,7 @@ impl<const AVX: bool> ClosestLeaf for TopClosest<'_, AVX> {
             match p.geom {
                 Geom::Mesh(m) => {
                     let mut own = None;
-                    let wr = p.watertight(self.world, &local, &mut own);
+                    let wr = p.watertight(&mut self.world, self.ray, &local, &mut own);
                     let pre = p.in_world().then_some(self.tr);
                     let accel = scene.meshes[m as usize].accel();
                     if let Some(h) = accel.intersect_with::<AVX>(&local, wr, pre, t_min, *t_max, self.cull) {
@@ -163,7 +163,8 @@ impl<const AVX: bool> ClosestLeaf for TopClosest<'_, AVX> {
 struct TopAny<'a, const AVX: bool> {
     scene: &'a Scene,
     ray: &'a Ray,
-    world: &'a WatertightRay,
+    /// The world ray's watertight form, once a mesh in world space needs it.
+    world: Option<WatertightRay>,
     tr: &'a Traversal,
     time: f32,
     t_min: f32,
@@ -182,7 +183,7 @@ impl<const AVX: bool> AnyLeaf for TopAny<'_, AVX> {
             let blocked = match p.geom {
                 Geom::Mesh(m) => {
                     let mut own = None;
-                    let wr = p.watertight(self.world, &local, &mut own);
+                    let wr = p.watertight(&mut self.world, self.ray, &local, &mut own);
                     let pre = p.in_world().then_some(self.tr);
                     scene.meshes[m as usize].accel().occluded_with::<AVX>(&local, wr, pre, t_min, t_max)
                 }
