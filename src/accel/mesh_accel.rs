@@ -19,7 +19,7 @@ use rayon::prelude::*;
 
 #[cfg(target_arch = "x86_64")]
 use super::bvh::fused_available;
-use super::bvh::{AnyLeaf, Bvh, ClosestLeaf};
+use super::bvh::{AnyLeaf, Bvh, ClosestLeaf, Traversal};
 use super::tri_block::TriBlock;
 use super::triangle::{Triangle, WatertightRay};
 use crate::math::{Aabb, Ray};
@@ -123,7 +123,7 @@ impl MeshAccel {
             // SAFETY: the CPU has AVX2 and FMA.
             return unsafe { self.intersect_avx2(ray, wr, t_min, t_max, cull) };
         }
-        self.intersect_with::<false>(ray, wr, t_min, t_max, cull)
+        self.intersect_with::<false>(ray, wr, None, t_min, t_max, cull)
     }
 
     /// [`MeshAccel::intersect_prepared`] compiled for AVX2 and FMA: the
@@ -142,17 +142,20 @@ impl MeshAccel {
         t_max: f32,
         cull: f32,
     ) -> Option<TriHit> {
-        self.intersect_with::<true>(ray, wr, t_min, t_max, cull)
+        self.intersect_with::<true>(ray, wr, None, t_min, t_max, cull)
     }
 
     /// [`MeshAccel::intersect_prepared`] for a caller compiled for AVX2 and
     /// FMA (`AVX`, after checking `fused_available`) or not: the traversal
-    /// and leaf tests inline into the caller's own code.
+    /// and leaf tests inline into the caller's own code. `pre`, when given,
+    /// is `ray` already prepared for traversal (by a caller whose own tree
+    /// saw the same ray), and is used instead of preparing it again.
     #[inline(always)]
     pub(crate) fn intersect_with<const AVX: bool>(
         &self,
         ray: &Ray,
         wr: &WatertightRay,
+        pre: Option<&Traversal>,
         t_min: f32,
         t_max: f32,
         cull: f32,
@@ -168,7 +171,10 @@ impl MeshAccel {
             }
             None => {
                 let leaf = Closest::<AVX> { blocks, ray, wr, t_min, cull, best: &mut best };
-                self.bvh.closest_with::<AVX, _>(ray, t_max, leaf);
+                match pre {
+                    Some(tr) => self.bvh.closest_prepared(tr, t_max, leaf),
+                    None => self.bvh.closest_with::<AVX, _>(ray, t_max, leaf),
+                };
             }
         }
         best
@@ -189,7 +195,7 @@ impl MeshAccel {
             // SAFETY: the CPU has AVX2 and FMA.
             return unsafe { self.occluded_avx2(ray, wr, t_min, t_max) };
         }
-        self.occluded_with::<false>(ray, wr, t_min, t_max)
+        self.occluded_with::<false>(ray, wr, None, t_min, t_max)
     }
 
     /// [`MeshAccel::occluded_prepared`] compiled for AVX2 and FMA (see
@@ -200,7 +206,7 @@ impl MeshAccel {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     unsafe fn occluded_avx2(&self, ray: &Ray, wr: &WatertightRay, t_min: f32, t_max: f32) -> bool {
-        self.occluded_with::<true>(ray, wr, t_min, t_max)
+        self.occluded_with::<true>(ray, wr, None, t_min, t_max)
     }
 
     /// [`MeshAccel::occluded_prepared`] as [`MeshAccel::intersect_with`] is
@@ -210,13 +216,16 @@ impl MeshAccel {
         &self,
         ray: &Ray,
         wr: &WatertightRay,
+        pre: Option<&Traversal>,
         t_min: f32,
         t_max: f32,
     ) -> bool {
         let blocks = &self.blocks[..];
-        match self.bvh.single_leaf() {
-            Some(range) => leaf_any::<AVX>(&blocks[range], wr, t_min, t_max),
-            None => self.bvh.any_with::<AVX, _>(ray, t_max, Any::<AVX> { blocks, wr, t_min }),
+        let leaf = Any::<AVX> { blocks, wr, t_min };
+        match (self.bvh.single_leaf(), pre) {
+            (Some(range), _) => leaf_any::<AVX>(&blocks[range], wr, t_min, t_max),
+            (None, Some(tr)) => self.bvh.any_prepared(tr, t_max, leaf),
+            (None, None) => self.bvh.any_with::<AVX, _>(ray, t_max, leaf),
         }
     }
 

@@ -123,9 +123,13 @@ impl WatertightRay {
 
 impl Triangle {
     /// The (unnormalized) normal of the winding: `(v1 - v0) × (v2 - v0)`.
-    #[inline]
+    /// Written out: `self.v.map(..)` was left out of line, a call per
+    /// back-face check of a camera ray's hits.
+    #[inline(always)]
     pub fn normal(&self) -> crate::math::Vec3 {
-        let [a, b, c] = self.v.map(crate::math::Vec3::from);
+        use crate::math::Vec3;
+        let [a, b, c] = self.v;
+        let (a, b, c) = (Vec3::from(a), Vec3::from(b), Vec3::from(c));
         (b - a).cross(c - a)
     }
 

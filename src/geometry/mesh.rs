@@ -108,7 +108,10 @@ impl Mesh {
 
     /// Geometric normal (from the winding, unnormalized) and shading normal
     /// (interpolated if smooth, else the geometric one), in object space.
-    #[inline]
+    /// Always inlined: called out of line from the AVX2 intersection, its
+    /// two vectors came back through memory and were read back in wider
+    /// loads than they were stored with.
+    #[inline(always)]
     pub fn normals_at(&self, hit: &TriHit) -> (Vec3, Vec3) {
         let t = self.triangles[hit.prim as usize];
         let [a, b, c] = t.map(|i| self.positions[i as usize]);

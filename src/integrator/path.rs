@@ -28,7 +28,7 @@
 //! light that ambient light stood in for.
 
 use super::whitted::{glossy, reflect, reflectance};
-use super::{light_reaching, surface_at, PathState, Surface};
+use super::{light_reaching_inline, surface_at, PathState, Surface};
 use crate::bsdf::fresnel;
 use crate::bsdf::sampling::{power_cosine, power_cosine_pdf};
 use crate::bsdf::{Brdf, Frame};
@@ -253,7 +253,9 @@ fn next_event(
             color += shaded_sample(scene, l, m, hit, at, origin, depth, scale, p, st);
             continue;
         }
-        let Some((ls, cos, tr)) = light_reaching(scene, light, origin, hit.p, at.n, st) else { continue };
+        let Some((ls, cos, tr)) = light_reaching_inline(scene, light, origin, hit.p, at.n, st) else {
+            continue;
+        };
         let (f, bsdf_pdf) = light_terms(m, at, ls.wi, cos, p);
         let w =
             if p.mis && hittable(light) { power_heuristic(ls.pdf / scale, bsdf_pdf) * scale } else { scale };

@@ -50,11 +50,14 @@ pub const MIN_TRANSMITTANCE: f32 = 1e-4;
 
 /// The closest surface or hypertexture hit along `ray`.
 pub fn trace(scene: &Scene, ray: &Ray, cull_back_faces: bool, st: &mut PathState) -> Option<Hit> {
-    let hit = scene.intersect(ray, st.time, cull_back_faces);
     let vols = &scene.volumes;
     if vols.surfaces.is_empty() {
-        return hit;
+        // Straight into the caller's slot: a hit kept in a local and copied
+        // out was read back in wide loads before the narrow stores that
+        // wrote it had landed.
+        return scene.intersect(ray, st.time, cull_back_faces);
     }
+    let hit = scene.intersect(ray, st.time, cull_back_faces);
     let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
     match vols.surface_hit(ray, scene.intersection_epsilon, t_max, &probe(ray, st)) {
         Ok(Some(c)) => {

@@ -76,6 +76,28 @@ pub(crate) trait AnyLeaf {
     fn test(&mut self, range: Range<usize>, t_max: f32) -> bool;
 }
 
+/// A ray prepared for traversal: the node test's per-ray constants (the
+/// reciprocal direction and what the fused test derives from it). A ray
+/// that meets several trees in the same space (the top level, then a mesh
+/// that needs no transform) prepares them once for all of them: the same
+/// values, so the same boxes entered.
+#[derive(Clone, Copy)]
+pub(crate) struct Traversal {
+    r: RayPre,
+    test: NodeTest,
+}
+
+impl Traversal {
+    /// Prepares `ray` for a traversal compiled for AVX2 and FMA (`FUSED`,
+    /// after checking [`fused_available`]) or not.
+    #[inline(always)]
+    pub(crate) fn new<const FUSED: bool>(ray: &Ray) -> Traversal {
+        let r = RayPre::new(ray);
+        let test = r.node_test::<FUSED>();
+        Traversal { r, test }
+    }
+}
+
 /// A closure as a leaf test, for callers off the hot paths.
 struct FnLeaf<F>(F);
 
@@ -343,13 +365,24 @@ impl Bvh {
     }
 
     #[inline(always)]
-    fn closest_plain<const FUSED: bool, L: ClosestLeaf>(
+    fn closest_plain<const FUSED: bool, L: ClosestLeaf>(&self, ray: &Ray, t_max: f32, leaf: L) -> bool {
+        self.closest_prepared(&Traversal::new::<FUSED>(ray), t_max, leaf)
+    }
+
+    #[inline(always)]
+    fn any_plain<const FUSED: bool, L: AnyLeaf>(&self, ray: &Ray, t_max: f32, leaf: L) -> bool {
+        self.any_prepared(&Traversal::new::<FUSED>(ray), t_max, leaf)
+    }
+
+    /// [`Bvh::closest_with`] for a ray already prepared (see [`Traversal`]).
+    #[inline(always)]
+    pub(crate) fn closest_prepared<L: ClosestLeaf>(
         &self,
-        ray: &Ray,
+        tr: &Traversal,
         mut t_max: f32,
         mut leaf: L,
     ) -> bool {
-        let r = RayPre::new(ray);
+        let (r, test) = (&tr.r, &tr.test);
         let mut cur = self.root;
         // Empty tree, or one leaf: the loop below calls `leaf` in one place
         // only, so that LLVM inlines it.
@@ -357,7 +390,6 @@ impl Bvh {
             return false;
         }
         let nodes = &self.nodes[..];
-        let test: NodeTest = r.node_test::<FUSED>();
         // Entries: child reference in the low half, entry distance's bits in
         // the high half. Only entries below `sp` are ever read.
         let mut stack = [MaybeUninit::<u64>::uninit(); STACK];
@@ -378,7 +410,7 @@ impl Bvh {
                 }
             } else {
                 let n = &nodes[cur as usize];
-                let (tn, mut mask) = test.hit(&r, n, t_max);
+                let (tn, mut mask) = test.hit(r, n, t_max);
                 if mask != 0 {
                     let a = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -459,15 +491,15 @@ impl Bvh {
         self.any_plain::<true, L>(ray, t_max, leaf)
     }
 
+    /// [`Bvh::any_with`] for a ray already prepared (see [`Traversal`]).
     #[inline(always)]
-    fn any_plain<const FUSED: bool, L: AnyLeaf>(&self, ray: &Ray, t_max: f32, mut leaf: L) -> bool {
-        let r = RayPre::new(ray);
+    pub(crate) fn any_prepared<L: AnyLeaf>(&self, tr: &Traversal, t_max: f32, mut leaf: L) -> bool {
+        let (r, test) = (&tr.r, &tr.test);
         let mut cur = self.root;
         if cur & LEAF != 0 && (cur == EMPTY || !r.hit_box(&self.bounds, t_max)) {
             return false;
         }
         let nodes = &self.nodes[..];
-        let test: NodeTest = r.node_test::<FUSED>();
         // Only entries below `sp` are ever read.
         let mut stack = [MaybeUninit::<u32>::uninit(); STACK];
         let mut sp = 0;
@@ -478,7 +510,7 @@ impl Bvh {
                 }
             } else {
                 let n = &nodes[cur as usize];
-                let (_, mut mask) = test.hit(&r, n, t_max);
+                let (_, mut mask) = test.hit(r, n, t_max);
                 if mask != 0 {
                     // Order does not matter for "any": take the first, defer the rest.
                     cur = n.child[mask.trailing_zeros() as usize];

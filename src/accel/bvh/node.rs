@@ -108,18 +108,21 @@ pub(super) fn decode(r: u32) -> Child {
     }
 }
 
-/// Ray data the node test needs, computed once per traversal.
+/// Ray data the node test needs, computed once per traversal. Kept as
+/// vectors, not arrays: the traversals broadcast them from registers, where
+/// arrays went through the stack and their reloads, wider than the stores
+/// that wrote them, waited for those stores to retire.
 #[derive(Clone, Copy)]
 pub(super) struct RayPre {
-    o: [Vec4; 3],
-    inv: [Vec4; 3],
+    o: Vec3A,
+    inv: Vec3A,
     /// Row of [`Node8::bounds`] holding each axis's near and far plane.
     near: [usize; 3],
     far: [usize; 3],
     /// For the fused test `b * inv + c`: `c = -o * inv`, moved down (near
     /// planes) or up (far planes) by more than its rounding error.
-    c_near: [f32; 3],
-    c_far: [f32; 3],
+    c_near: Vec3A,
+    c_far: Vec3A,
     /// Whether `c_near` and `c_far` are finite, so the fused test applies.
     pub(super) fused_ok: bool,
 }
@@ -143,17 +146,18 @@ impl RayPre {
         // large next to the result. A margin of two ulps, taken outwards,
         // covers it and the rounding of the margin itself; the relative
         // errors left are the ones `SLAB_EXPAND` already covers.
-        let oi = Vec3A::from(ray.o) * inv;
+        let o = Vec3A::from(ray.o);
+        let oi = o * inv;
         let pad = oi.abs() * (2.0 * f32::EPSILON);
         let (cn, cf) = (-oi - pad, -oi + pad);
         let fused_ok = cn.is_finite() && cf.is_finite();
         RayPre {
-            o: [Vec4::splat(ray.o.x), Vec4::splat(ray.o.y), Vec4::splat(ray.o.z)],
-            inv: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
+            o,
+            inv,
             near: [nx, 2 + ny, 4 + nz],
             far: [1 - nx, 3 - ny, 5 - nz],
-            c_near: cn.to_array(),
-            c_far: cf.to_array(),
+            c_near: cn,
+            c_far: cf,
             fused_ok,
         }
     }
@@ -178,7 +182,7 @@ impl RayPre {
         let s = _mm256_set1_ps;
         let (inv, cn, cf) = (&self.inv, &self.c_near, &self.c_far);
         let (near, far) = (&self.near, &self.far);
-        let plane = |r: usize, a: usize, c: f32| _mm256_fmadd_ps(row(r), s(inv[a].x), s(c));
+        let plane = |r: usize, a: usize, c: f32| _mm256_fmadd_ps(row(r), s(inv[a]), s(c));
         let tn = _mm256_max_ps(
             _mm256_max_ps(plane(near[0], 0, cn[0]), plane(near[1], 1, cn[1])),
             _mm256_max_ps(plane(near[2], 2, cn[2]), _mm256_setzero_ps()),
@@ -212,7 +216,8 @@ impl RayPre {
     #[inline(always)]
     pub(super) fn hit(&self, n: &Node8, t_max: f32) -> ([f32; WIDTH], u32) {
         let half = |h: usize| {
-            let slab = |row: usize, a: usize| (n.half(row, h) - self.o[a]) * self.inv[a];
+            let slab =
+                |row: usize, a: usize| (n.half(row, h) - Vec4::splat(self.o[a])) * Vec4::splat(self.inv[a]);
             let tn =
                 slab(self.near[0], 0).max(slab(self.near[1], 1)).max(slab(self.near[2], 2).max(Vec4::ZERO));
             let tf = slab(self.far[0], 0).min(slab(self.far[1], 1)).min(slab(self.far[2], 2));
@@ -231,7 +236,7 @@ impl RayPre {
         // Row `2a` of a node is axis a's minimum, row `2a + 1` its maximum.
         let (lo, hi) = (b.min.to_array(), b.max.to_array());
         let bound = |row: usize| if row % 2 == 0 { lo[row / 2] } else { hi[row / 2] };
-        let slab = |row: usize, a: usize| (bound(row) - self.o[a].x) * self.inv[a].x;
+        let slab = |row: usize, a: usize| (bound(row) - self.o[a]) * self.inv[a];
         let tn = slab(self.near[0], 0).max(slab(self.near[1], 1)).max(slab(self.near[2], 2).max(0.0));
         let tf = slab(self.far[0], 0).min(slab(self.far[1], 1)).min(slab(self.far[2], 2));
         tn <= (tf * SLAB_EXPAND).min(t_max)
@@ -289,9 +294,9 @@ impl FusedRay {
         use std::arch::x86_64::_mm256_set1_ps as s;
         let (inv, cn, cf) = (&r.inv, &r.c_near, &r.c_far);
         FusedRay {
-            inv: [s(inv[0].x), s(inv[1].x), s(inv[2].x)],
-            c_near: [s(cn[0]), s(cn[1]), s(cn[2])],
-            c_far: [s(cf[0]), s(cf[1]), s(cf[2])],
+            inv: [s(inv.x), s(inv.y), s(inv.z)],
+            c_near: [s(cn.x), s(cn.y), s(cn.z)],
+            c_far: [s(cf.x), s(cf.y), s(cf.z)],
             near: r.near.map(|row| row * WIDTH),
             far: r.far.map(|row| row * WIDTH),
         }

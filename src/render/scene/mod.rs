@@ -66,17 +66,20 @@ impl Prim {
         self.xf.is_none() && self.motion == Vec3::ZERO
     }
 
-    /// The watertight form of the object-space ray `local`: the world ray's,
-    /// shared, where [`Prim::in_world`]; else made in `own`.
+    /// The watertight form of the object-space ray `local`: the world ray's
+    /// (`ray`'s), shared, where [`Prim::in_world`], made in `world` on first
+    /// use (a shadow ray that meets no mesh never needs it); else made in
+    /// `own`.
     #[inline(always)]
     fn watertight<'a>(
         &self,
-        world: &'a WatertightRay,
+        world: &'a mut Option<WatertightRay>,
+        ray: &Ray,
         local: &Ray,
         own: &'a mut Option<WatertightRay>,
     ) -> &'a WatertightRay {
         if self.in_world() {
-            world
+            world.get_or_insert_with(|| WatertightRay::new(ray))
         } else {
             own.insert(WatertightRay::new(local))
         }
@@ -297,13 +300,37 @@ impl Scene {
     pub fn intersect(&self, ray: &Ray, time: f32, cull_back_faces: bool) -> Option<Hit> {
         let cull = if cull_back_faces { 1.0 } else { 0.0 };
         #[cfg(target_arch = "x86_64")]
-        let (best_t, best) = match fused_available() {
+        if fused_available() {
             // SAFETY: the CPU has AVX2 and FMA.
-            true => unsafe { self.closest_avx2(ray, time, cull) },
-            false => self.closest_with::<false>(ray, time, cull),
-        };
-        #[cfg(not(target_arch = "x86_64"))]
-        let (best_t, best) = self.closest_with::<false>(ray, time, cull);
+            return unsafe { self.intersect_avx2(ray, time, cull) };
+        }
+        self.intersect_plain(ray, time, cull)
+    }
+
+    /// [`Scene::intersect`] without AVX2, kept out of line so that its
+    /// traversal stacks do not enlarge the caller's frame.
+    #[inline(never)]
+    fn intersect_plain(&self, ray: &Ray, time: f32, cull: f32) -> Option<Hit> {
+        self.intersect_with::<false>(ray, time, cull)
+    }
+
+    /// [`Scene::intersect`] compiled for AVX2 and FMA, the hit's normals
+    /// worked out in the same function as the traversal: returned from a
+    /// function of their own, the traversal's results went through memory
+    /// and were read back in wider loads than they were written with, which
+    /// waited for the stores. The same operations, so the same bits.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn intersect_avx2(&self, ray: &Ray, time: f32, cull: f32) -> Option<Hit> {
+        self.intersect_with::<true>(ray, time, cull)
+    }
+
+    #[inline(always)]
+    fn intersect_with<const AVX: bool>(&self, ray: &Ray, time: f32, cull: f32) -> Option<Hit> {
+        let (best_t, best) = self.closest_with::<AVX>(ray, time, cull);
         let (pi, ng, ns, geom) = match best? {
             Closest::Plane(i) => {
                 let (pl, material, textures, _) = self.planes[i];

@@ -9,7 +9,7 @@
 
 #[cfg(target_arch = "x86_64")]
 use crate::accel::bvh::fused_available;
-use crate::accel::bvh::{AnyLeaf, ClosestLeaf};
+use crate::accel::bvh::{AnyLeaf, ClosestLeaf, Traversal};
 use crate::accel::triangle::WatertightRay;
 use crate::math::Ray;
 use std::ops::Range;
@@ -25,24 +25,22 @@ impl Scene {
             // SAFETY: the CPU has AVX2 and FMA.
             return unsafe { self.occluded_avx2(ray, t_max, time) };
         }
+        self.occluded_plain(ray, t_max, time)
+    }
+
+    /// [`Scene::occluded`] without AVX2, out of line (see
+    /// [`Scene::intersect`]'s `intersect_plain`).
+    #[inline(never)]
+    fn occluded_plain(&self, ray: &Ray, t_max: f32, time: f32) -> bool {
         self.occluded_with::<false>(ray, t_max, time)
     }
 
     /// The nearest surface along `ray` and its distance ([`Scene::intersect`]
-    /// without the shading frame), with the whole two-level traversal
-    /// compiled for AVX2 and FMA: the top-level and mesh traversals and the
-    /// leaf tests inline into this one function (the leaf tests are
-    /// `#[inline(always)]` trait methods, not closures, for that). The results
-    /// are bit for bit those of the plain path: Rust never fuses on its own.
-    ///
-    /// # Safety
-    /// The CPU must have AVX2 and FMA.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) unsafe fn closest_avx2(&self, ray: &Ray, time: f32, cull: f32) -> (f32, Option<Closest>) {
-        self.closest_with::<true>(ray, time, cull)
-    }
-
+    /// without the shading frame), for a caller compiled for AVX2 and FMA
+    /// (`AVX`) or not: the top-level and mesh traversals and the leaf tests
+    /// inline into the caller (the leaf tests are `#[inline(always)]` trait
+    /// methods, not closures, for that). The results are bit for bit those
+    /// of the plain path: Rust never fuses on its own.
     #[inline(always)]
     pub(super) fn closest_with<const AVX: bool>(
         &self,
@@ -59,13 +57,15 @@ impl Scene {
                 best = Some(Closest::Plane(i));
             }
         }
-        // The shear of the watertight triangle test, shared by every mesh
-        // that needs no transform.
-        let world = WatertightRay::new(ray);
+        // The node test's constants and the shear of the watertight
+        // triangle test (made when first needed), shared by every mesh that
+        // needs no transform.
+        let tr = Traversal::new::<AVX>(ray);
         let leaf = TopClosest::<AVX> {
             scene: self,
             ray,
-            world: &world,
+            world: None,
+            tr: &tr,
             time,
             t_min,
             cull,
@@ -73,12 +73,12 @@ impl Scene {
             best: &mut best,
         };
         let t_max = *leaf.best_t;
-        self.tlas.closest_with::<AVX, _>(ray, t_max, leaf);
+        self.tlas.closest_prepared(&tr, t_max, leaf);
         (best_t, best)
     }
 
     /// [`Scene::occluded`] compiled for AVX2 and FMA (see
-    /// [`Scene::closest_avx2`]).
+    /// [`Scene::closest_with`]).
     ///
     /// # Safety
     /// The CPU must have AVX2 and FMA.
@@ -94,9 +94,9 @@ impl Scene {
         if self.planes.iter().any(|(pl, _, _, _)| pl.intersect(ray, t_min, t_max).is_some()) {
             return true;
         }
-        let world = WatertightRay::new(ray);
-        let leaf = TopAny::<AVX> { scene: self, ray, world: &world, time, t_min };
-        self.tlas.any_with::<AVX, _>(ray, t_max, leaf)
+        let tr = Traversal::new::<AVX>(ray);
+        let leaf = TopAny::<AVX> { scene: self, ray, world: None, tr: &tr, time, t_min };
+        self.tlas.any_prepared(&tr, t_max, leaf)
     }
 }
 
@@ -105,7 +105,9 @@ impl Scene {
 struct TopClosest<'a, const AVX: bool> {
     scene: &'a Scene,
     ray: &'a Ray,
-    world: &'a WatertightRay,
+    /// The world ray's watertight form, once a mesh in world space needs it.
+    world: Option<WatertightRay>,
+    tr: &'a Traversal,
     time: f32,
     t_min: f32,
     cull: f32,
@@ -125,9 +127,10 @@ impl<const AVX: bool> ClosestLeaf for TopClosest<'_, AVX> {
             match p.geom {
                 Geom::Mesh(m) => {
                     let mut own = None;
-                    let wr = p.watertight(self.world, &local, &mut own);
+                    let wr = p.watertight(&mut self.world, self.ray, &local, &mut own);
+                    let pre = p.in_world().then_some(self.tr);
                     let accel = scene.meshes[m as usize].accel();
-                    if let Some(h) = accel.intersect_with::<AVX>(&local, wr, t_min, *t_max, self.cull) {
+                    if let Some(h) = accel.intersect_with::<AVX>(&local, wr, pre, t_min, *t_max, self.cull) {
                         *t_max = h.t;
                         *self.best = Some(Closest::Triangle(pi, h));
                         hit = true;
@@ -160,7 +163,9 @@ impl<const AVX: bool> ClosestLeaf for TopClosest<'_, AVX> {
 struct TopAny<'a, const AVX: bool> {
     scene: &'a Scene,
     ray: &'a Ray,
-    world: &'a WatertightRay,
+    /// The world ray's watertight form, once a mesh in world space needs it.
+    world: Option<WatertightRay>,
+    tr: &'a Traversal,
     time: f32,
     t_min: f32,
 }
@@ -178,8 +183,9 @@ impl<const AVX: bool> AnyLeaf for TopAny<'_, AVX> {
             let blocked = match p.geom {
                 Geom::Mesh(m) => {
                     let mut own = None;
-                    let wr = p.watertight(self.world, &local, &mut own);
-                    scene.meshes[m as usize].accel().occluded_with::<AVX>(&local, wr, t_min, t_max)
+                    let wr = p.watertight(&mut self.world, self.ray, &local, &mut own);
+                    let pre = p.in_world().then_some(self.tr);
+                    scene.meshes[m as usize].accel().occluded_with::<AVX>(&local, wr, pre, t_min, t_max)
                 }
                 Geom::Sphere(s) => s.intersect(&local, t_min, t_max).is_some(),
                 Geom::Ellipsoid(e) => scene.ellipsoids[e as usize].intersect(&local, t_min, t_max).is_some(),
