@@ -50,6 +50,8 @@ const CASES: &[(&str, &[&str])] = &[
     ("light_mesh_without_radiance.xml", &["LightMesh[id=1]", "missing its <Radiance>"]),
     ("light_sphere_negative_radiance.xml", &["<Radiance>", "not negative"]),
     ("renderer_params_unknown_word.xml", &["<RendererParams>", "word 2", "unknown", "NextEventEstimation"]),
+    ("renderer_params_all_lights_without_mis.xml", &["<RendererParams>", "AllLights", "needs MIS"]),
+    ("renderer_params_one_and_all_lights.xml", &["<RendererParams>", "both AllLights and OneLight"]),
     ("renderer_unknown.xml", &["<Renderer>", "unknown", "PathTracing"]),
     ("material_without_id.xml", &["<Material>", "no id"]),
     ("unknown_transformation.xml", &["\"t9\"", "not defined", "Transformations"]),

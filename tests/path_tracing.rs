@@ -83,27 +83,55 @@ fn every_variant_finds_the_known_radiance_under_a_sphere_light() {
     }
 }
 
+/// `floor_scene` with a point light of intensity 4 at (2, 2, 0) beside its
+/// sphere light, and the radiance the floor then sends to the camera.
+fn two_light_scene(params: &str) -> (String, f64) {
+    let text = floor_scene(&format!("<Renderer>PathTracing</Renderer><RendererParams>{params}</RendererParams>"))
+        .replace(
+            "  <VertexData>",
+            "  <Lights><PointLight id=\"1\"><Position>2 2 0</Position><Intensity>4 4 4</Intensity></PointLight></Lights>\n  <VertexData>",
+        );
+    // The point light adds ρ/π · I cos/d² = 0.5/π · 4 · (2/√8)/8 at the
+    // origin; the sphere does not shade it (the line passes 1.41 from its
+    // centre).
+    (text, 0.3125 + 0.5 / std::f64::consts::PI * 4.0 * (2.0 / 8f64.sqrt()) / 8.0)
+}
+
 #[test]
-fn mis_choosing_lights_by_power_keeps_the_known_radiance() {
-    // The sphere light of `floor_scene` (power π·10·4π·0.25 ≈ 98.7) and a
-    // point light of intensity 4 at (2, 2, 0) (power 4π·4 ≈ 50.3): MIS
-    // chooses them 2:1, not evenly. The point light adds
-    // ρ/π · I cos/d² = 0.5/π · 4 · (2/√8)/8 at the origin; the sphere does not
-    // shade it (the line passes 1.41 from its centre). A light whose choice
-    // were weighed with another chance than it was drawn with would miss.
+fn mis_keeps_the_known_radiance_choosing_one_light_or_sampling_all() {
+    // The sphere light (power π·10·4π·0.25 ≈ 98.7) and the point light
+    // (power 4π·4 ≈ 50.3): under `OneLight` MIS chooses them 2:1, not
+    // evenly; `AllLights`, and `MIS` alone with so few lights, sample both
+    // at every hit. A light weighed with another chance than it was drawn
+    // with would miss.
     let dir = tempfile::tempdir().expect("temp dir");
-    let text = floor_scene("<Renderer>PathTracing</Renderer><RendererParams>MIS</RendererParams>").replace(
-        "  <VertexData>",
-        "  <Lights><PointLight id=\"1\"><Position>2 2 0</Position><Intensity>4 4 4</Intensity></PointLight></Lights>\n  <VertexData>",
-    );
-    let expected = 0.3125 + 0.5 / std::f64::consts::PI * 4.0 * (2.0 / 8f64.sqrt()) / 8.0;
-    let img = render(&load(dir.path(), &text), &RenderOptions { spp: Some(64), ..Default::default() });
-    let (m, se) = mean_and_se(&img);
-    println!("two lights under MIS: {m:.4} ± {se:.4} (expected {expected:.4})");
-    assert!(
-        (m - expected).abs() <= 4.0 * se + 0.01 * expected,
-        "mean {m:.4} ± {se:.4}, expected {expected:.4}"
-    );
+    for params in ["MIS OneLight", "MIS AllLights", "MIS"] {
+        let (text, expected) = two_light_scene(params);
+        let img = render(&load(dir.path(), &text), &RenderOptions { spp: Some(64), ..Default::default() });
+        let (m, se) = mean_and_se(&img);
+        println!("two lights under {params}: {m:.4} ± {se:.4} (expected {expected:.4})");
+        assert!(
+            (m - expected).abs() <= 4.0 * se + 0.01 * expected,
+            "{params}: mean {m:.4} ± {se:.4}, expected {expected:.4}"
+        );
+    }
+}
+
+#[test]
+fn mis_sampling_both_of_two_lights_is_less_noisy_than_choosing_one() {
+    // One sample of a light chosen by power carries the choice's noise
+    // (each light's estimate divided by its chance) on top of the sample's
+    // own; sampling both has only the latter, and the point light's has
+    // none. By default a scene with so few lights samples them all.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene =
+        |params: &str| Scene::build(&load(dir.path(), &two_light_scene(params).0)).expect("scene builds");
+    let (one, all, auto) = (scene("MIS OneLight"), scene("MIS AllLights"), scene("MIS"));
+    let (v1, va, vd) = (two_seed_variance(&one, 4), two_seed_variance(&all, 4), two_seed_variance(&auto, 4));
+    println!("per-pixel variance with two lights: OneLight {v1:.6}, AllLights {va:.6}, MIS alone {vd:.6}");
+    assert!(v1 > 0.0, "choosing one light shows no noise to compare with");
+    assert!(va < 0.5 * v1, "AllLights variance {va:.6} is not below half of OneLight's {v1:.6}");
+    assert_eq!(va, vd, "MIS alone does not sample both of two lights");
 }
 
 #[test]

@@ -149,12 +149,13 @@ def mitsuba_dict(work, verts, cam, meshes, lights, spheres, point, spp, res, see
     return scene
 
 
-def luster_scene(src, dst, spp, res):
-    """The course file with its first camera only, made luster's MIS path tracer."""
+def luster_scene(src, dst, spp, res, params="MIS"):
+    """The course file with its first camera only, made luster's MIS path
+    tracer (`params`: its RendererParams words)."""
     text = open(src).read()
     cams = re.findall(r"<Camera .*?</Camera>", text, flags=re.S)
     cam = cams[0]
-    cam = re.sub(r"<RendererParams>.*?</RendererParams>", "<RendererParams>MIS</RendererParams>", cam)
+    cam = re.sub(r"<RendererParams>.*?</RendererParams>", f"<RendererParams>{params}</RendererParams>", cam)
     cam = re.sub(r"<NumSamples>\d+</NumSamples>", f"<NumSamples>{spp}</NumSamples>", cam)
     cam = re.sub(r"<ImageResolution>.*?</ImageResolution>", f"<ImageResolution>{res} {res}</ImageResolution>", cam)
     cam = re.sub(r"<ImageName>.*?</ImageName>", "<ImageName>luster.exr</ImageName>", cam)
@@ -198,6 +199,10 @@ def main():
     ap.add_argument("--threads", type=int, default=0, help="threads of both renderers (0: all cores)")
     ap.add_argument("--reps", type=int, default=3, help="alternating runs of each renderer in the speed check")
     ap.add_argument("--keep", help="folder to keep both renders in")
+    ap.add_argument("--params", default="MIS",
+                    help="luster's RendererParams words (default MIS: with this scene's two lights, both are "
+                         "sampled at every hit; 'MIS OneLight' takes one per hit, chosen by power, as Mitsuba "
+                         "takes one chosen uniformly)")
     ap.add_argument("--floor", type=int, default=None, metavar="REF_SPP",
                     help="instead: the noise floor of the FLIP check at --spp (each renderer against itself "
                          "with two seeds) and both against Mitsuba at REF_SPP (0: no such reference); images "
@@ -219,7 +224,7 @@ def main():
         if spp <= 0:
             continue
         ls = os.path.join(work, "luster.xml")
-        luster_scene(a.scene, ls, spp, a.res)
+        luster_scene(a.scene, ls, spp, a.res, a.params)
         d = mitsuba_dict(work, verts, cam, meshes, lights, spheres, point, spp, a.res)
         reps = a.reps if label == "speed" else 1
         runs = []
@@ -273,7 +278,7 @@ def noise_floor(a, work, verts, cam, meshes, lights, spheres, point, flip):
     image is kept in --keep (or the temporary folder) and reused when it is
     already there, so a run can be resumed and the table recomputed."""
     ls = os.path.join(work, "luster.xml")
-    luster_scene(a.scene, ls, a.spp, a.res)
+    luster_scene(a.scene, ls, a.spp, a.res, a.params)
     jobs = [(f"{who}{seed}", who, seed, a.spp) for seed in (0, 1) for who in ("mitsuba", "luster")]
     if a.floor > 0:
         jobs.append(("ref", "mitsuba", 7, a.floor))

@@ -46,6 +46,7 @@ impl Integrator {
                 importance: p.importance,
                 russian_roulette: p.russian_roulette,
                 mis: p.mis,
+                lights: p.lights,
             }),
         }
     }

@@ -14,7 +14,7 @@
 //! | `ImportanceSampling` | cosine-weighted bounces, `p = cos/π` |
 //! | `NextEventEstimation` | every light sampled at every hit; an emitter a bounce then hits adds nothing (it was counted already) |
 //! | `RussianRoulette` | no depth limit: a path goes on with probability `q = min(1, max(throughput))` and its estimate is divided by `q` |
-//! | `MIS` (luster) | bounces drawn from the BSDF; one light, chosen by power ([`crate::light::pick`]), sampled per hit (its estimate divided by the chance of choosing it); light and bounce samples both count, weighed by the power heuristic `p_a² / (p_a² + p_b²)` with the light's density times the chance of choosing it; the environment light is sampled and hit alike |
+//! | `MIS` (luster) | bounces drawn from the BSDF; every light sampled per hit in a scene with at most four (`AllLights`: always), else one, chosen by power ([`crate::light::pick`]; `OneLight`: always), its estimate divided by the chance of choosing it; light and bounce samples both count, weighed by the power heuristic `p_a² / (p_a² + p_b²)` with the light's density times the chance of choosing it; the environment light is sampled and hit alike |
 //!
 //! Without `RussianRoulette` a path ends after `MaxRecursionDepth` bounces,
 //! as the course's reflections do. Mirrors, conductors and dielectrics are
@@ -37,6 +37,7 @@ use crate::material::{Material, Specular};
 use crate::math::{Ray, Vec3};
 use crate::render::scene::{Hit, Scene};
 use crate::render::volumes;
+use crate::scene::description::LightSamples;
 
 /// Bounces after which even Russian roulette stops a path (the throughput of
 /// a path that long is far below anything visible).
@@ -53,6 +54,37 @@ pub struct PathParams {
     pub russian_roulette: bool,
     /// Multiple importance sampling of light and BSDF samples.
     pub mis: bool,
+    /// Under MIS, how many lights a hit samples.
+    pub lights: LightSamples,
+}
+
+/// Under MIS, a scene with at most this many lights has every one sampled
+/// at every hit ([`LightSamples::Auto`]); with more, one is chosen by power.
+/// One light sample per hit leaves the noise of the choice: on the Cornell
+/// box of `tools/mitsuba_cornell_check.py` (a point light and a light box)
+/// sampling both removes 57% of the variance for 20% more time (docs/path-tracing.md,
+/// "Lights per hit"). Each light adds a shadow ray to every hit, so the
+/// count is kept small.
+const EVERY_LIGHT_UP_TO: usize = 4;
+
+/// Whether MIS samples every light at a hit rather than one chosen by power.
+#[inline]
+fn every_light(scene: &Scene, p: &PathParams) -> bool {
+    match p.lights {
+        LightSamples::All => true,
+        LightSamples::One => scene.lights.len() <= 1,
+        LightSamples::Auto => scene.lights.len() <= EVERY_LIGHT_UP_TO,
+    }
+}
+
+/// The chance that MIS's light sampling takes light `i` at a hit.
+#[inline]
+fn pick_pmf(scene: &Scene, p: &PathParams, i: usize) -> f32 {
+    if every_light(scene, p) {
+        1.0
+    } else {
+        scene.light_pick.pmf(i)
+    }
 }
 
 /// How the ray being traced left its last surface, which decides how much an
@@ -75,7 +107,14 @@ const STRATIFIED_FIRST_HIT: u32 = 4;
 
 /// Radiance arriving along the camera ray `ray`.
 pub fn radiance(scene: &Scene, ray: &Ray, p: &PathParams, st: &mut PathState) -> Vec3 {
-    st.sampler.stratify_first(st.sampler.calls() + STRATIFIED_FIRST_HIT);
+    // Sampling every light, the first hit draws once per light that draws,
+    // then the lobe and the direction.
+    let first_hit = if p.mis && scene.lights.len() > 1 && every_light(scene, p) {
+        2 + scene.lights.iter().filter(|l| l.draws()).count() as u32
+    } else {
+        STRATIFIED_FIRST_HIT
+    };
+    st.sampler.stratify_first(st.sampler.calls() + first_hit);
     li(scene, ray, 0, Vec3::ONE, Came::Direct, p, st)
 }
 
@@ -141,7 +180,8 @@ fn escaped(scene: &Scene, ray: &Ray, came: Came, p: &PathParams, st: &PathState)
         // The density of the environment's own sampler (importance, uniform
         // or cosine about the normal), as its light samples were drawn.
         Came::Bounce { pdf, n } if p.mis => {
-            power_heuristic(pdf, env.sampling_pdf(Some(n), d) * scene.light_pick.environment_pmf())
+            let pick = if every_light(scene, p) { 1.0 } else { scene.light_pick.environment_pmf() };
+            power_heuristic(pdf, env.sampling_pdf(Some(n), d) * pick)
         }
         Came::Bounce { .. } if p.next_event => 0.0,
         Came::Bounce { .. } => 1.0,
@@ -237,9 +277,10 @@ fn next_event(
     st: &mut PathState,
 ) -> Vec3 {
     let mut color = Vec3::ZERO;
-    // MIS takes one light per hit, chosen by power: a shadow ray per hit
-    // whatever the number of lights. The course's variant samples them all.
-    let (lights, scale) = if p.mis && scene.lights.len() > 1 {
+    // MIS takes every light of a scene with few ([`every_light`]), else one
+    // per hit, chosen by power: a shadow ray per hit whatever the number of
+    // lights. The course's variant samples them all.
+    let (lights, scale) = if p.mis && !every_light(scene, p) {
         let (i, pick) = scene.light_pick.choose(st.sampler.next_1d());
         if pick <= 0.0 {
             return color;
@@ -325,7 +366,7 @@ fn hit_weight(scene: &Scene, li: usize, came: Came, ray: &Ray, hit: &Hit, p: &Pa
     match came {
         Came::Direct => 1.0,
         Came::Bounce { pdf, .. } if p.mis => {
-            let pick = scene.light_pick.pmf(li);
+            let pick = pick_pmf(scene, p, li);
             power_heuristic(pdf, pick * light_pdf(&scene.lights[li], ray.o, hit, ray.d, time))
         }
         Came::Bounce { .. } if p.next_event => 0.0,

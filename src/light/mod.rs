@@ -263,9 +263,20 @@ impl Light {
     /// without making it (for a surface that reflects no direct light).
     #[inline]
     pub fn skip_sample(&self, sampler: &mut PixelSampler) {
-        if matches!(self, Light::Area(_) | Light::Mesh(_) | Light::Sphere(_) | Light::Environment(_)) {
+        if self.draws() && !matches!(self, Light::Shaded(_)) {
             sampler.skip();
         }
+    }
+
+    /// Whether a sample of this light draws from the sampler: every light
+    /// with an extent (an emissive shader's in the path tracer, which draws
+    /// its point itself; [`sample`](Self::sample) draws for the others).
+    #[inline]
+    pub fn draws(&self) -> bool {
+        matches!(
+            self,
+            Light::Area(_) | Light::Mesh(_) | Light::Sphere(_) | Light::Environment(_) | Light::Shaded(_)
+        )
     }
 }
 

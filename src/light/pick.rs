@@ -1,7 +1,8 @@
-//! Which light the MIS path tracer samples at a hit: one light per hit,
-//! chosen with probability proportional to its emitted power, so a bright
-//! lamp gets its shadow rays and a dim fill light few (pbrt's "power light
-//! sampler"). The chance of the choice enters every MIS weight, so the
+//! Which light the MIS path tracer samples at a hit when it samples one (a
+//! scene with more than four lights, or `OneLight`; with fewer it samples
+//! them all): chosen with probability proportional to its emitted power, so
+//! a bright lamp gets its shadow rays and a dim fill light few (pbrt's
+//! "power light sampler"). The chance of the choice enters every MIS weight, so the
 //! estimate is unbiased for any positive choice of probabilities; power
 //! only lowers the variance.
 //!

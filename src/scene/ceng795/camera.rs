@@ -25,7 +25,7 @@
 use super::Warnings;
 use crate::film::outputs::{file_key, plan_outputs};
 use crate::math::Transform;
-use crate::scene::description::{CameraDesc, PathParamsDesc, Projection, RendererDesc};
+use crate::scene::description::{CameraDesc, LightSamples, PathParamsDesc, Projection, RendererDesc};
 use crate::scene::element::{Element, Reader};
 use crate::scene::error::SceneError;
 use std::path::{Component, Path};
@@ -253,8 +253,10 @@ pub fn transform_all(
 
 /// A camera's integrator: `<Renderer>PathTracing</Renderer>` with the words of
 /// `<RendererParams>` (none, or an empty element: the course's uniform
-/// variant; `MIS`: luster's multiple importance sampling), else the course's
-/// recursive ray tracer. An unknown renderer or word is an error.
+/// variant; `MIS`: luster's multiple importance sampling, with `AllLights` or
+/// `OneLight` to say how many lights a hit samples), else the course's
+/// recursive ray tracer. An unknown renderer or word is an error, and so are
+/// `AllLights` and `OneLight` together or without `MIS`.
 pub fn renderer(r: &Reader, c: &Element) -> Result<RendererDesc, SceneError> {
     let Some(re) = c.child("Renderer") else {
         if let Some(p) = c.child("RendererParams") {
@@ -268,20 +270,24 @@ pub fn renderer(r: &Reader, c: &Element) -> Result<RendererDesc, SceneError> {
         _ => return Err(r.err(re, "<Renderer> is unknown (expected PathTracing, RayTracing or Whitted)")),
     }
     let mut p = PathParamsDesc::default();
-    let words = c.child("RendererParams").map_or("", |e| e.text.as_str());
+    let params = c.child("RendererParams");
+    let el = params.unwrap_or(c);
+    let words = params.map_or("", |e| e.text.as_str());
+    let (mut all, mut one) = (false, false);
     for (i, word) in words.split_whitespace().enumerate() {
         let flag = match word {
             "NextEventEstimation" => &mut p.next_event,
             "ImportanceSampling" => &mut p.importance,
             "RussianRoulette" => &mut p.russian_roulette,
             "MIS" => &mut p.mis,
+            "AllLights" => &mut all,
+            "OneLight" => &mut one,
             _ => {
-                let el = c.child("RendererParams").unwrap_or(c);
                 return Err(r.err(
                     el,
                     format!(
                         "<RendererParams> word {} is unknown (expected NextEventEstimation, \
-                         ImportanceSampling, RussianRoulette or MIS)",
+                         ImportanceSampling, RussianRoulette, MIS, AllLights or OneLight)",
                         i + 1
                     ),
                 ));
@@ -289,6 +295,18 @@ pub fn renderer(r: &Reader, c: &Element) -> Result<RendererDesc, SceneError> {
         };
         *flag = true;
     }
+    if all && one {
+        return Err(r.err(el, "<RendererParams> has both AllLights and OneLight; give one of them"));
+    }
+    if (all || one) && !p.mis {
+        let word = if all { "AllLights" } else { "OneLight" };
+        return Err(r.err(el, format!("<RendererParams> word {word} needs MIS beside it")));
+    }
+    p.lights = match (all, one) {
+        (true, _) => LightSamples::All,
+        (_, true) => LightSamples::One,
+        _ => LightSamples::Auto,
+    };
     Ok(RendererDesc::PathTracing(p))
 }
 

@@ -160,4 +160,18 @@ pub struct PathParamsDesc {
     /// heuristic, bounces drawn from the BSDF, the environment light hit and
     /// sampled (see docs/path-tracing.md). The course's words are then unused.
     pub mis: bool,
+    /// With `MIS`: how many lights a hit samples (`AllLights`, `OneLight`).
+    pub lights: LightSamples,
+}
+
+/// How many lights an `MIS` hit samples.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightSamples {
+    /// Every light when the scene has a few, else one chosen by power.
+    #[default]
+    Auto,
+    /// `OneLight`: one light, chosen by power, whatever the count.
+    One,
+    /// `AllLights`: every light, whatever the count.
+    All,
 }
