@@ -332,7 +332,8 @@ pub(super) fn split_batch(px: &[Vec3], rgb: &mut [[f32; BATCH]; 3]) {
 /// code compiled for AVX2. Only the instruction set differs, and without
 /// fused multiply-adds (Rust never contracts `a * b + c`, and FMA is not
 /// enabled) every operation rounds as in the portable build, so the results
-/// are the same bits.
+/// are the same bits. The one difference in code is the quantizer's
+/// table lookup, gathered in the twin: integer arithmetic, the same codes.
 pub(super) mod vector {
     /// Tests set it to run the portable build on a processor with AVX2.
     #[cfg(test)]
