@@ -12,6 +12,7 @@
 use super::tonemap::{split_batch, vector, BATCH};
 use crate::math::Vec3;
 use rayon::prelude::*;
+use std::mem::MaybeUninit;
 
 /// The δ of Reinhard et al.'s log-average, keeping black pixels finite.
 const LOG_DELTA: f64 = 1e-5;
@@ -56,9 +57,15 @@ impl Stats {
     pub(super) fn of(pixels: &[Vec3], with_hist: bool) -> Stats {
         let avx2 = vector::avx2();
         let (sums, hist, lum) = if with_hist {
-            let mut lum = vec![0.0f32; pixels.len()];
-            let blocks = pixels.par_chunks(LOG_BLOCK).zip(lum.par_chunks_mut(LOG_BLOCK));
+            // Not zeroed first (a tenth of the pass): every block writes
+            // each of its values.
+            let mut lum: Vec<f32> = Vec::with_capacity(pixels.len());
+            let slots = &mut lum.spare_capacity_mut()[..pixels.len()];
+            let blocks = pixels.par_chunks(LOG_BLOCK).zip(slots.par_chunks_mut(LOG_BLOCK));
             let (sums, hist) = gather(blocks.map(|(b, l)| (b, Some(l))), true, avx2);
+            // SAFETY: `block_stats` wrote the luminance of every pixel of
+            // its block into the block's slots, and the blocks cover them.
+            unsafe { lum.set_len(pixels.len()) };
             (sums, hist, lum)
         } else {
             let (sums, hist) = gather(pixels.par_chunks(LOG_BLOCK).map(|b| (b, None)), false, avx2);
@@ -70,7 +77,7 @@ impl Stats {
 
 /// The blocks' sums in block order, and the summed histogram.
 fn gather<'a>(
-    blocks: impl IndexedParallelIterator<Item = (&'a [Vec3], Option<&'a mut [f32]>)>,
+    blocks: impl IndexedParallelIterator<Item = (&'a [Vec3], Option<&'a mut [MaybeUninit<f32>]>)>,
     with_hist: bool,
     avx2: bool,
 ) -> (Vec<(usize, f64)>, Vec<u32>) {
@@ -111,7 +118,11 @@ fn gather<'a>(
 /// # Safety
 /// The processor must have AVX2 ([`vector::avx2`]).
 #[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2"))]
-unsafe fn block_stats_avx2(block: &[Vec3], hist: Option<&mut [u32]>, lum: Option<&mut [f32]>) -> f64 {
+unsafe fn block_stats_avx2(
+    block: &[Vec3],
+    hist: Option<&mut [u32]>,
+    lum: Option<&mut [MaybeUninit<f32>]>,
+) -> f64 {
     block_stats(block, hist, lum)
 }
 
@@ -120,7 +131,11 @@ unsafe fn block_stats_avx2(block: &[Vec3], hist: Option<&mut [u32]>, lum: Option
 /// long as the block) when given. The batch arrays live here, once a block:
 /// zeroing them for every batch cost as much as a tenth of the pass.
 #[inline(always)]
-fn block_stats(block: &[Vec3], mut hist: Option<&mut [u32]>, mut lum: Option<&mut [f32]>) -> f64 {
+fn block_stats(
+    block: &[Vec3],
+    mut hist: Option<&mut [u32]>,
+    mut lum: Option<&mut [MaybeUninit<f32>]>,
+) -> f64 {
     let mut acc = [0.0f64; LANES];
     let mut rgb = [[0.0f32; BATCH]; 3];
     let mut y = [0.0f32; BATCH];
@@ -133,17 +148,26 @@ fn block_stats(block: &[Vec3], mut hist: Option<&mut [u32]>, mut lum: Option<&mu
             *l = ln(LOG_DELTA as f32 + y);
         }
         // Batches start at multiples of LANES, so lane k of each group of
-        // LANES is pixel i with i % LANES == k.
-        for group in logs[..n].chunks(LANES) {
+        // LANES is pixel i with i % LANES == k. Whole groups first: with a
+        // fixed length the sums stay in registers (as `chunks(LANES)` they
+        // went through memory, a store and a reload each group).
+        let mut groups = logs[..n].chunks_exact(LANES);
+        for group in &mut groups {
             acc.iter_mut().zip(group).for_each(|(a, l)| *a += l);
         }
+        acc.iter_mut().zip(groups.remainder()).for_each(|(a, l)| *a += l);
         if let Some(hist) = hist.as_deref_mut() {
+            let hist = &mut hist[..BUCKETS];
             for &y in &y[..n] {
-                hist[(y.to_bits() >> BUCKET_SHIFT) as usize] += 1;
+                // Luminance is never negative, so the index is below
+                // BUCKETS; the mask only spares a bounds check.
+                hist[(y.to_bits() >> BUCKET_SHIFT) as usize & (BUCKETS - 1)] += 1;
             }
         }
         if let Some(lum) = lum.as_deref_mut() {
-            lum[k * BATCH..][..n].copy_from_slice(&y[..n]);
+            lum[k * BATCH..][..n].iter_mut().zip(&y[..n]).for_each(|(l, &y)| {
+                l.write(y);
+            });
         }
     }
     acc.iter().sum()
@@ -178,6 +202,9 @@ pub(super) fn ln(x: f32) -> f64 {
     f64::from(e) * std::f64::consts::LN_2 + 2.0 * t * series
 }
 
+/// Luminances [`nth_luminance`] tests at once for one of the bucket's.
+const SCAN_GROUP: usize = 32;
+
 /// The `at`-th smallest of the luminances `lum` (in `f32::total_cmp`
 /// order), as a full sort would give it: `hist` (see [`Stats`]) finds the
 /// bucket holding rank `at`, and only that bucket's values are selected in.
@@ -190,9 +217,20 @@ pub(super) fn nth_luminance(lum: &[f32], hist: &[u32], at: usize) -> f32 {
         }
         below += c as usize;
     }
+    let in_bucket = |y: &f32| y.to_bits() >> BUCKET_SHIFT == bucket;
     let parts: Vec<Vec<f32>> = lum
         .par_chunks(LOG_BLOCK)
-        .map(|block| block.iter().copied().filter(|y| y.to_bits() >> BUCKET_SHIFT == bucket).collect())
+        .map(|block| {
+            // Most groups hold none of the bucket's values: a test of the
+            // whole group (vector code, no branch a value) passes them by.
+            let mut inside = Vec::new();
+            for group in block.chunks(SCAN_GROUP) {
+                if group.iter().fold(false, |any, y| any | in_bucket(y)) {
+                    inside.extend(group.iter().copied().filter(in_bucket));
+                }
+            }
+            inside
+        })
         .collect();
     let mut inside: Vec<f32> = parts.concat();
     *inside.select_nth_unstable_by(at - below, f32::total_cmp).1
