@@ -262,7 +262,20 @@ fn cpu_table() {
 
 criterion_group! { name = benches; config = config(); targets = bench_shaders, bench_call_scalars }
 
+/// `-- profile_empty`: only the empty colour call, for about two seconds,
+/// so `perf record` sees that path alone.
+fn profile_empty() {
+    let pts = points();
+    let empty = set(EMPTY);
+    let ns = cpu_per_call(60_000_000, |k| empty.color(0, black_box(&pts[k & 1023])).ok());
+    println!("empty color(s): {ns:.1} CPU ns per call");
+}
+
 fn main() {
+    if std::env::args().any(|a| a == "profile_empty") {
+        profile_empty();
+        return;
+    }
     cpu_table();
     benches();
     Criterion::default().configure_from_args().final_summary();
