@@ -19,7 +19,11 @@
 //! color 52.2 / 44.3 ns, per point of `heights3` 27.4 / 16.2 ns.
 //! Session 11, load 9–12, three pairs: floor 22.7 / 21.1 ns, empty color
 //! 58.6 / 45.9 ns (the result in a register instead of an 80-byte `Result`).
-//! `cargo bench --bench shader -- cpu_only` prints only that table.
+//! Session 13, load 2, five pairs pinned to one core: empty color
+//! 33.6 / 31.1 ns, `height` constant 31.6 / 29.7, per point of
+//! `heights3` 16.1 / 14.3 (trampoline wrappers, AVX shading point;
+//! `docs/shaders.md`). `cargo bench --bench shader -- cpu_only` prints only
+//! that table; `-- profile_empty` runs only the empty call, for `perf record`.
 
 use std::hint::black_box;
 use std::time::Duration;
