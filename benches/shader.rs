@@ -19,7 +19,11 @@
 //! color 52.2 / 44.3 ns, per point of `heights3` 27.4 / 16.2 ns.
 //! Session 11, load 9–12, three pairs: floor 22.7 / 21.1 ns, empty color
 //! 58.6 / 45.9 ns (the result in a register instead of an 80-byte `Result`).
-//! `cargo bench --bench shader -- cpu_only` prints only that table.
+//! Session 13, load 2, five pairs pinned to one core: empty color
+//! 33.6 / 31.1 ns, `height` constant 31.6 / 29.7, per point of
+//! `heights3` 16.1 / 14.3 (trampoline wrappers, AVX shading point;
+//! `docs/shaders.md`). `cargo bench --bench shader -- cpu_only` prints only
+//! that table; `-- profile_empty` runs only the empty call, for `perf record`.
 
 use std::hint::black_box;
 use std::time::Duration;
@@ -262,7 +266,20 @@ fn cpu_table() {
 
 criterion_group! { name = benches; config = config(); targets = bench_shaders, bench_call_scalars }
 
+/// `-- profile_empty`: only the empty colour call, for about two seconds,
+/// so `perf record` sees that path alone.
+fn profile_empty() {
+    let pts = points();
+    let empty = set(EMPTY);
+    let ns = cpu_per_call(60_000_000, |k| empty.color(0, black_box(&pts[k & 1023])).ok());
+    println!("empty color(s): {ns:.1} CPU ns per call");
+}
+
 fn main() {
+    if std::env::args().any(|a| a == "profile_empty") {
+        profile_empty();
+        return;
+    }
     cpu_table();
     benches();
     Criterion::default().configure_from_args().final_summary();

@@ -424,10 +424,22 @@ impl IoBlock {
         // and no other reference to the record exists while `fill` runs.
         unsafe {
             fill(&mut *self.shade);
-            *self.out = Out::default();
-            (*self.clock).start_ns = 0;
-            (*self.clock).expired = 0;
+            self.arm();
         }
+    }
+
+    /// Clears the rejection flag and arms the clock for one call. The
+    /// channels need no clearing: a wrapper that returns normally has
+    /// written every one its entry point's caller reads.
+    ///
+    /// # Safety
+    ///
+    /// No Lua code runs (see the module doc).
+    #[inline]
+    unsafe fn arm(&self) {
+        (*self.out).bad = 0;
+        (*self.clock).start_ns = 0;
+        (*self.clock).expired = 0;
     }
 
     /// Writes the shading point, clears the material outputs and arms the
@@ -456,9 +468,7 @@ impl IoBlock {
             for (k, &s) in self.shade3.iter().enumerate() {
                 fill(k, &mut *s);
             }
-            *self.out = Out::default();
-            (*self.clock).start_ns = 0;
-            (*self.clock).expired = 0;
+            self.arm();
         }
     }
 

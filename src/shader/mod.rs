@@ -52,11 +52,14 @@
 //! pathological pattern on a long string) runs to its end before the next check.
 
 mod call;
+mod compile;
 mod error;
 mod ffi;
 mod instrument;
+mod invoke;
 mod modules;
 mod params;
+mod shade;
 /// The instrumenter, for the fuzz entry points.
 pub(crate) use instrument::instrument as instrument_script;
 mod state;
