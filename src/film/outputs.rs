@@ -118,10 +118,10 @@ pub fn first_ldr(image_name: &str, tonemaps: &[Tonemap], display: Display) -> Op
 /// The HDR files are encoded and written on threads of their own while the
 /// 8-bit ones are tone-mapped and encoded on rayon's pool. An HDR writer
 /// spends most of its time in the kernel, copying 12 bytes a pixel into
-/// the page cache and then, when the rename replaces an older image, waiting
-/// while the file system frees that image's blocks (several milliseconds on
-/// ext4, with no CPU used): on a rayon worker that wait would take a core
-/// from the tone mapping.
+/// the page cache. When the rename replaces an older image, the file system
+/// frees that image's blocks (several milliseconds on ext4 mounted with
+/// `discard`, with no CPU used) when its last handle closes, which
+/// [`write_atomic`](crate::image::output) leaves to a thread of its own.
 pub fn write_outputs(film: &Film, outdir: &Path, outputs: &[Output]) -> Result<Vec<PathBuf>, WriteError> {
     use rayon::prelude::*;
     let write = |o: &Output| -> Result<PathBuf, WriteError> {
