@@ -77,13 +77,15 @@ fn every_light(scene: &Scene, p: &PathParams) -> bool {
     }
 }
 
-/// The chance that MIS's light sampling takes light `i` at a hit.
+/// The chance that MIS's light sampling takes a light at a hit, whose
+/// chance of being chosen by power is `by_power`: 1 where every light is
+/// sampled.
 #[inline]
-fn pick_pmf(scene: &Scene, p: &PathParams, i: usize) -> f32 {
+fn pick_chance(scene: &Scene, p: &PathParams, by_power: f32) -> f32 {
     if every_light(scene, p) {
         1.0
     } else {
-        scene.light_pick.pmf(i)
+        by_power
     }
 }
 
@@ -180,7 +182,7 @@ fn escaped(scene: &Scene, ray: &Ray, came: Came, p: &PathParams, st: &PathState)
         // The density of the environment's own sampler (importance, uniform
         // or cosine about the normal), as its light samples were drawn.
         Came::Bounce { pdf, n } if p.mis => {
-            let pick = if every_light(scene, p) { 1.0 } else { scene.light_pick.environment_pmf() };
+            let pick = pick_chance(scene, p, scene.light_pick.environment_pmf());
             power_heuristic(pdf, env.sampling_pdf(Some(n), d) * pick)
         }
         Came::Bounce { .. } if p.next_event => 0.0,
@@ -366,7 +368,7 @@ fn hit_weight(scene: &Scene, li: usize, came: Came, ray: &Ray, hit: &Hit, p: &Pa
     match came {
         Came::Direct => 1.0,
         Came::Bounce { pdf, .. } if p.mis => {
-            let pick = pick_pmf(scene, p, li);
+            let pick = pick_chance(scene, p, scene.light_pick.pmf(li));
             power_heuristic(pdf, pick * light_pdf(&scene.lights[li], ray.o, hit, ray.d, time))
         }
         Came::Bounce { .. } if p.next_event => 0.0,
