@@ -11,6 +11,9 @@ pub struct Mesh {
     triangles: Vec<[u32; 3]>,
     /// Per-vertex normals when the mesh is smooth-shaded.
     normals: Option<Vec<Vec3>>,
+    /// Each triangle's unit winding normal, when the mesh is flat-shaded
+    /// (see [`Mesh::unit_normal`]).
+    unit_normals: Option<Vec<Vec3>>,
     /// Per-vertex texture coordinates, when the mesh has them.
     uvs: Option<Vec<Vec2>>,
 }
@@ -32,7 +35,11 @@ impl Mesh {
     /// Builds a mesh; `normals`, when given, are per-vertex shading normals.
     pub fn new(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>, normals: Option<Vec<Vec3>>) -> Mesh {
         let accel = MeshAccel::build(&positions, &triangles);
-        Mesh { accel, positions, triangles, normals, uvs: None }
+        let unit_normals = normals.is_none().then(|| {
+            let at = |i: u32| positions.get(i as usize).copied().unwrap_or(Vec3::NAN);
+            triangles.iter().map(|t| winding_normal(t.map(at)).normalize()).collect()
+        });
+        Mesh { accel, positions, triangles, normals, unit_normals, uvs: None }
     }
 
     /// Gives the mesh per-vertex texture coordinates (one per position).
@@ -106,6 +113,15 @@ impl Mesh {
         self.accel.occluded(ray, t_min, t_max)
     }
 
+    /// The unit normal of triangle `prim`'s winding, object space, where the
+    /// mesh is flat-shaded: the bits `normals_at(..).0.normalize()` gives
+    /// (worked out once at build time, not at every hit: a square root and
+    /// a division on the path tracer's every bounce).
+    #[inline(always)]
+    pub fn unit_normal(&self, prim: u32) -> Option<Vec3> {
+        self.unit_normals.as_ref().and_then(|n| n.get(prim as usize)).copied()
+    }
+
     /// Geometric normal (from the winding, unnormalized) and shading normal
     /// (interpolated if smooth, else the geometric one), in object space.
     /// Always inlined: called out of line from the AVX2 intersection, its
@@ -114,8 +130,7 @@ impl Mesh {
     #[inline(always)]
     pub fn normals_at(&self, hit: &TriHit) -> (Vec3, Vec3) {
         let t = self.triangles[hit.prim as usize];
-        let [a, b, c] = t.map(|i| self.positions[i as usize]);
-        let ng = (b - a).cross(c - a);
+        let ng = winding_normal(t.map(|i| self.positions[i as usize]));
         let ns = match &self.normals {
             Some(n) => {
                 let w = 1.0 - hit.u - hit.v;
@@ -130,6 +145,12 @@ impl Mesh {
         };
         (ng, ns)
     }
+}
+
+/// The unnormalized normal of a triangle's winding, `(b − a) × (c − a)`.
+#[inline(always)]
+fn winding_normal([a, b, c]: [Vec3; 3]) -> Vec3 {
+    (b - a).cross(c - a)
 }
 
 /// Smooth vertex normals: at each vertex, the area-weighted sum of the normals

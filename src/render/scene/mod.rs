@@ -347,8 +347,25 @@ impl Scene {
             Closest::Triangle(pi, h) => {
                 let p = &self.prims[pi];
                 let Geom::Mesh(m) = p.geom else { return None };
-                let (ng, ns) = self.meshes[m as usize].normals_at(&h);
-                (pi, ng, ns, HitGeom::Triangle { prim: pi as u32, hit: h })
+                let mesh = &self.meshes[m as usize];
+                let geom = HitGeom::Triangle { prim: pi as u32, hit: h };
+                // A flat-shaded mesh in world space: its normal, normalized
+                // once at build time, is what the steps below would give
+                // (`ns` equals `ng`, so the flip never applies).
+                if let (None, Some(n)) = (&p.xf, mesh.unit_normal(h.prim)) {
+                    let (material, textures) = (p.material, p.textures);
+                    return Some(Hit {
+                        t: best_t,
+                        p: ray.at(best_t),
+                        ng: n,
+                        ns: n,
+                        material,
+                        textures,
+                        geom,
+                    });
+                }
+                let (ng, ns) = mesh.normals_at(&h);
+                (pi, ng, ns, geom)
             }
             Closest::Sphere(pi) => {
                 let p = &self.prims[pi];
