@@ -82,13 +82,17 @@ impl PixelSampler {
         }
     }
 
-    /// This pixel's sampler for a run of samples up to `end` (exclusive)
-    /// that one thread draws in order: their stratified calls are computed
+    /// This pixel's sampler for a run of samples that one thread draws in
+    /// order, one after another: their stratified calls are computed
     /// several samples at a time ([`batch`]), with the same values.
     #[inline]
-    pub fn batched_until(self, end: u32) -> Self {
+    pub fn batched(self, run: std::ops::Range<u32>) -> Self {
+        let end = run.end.min(self.n.len);
+        if end < run.start + batch::MIN_RUN {
+            return self;
+        }
         let memo = batch::memo(self.n.len);
-        let batch_end = if memo.is_null() { 0 } else { end.min(self.n.len) };
+        let batch_end = if memo.is_null() { 0 } else { end };
         PixelSampler { batch_end, memo, ..self }
     }
 

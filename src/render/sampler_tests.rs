@@ -271,13 +271,15 @@ fn batched_draws_equal_the_scalar_ones() {
             let pixel = PixelSampler::new(seed, x, y, 0, count);
             let other = PixelSampler::new(seed, x + 1, y, 0, count + 1);
             for run in &runs {
-                let end = run.end.min(count);
-                let (batched, others) = (pixel.batched_until(end), other.batched_until(end));
+                let (batched, others) = (pixel.batched(run.clone()), other.batched(run.clone()));
                 #[cfg(target_arch = "x86_64")]
-                if count > 1 && std::arch::is_x86_feature_detected!("avx2") {
-                    assert_eq!(batched.batch_end, end, "count {count}: batched");
+                if count > 1
+                    && run.end.min(count) >= run.start + 3
+                    && std::arch::is_x86_feature_detected!("avx2")
+                {
+                    assert_eq!(batched.batch_end, run.end.min(count), "count {count}: batched");
                 }
-                for index in run.clone() {
+                for index in run.start..run.end.min(count) {
                     let want = draws(&mut PixelSampler::new(seed, x, y, index, count), index);
                     assert_eq!(draws(&mut batched.at(index), index), want, "count {count} sample {index}");
                     if index % 5 == 0 {
