@@ -89,8 +89,9 @@ pub(super) fn memo(count: u32) -> Handle {
 pub(super) type Handle = *const RefCell<Memo>;
 
 /// Stratified dimension `dim` of sample `s.index` (below `s.batch_end`, so
-/// `s.memo` is not null),
-/// from the memo, or `None` where the caller draws it alone.
+/// `s.memo` is not null) from the memo, or `None` where the caller draws it
+/// alone. Only the lookup is inlined: the rest would make every caller's
+/// scalar draw slower too.
 #[inline(always)]
 pub(super) fn draw(s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> {
     let key = dim.wrapping_mul(2) | u32::from(two_d);
@@ -99,26 +100,35 @@ pub(super) fn draw(s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> 
     // with samples to batch has a non-null one.
     let memo = unsafe { &*s.memo };
     {
-        let memo = &mut *memo.borrow_mut();
-        let tag = &mut memo.tags[slot];
+        let memo = memo.borrow();
+        let tag = &memo.tags[slot];
         let off = s.index.wrapping_sub(tag.first);
-        if tag.pixel == s.pixel_hash && tag.count == s.n.len && tag.key == key {
-            if off < tag.len {
-                return Some(memo.values[slot][off as usize % LANES]);
-            }
-        } else if !(memo.hot[slot] && tag.key == key) {
-            // First use in this pixel (or pass): drawn alone.
-            memo.hot[slot] = false;
-            *tag = Tag { pixel: s.pixel_hash, count: s.n.len, key, first: s.index, len: 0 };
-            return None;
+        if tag.pixel == s.pixel_hash && tag.count == s.n.len && tag.key == key && off < tag.len {
+            return Some(memo.values[slot][off as usize % LANES]);
         }
-        fill(memo, slot, s, dim, two_d)
     }
+    miss(&mut memo.borrow_mut(), slot, s, dim, two_d)
+}
+
+/// [`draw`] where the memo does not hold the value: the dimension's first
+/// use in this pixel is drawn alone, unless the pixel before batched it;
+/// a later use batches the samples from this one on.
+#[inline(never)]
+fn miss(memo: &mut Memo, slot: usize, s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> {
+    let key = dim.wrapping_mul(2) | u32::from(two_d);
+    let tag = &mut memo.tags[slot];
+    let this_pixel = tag.pixel == s.pixel_hash && tag.count == s.n.len;
+    if tag.key != key || !(this_pixel || memo.hot[slot]) {
+        memo.hot[slot] = false;
+        *tag = Tag { pixel: s.pixel_hash, count: s.n.len, key, first: s.index, len: 0 };
+        return None;
+    }
+    fill(memo, slot, s, dim, two_d)
 }
 
 /// Fills entry `slot` from sample `s.index` on; `None` where fewer than
 /// two samples are left to draw (or, never, no lanes to do it with).
-#[inline(never)]
+#[inline]
 fn fill(memo: &mut Memo, slot: usize, s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> {
     let len = (s.batch_end - s.index).min(LANES as u32);
     let key = dim.wrapping_mul(2) | u32::from(two_d);
