@@ -28,6 +28,10 @@
 //! and the first hit) and draws the rest as independent uniforms, one 64-bit
 //! hash of (seed, pixel, sample, call) each.
 //!
+//! The render loop's runs of samples ([`PixelSampler::batched`]) draw their
+//! stratified calls from a per-thread memo filled sixteen samples at a time
+//! in AVX2 lanes (`sampler_batch.rs`), with the same values bit for bit.
+//!
 //! A single-sample image has nothing to stratify: its draws are the earlier
 //! sampler's hashed values, bit for bit, so 1-spp images keep their bytes.
 
