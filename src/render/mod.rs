@@ -238,7 +238,7 @@ fn render_tiles(
                     break;
                 }
                 for x in x0..x1 {
-                    let pixel = PixelSampler::new(opts.seed, x, y, 0, spp);
+                    let pixel = PixelSampler::new(opts.seed, x, y, 0, spp).batched(samples.clone());
                     for s in samples.clone() {
                         let mut sampler = pixel.at(s);
                         let (jx, jy) = if spp == 1 { (0.5, 0.5) } else { sampler.next_2d() };

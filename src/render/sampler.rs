@@ -28,6 +28,10 @@
 //! and the first hit) and draws the rest as independent uniforms, one 64-bit
 //! hash of (seed, pixel, sample, call) each.
 //!
+//! The render loop's runs of samples ([`PixelSampler::batched`]) draw their
+//! stratified calls from a per-thread memo filled sixteen samples at a time
+//! in AVX2 lanes (`sampler_batch.rs`), with the same values bit for bit.
+//!
 //! A single-sample image has nothing to stratify: its draws are the earlier
 //! sampler's hashed values, bit for bit, so 1-spp images keep their bytes.
 
@@ -51,6 +55,11 @@ pub struct PixelSampler {
     inv_mk: f32,
     /// Calls drawn from CMJ patterns; later calls are independent uniforms.
     stratified: u32,
+    /// Samples below this one are drawn in order on this thread, so their
+    /// stratified calls may come from [`batch`] (0: never), whose memo is
+    /// `memo` (not null where `batch_end` is not 0).
+    batch_end: u32,
+    memo: batch::Handle,
 }
 
 impl PixelSampler {
@@ -72,7 +81,23 @@ impl PixelSampler {
             inv_n: 1.0 / count as f32,
             inv_mk: 1.0 / (cols * rows) as f32,
             stratified: u32::MAX,
+            batch_end: 0,
+            memo: std::ptr::null(),
         }
+    }
+
+    /// This pixel's sampler for a run of samples that one thread draws in
+    /// order, one after another: their stratified calls are computed
+    /// several samples at a time ([`batch`]), with the same values.
+    #[inline]
+    pub fn batched(self, run: std::ops::Range<u32>) -> Self {
+        let end = run.end.min(self.n.len);
+        if end < run.start + batch::MIN_RUN {
+            return self;
+        }
+        let memo = batch::memo(self.n.len);
+        let batch_end = if memo.is_null() { 0 } else { end };
+        PixelSampler { batch_end, memo, ..self }
     }
 
     /// Sample `index` of the same pixel and count: what [`new`](Self::new)
@@ -116,6 +141,11 @@ impl PixelSampler {
             let h = self.independent(dim);
             return (unit((h >> 32) as u32), unit(h as u32));
         }
+        if self.index < self.batch_end {
+            if let Some([x, y]) = batch::draw(self, dim, true) {
+                return (x, y);
+            }
+        }
         let p = hash2(self.pixel_hash, dim);
         cmj_grid(self.slot, self.n, self.cols, self.rows, p, (self.inv_n, self.inv_mk))
     }
@@ -142,6 +172,11 @@ impl PixelSampler {
         }
         if dim >= self.stratified {
             return unit((self.independent(dim) >> 32) as u32);
+        }
+        if self.index < self.batch_end {
+            if let Some([v, _]) = batch::draw(self, dim, false) {
+                return v;
+            }
         }
         let p = hash2(self.pixel_hash, dim);
         let s = permute(self.slot, self.n, p);
@@ -325,6 +360,9 @@ fn mix64(mut z: u64) -> u64 {
 fn hash3(a: u32, b: u32, c: u32) -> u32 {
     hash2(hash2(a, b), c)
 }
+
+#[path = "sampler_batch.rs"]
+mod batch;
 
 #[cfg(test)]
 #[path = "sampler_tests.rs"]

@@ -227,3 +227,67 @@ const OLD: [f32; 6] = [
     f32::from_bits(0x3d7d_8d20),
     f32::from_bits(0x3de7_acf8),
 ];
+
+/// The calls sample `index` makes in [`batched_draws_equal_the_scalar_ones`]:
+/// the camera's, then a path whose length and kinds of draw vary with the
+/// sample (so a dimension is 1D for some samples and 2D for others, and
+/// deep dimensions are reached by only some), then independent draws.
+fn draws(s: &mut PixelSampler, index: u32) -> Vec<(f32, f32)> {
+    let mut out = vec![s.next_2d(), (s.next_1d(), 0.0)];
+    s.skip();
+    let h = hash2(index, 0x51ed);
+    for call in 0..(h % 7) {
+        if (h >> call) & 1 == 0 {
+            out.push(s.next_2d());
+        } else {
+            out.push((s.next_1d(), 1.0));
+        }
+    }
+    s.stratify_first(s.calls() + 1 + h % 3);
+    for _ in 0..4 {
+        out.push(s.next_2d());
+        out.push((s.next_1d(), 2.0));
+    }
+    out
+}
+
+/// Samples drawn in runs through the per-thread memo and its AVX2 lanes
+/// give the scalar formula's values bit for bit: every count kind (one
+/// sample, a grid of one column, squares, primes, past 4096), the render
+/// loop's passes and runs that start and end mid-pixel, and pixels and
+/// counts interleaved so the memo's entries are replaced.
+#[test]
+fn batched_draws_equal_the_scalar_ones() {
+    for count in [1u32, 2, 3, 5, 16, 17, 100, 900, 1000, 4097] {
+        let mut runs = Vec::new();
+        let mut taken = 0;
+        while taken < count {
+            let n = taken.max(1).min(count.div_ceil(8)).min(count - taken);
+            runs.push(taken..taken + n);
+            taken += n;
+        }
+        runs.extend([count / 3..count / 3 + 21, count - 1..count, count / 2..count, 0..count]);
+        for (seed, x, y) in [(0u32, 0u32, 0u32), (7, 13, 5), (0xdead_beef, 799, 3)] {
+            let pixel = PixelSampler::new(seed, x, y, 0, count);
+            let other = PixelSampler::new(seed, x + 1, y, 0, count + 1);
+            for run in &runs {
+                let (batched, others) = (pixel.batched(run.clone()), other.batched(run.clone()));
+                #[cfg(target_arch = "x86_64")]
+                if count > 1
+                    && run.end.min(count) >= run.start + 3
+                    && std::arch::is_x86_feature_detected!("avx2")
+                {
+                    assert_eq!(batched.batch_end, run.end.min(count), "count {count}: batched");
+                }
+                for index in run.start..run.end.min(count) {
+                    let want = draws(&mut PixelSampler::new(seed, x, y, index, count), index);
+                    assert_eq!(draws(&mut batched.at(index), index), want, "count {count} sample {index}");
+                    if index % 5 == 0 {
+                        let want = draws(&mut PixelSampler::new(seed, x + 1, y, index, count + 1), index);
+                        assert_eq!(draws(&mut others.at(index), index), want, "interleaved");
+                    }
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,378 @@
+//! A pixel's CMJ draws computed a run of samples at a time.
+//!
+//! The render loop takes a pixel's samples of one pass one after another on
+//! one thread, and every sample draws the same first dimensions. Drawn one
+//! at a time, a CMJ point's three cycle-walked permutations cost a branch
+//! that mispredicts about a third of the time (the walk rejects 22–37% of
+//! its candidates at the course's counts) and latency-bound chains of
+//! multiplications. Here the second sample of a pass to draw a dimension
+//! computes that dimension for the next [`LANES`] samples at once, in AVX2
+//! lanes that walk together until every lane is in range, into a small
+//! per-thread memo that the following samples read.
+//!
+//! The memo is keyed by everything a value depends on (the pixel's hash,
+//! the count, the dimension, 1D or 2D, the sample), so it is a cache of a
+//! pure function: the values are the scalar formula's bit for bit, whatever
+//! the thread, the pass or the tile order. Every lane performs the scalar
+//! code's integer and `f32` operations in the same order (no FMA), and the
+//! divisions by the grid side are exact (their bounds are checked where
+//! batching is enabled, [`memo`]). A dimension's first use in a pass is
+//! drawn alone: deep dimensions that only some samples reach would
+//! otherwise cost a batch per sample.
+
+use super::PixelSampler;
+use std::cell::RefCell;
+
+/// Samples computed by one batch: two vectors of eight, whose walks
+/// interleave.
+const LANES: usize = 16;
+
+/// Memo entries, indexed by dimension: more than a camera sample's
+/// stratified dimensions in the course's scenes.
+const SLOTS: usize = 64;
+
+/// Largest count batched: keeps the grid divisions by multiplication exact
+/// (`s · m < 2³²` for every `s < n`) and the walk's compares in signed range.
+const MAX_COUNT: u32 = 1 << 20;
+
+/// What one memo entry holds: a dimension's values for samples
+/// `first..first + len` of a pixel.
+#[derive(Clone, Copy)]
+struct Tag {
+    pixel: u32,
+    count: u32,
+    /// `2·dim + (1 if 2D)`.
+    key: u32,
+    first: u32,
+    len: u32,
+}
+
+/// The memo: tags apart from the values, so a lookup touches the tag's
+/// cache line and one value's.
+pub(super) struct Memo {
+    tags: [Tag; SLOTS],
+    /// Whether the entry's dimension was batched in the pixel before: such
+    /// a dimension is batched from its first use in the next pixel.
+    hot: [bool; SLOTS],
+    values: [[[f32; 2]; LANES]; SLOTS],
+}
+
+const NO_TAG: Tag = Tag { pixel: 0, count: 0, key: 0, first: 0, len: 0 };
+
+thread_local! {
+    static MEMO: RefCell<Memo> = const {
+        RefCell::new(Memo { tags: [NO_TAG; SLOTS], hot: [false; SLOTS], values: [[[0.0; 2]; LANES]; SLOTS] })
+    };
+}
+
+/// Shortest run of samples batched: a run of two costs as much either way,
+/// and drawing alone skips the memo's bookkeeping (2% of the MIS Cornell
+/// box at 16 samples, whose passes are of two).
+pub(super) const MIN_RUN: u32 = 3;
+
+/// This thread's memo, for a pixel of `count` samples, where it may be
+/// batched on this processor (null otherwise).
+///
+/// A sampler keeps the pointer: reaching a thread-local costs a call that
+/// does not inline, more than the memo's lookup. The pointer makes the
+/// sampler neither `Send` nor `Sync`, so it is only ever followed on this
+/// thread, whose memo lives as long as the thread (it has nothing to drop).
+pub(super) fn memo(count: u32) -> Handle {
+    #[cfg(target_arch = "x86_64")]
+    if (2..=MAX_COUNT).contains(&count) && std::arch::is_x86_feature_detected!("avx2") {
+        return MEMO.with(|m| m as Handle);
+    }
+    std::ptr::null()
+}
+
+/// A pointer to a thread's memo.
+pub(super) type Handle = *const RefCell<Memo>;
+
+/// Stratified dimension `dim` of sample `s.index` (below `s.batch_end`, so
+/// `s.memo` is not null) from the memo, or `None` where the caller draws it
+/// alone. Only the lookup is inlined: the rest would make every caller's
+/// scalar draw slower too.
+#[inline(always)]
+pub(super) fn draw(s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> {
+    let key = dim.wrapping_mul(2) | u32::from(two_d);
+    let slot = key as usize % SLOTS;
+    // SAFETY: `memo` set `s.memo` on this thread (see there), and a sampler
+    // with samples to batch has a non-null one.
+    let memo = unsafe { &*s.memo };
+    {
+        let memo = memo.borrow();
+        let tag = &memo.tags[slot];
+        let off = s.index.wrapping_sub(tag.first);
+        if tag.pixel == s.pixel_hash && tag.count == s.n.len && tag.key == key && off < tag.len {
+            return Some(memo.values[slot][off as usize % LANES]);
+        }
+    }
+    miss(&mut memo.borrow_mut(), slot, s, dim, two_d)
+}
+
+/// [`draw`] where the memo does not hold the value: the dimension's first
+/// use in this pixel is drawn alone, unless the pixel before batched it;
+/// a later use batches the samples from this one on.
+#[inline(never)]
+fn miss(memo: &mut Memo, slot: usize, s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> {
+    let key = dim.wrapping_mul(2) | u32::from(two_d);
+    let tag = &mut memo.tags[slot];
+    let this_pixel = tag.pixel == s.pixel_hash && tag.count == s.n.len;
+    if tag.key != key || !(this_pixel || memo.hot[slot]) {
+        memo.hot[slot] = false;
+        *tag = Tag { pixel: s.pixel_hash, count: s.n.len, key, first: s.index, len: 0 };
+        return None;
+    }
+    fill(memo, slot, s, dim, two_d)
+}
+
+/// Fills entry `slot` from sample `s.index` on; `None` where fewer than
+/// two samples are left to draw (or, never, no lanes to do it with).
+#[inline]
+fn fill(memo: &mut Memo, slot: usize, s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> {
+    let len = (s.batch_end - s.index).min(LANES as u32);
+    let key = dim.wrapping_mul(2) | u32::from(two_d);
+    memo.tags[slot] = Tag { pixel: s.pixel_hash, count: s.n.len, key, first: s.index, len: 0 };
+    if len < 2 || cfg!(not(target_arch = "x86_64")) {
+        return None;
+    }
+    memo.tags[slot].len = len;
+    memo.hot[slot] = true;
+    let values = &mut memo.values[slot];
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: `batch_end` is set only where `memo` found AVX2.
+    unsafe {
+        lanes::fill(values, s, dim, two_d, len as usize)
+    };
+    Some(values[0])
+}
+
+#[cfg(target_arch = "x86_64")]
+mod lanes {
+    use super::super::{hash2, PixelSampler, Span, ONE_MINUS_EPS};
+    use super::LANES;
+    use std::arch::x86_64::*;
+
+    type V = __m256i;
+    type Values = [[f32; 2]; LANES];
+
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn splat(a: u32) -> V {
+        _mm256_set1_epi32(a as i32)
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn xor(a: V, b: V) -> V {
+        _mm256_xor_si256(a, b)
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn mul(a: V, b: u32) -> V {
+        _mm256_mullo_epi32(a, splat(b))
+    }
+
+    /// `a ^= (a & w) >> S`.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn fold<const S: i32>(a: V, w: V) -> V {
+        xor(a, _mm256_srli_epi32::<S>(_mm256_and_si256(a, w)))
+    }
+
+    /// `a - len` in the lanes where `a ≥ len` (all values below 2³¹).
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn reduce(a: V, len: V) -> V {
+        _mm256_sub_epi32(a, _mm256_andnot_si256(_mm256_cmpgt_epi32(len, a), len))
+    }
+
+    /// The high 32 bits of `a · b` in every lane.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn mul_high(a: V, b: u32) -> V {
+        let b = splat(b);
+        let even = _mm256_srli_epi64::<32>(_mm256_mul_epu32(a, b));
+        let odd = _mm256_mul_epu32(_mm256_srli_epi64::<32>(a), b);
+        _mm256_blend_epi32::<0b1010_1010>(even, odd)
+    }
+
+    /// [`super::super::permute`] of every lane of `N` vectors: the walk
+    /// goes on until every lane is in range, a lane that is keeps its value,
+    /// and the final `(i + p) mod l` is taken by compares, not a division.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn permute<const N: usize>(mut cur: [V; N], l: Span, p: u32) -> [V; N] {
+        if l.len <= 1 {
+            return [_mm256_setzero_si256(); N];
+        }
+        let (w, len) = (splat(l.mask), splat(l.len));
+        let mut done = [_mm256_setzero_si256(); N];
+        loop {
+            let mut all = -1;
+            for v in 0..N {
+                let mut i = mul(xor(cur[v], splat(p)), 0xe170_893d);
+                i = fold::<4>(xor(i, splat(p >> 16)), w);
+                i = mul(xor(i, splat(p >> 8)), 0x0929_eb3f);
+                i = fold::<1>(xor(i, splat(p >> 23)), w);
+                i = fold::<2>(mul(i, 1 | (p >> 27)), w);
+                i = _mm256_and_si256(mul(i, 0x9e50_1cc3), w);
+                i = xor(i, _mm256_srli_epi32::<5>(i));
+                cur[v] = _mm256_blendv_epi8(i, cur[v], done[v]);
+                done[v] = _mm256_or_si256(done[v], _mm256_cmpgt_epi32(len, i));
+                all &= _mm256_movemask_epi8(done[v]);
+            }
+            if all == -1 {
+                break;
+            }
+        }
+        // `(i + p) mod l` for `i < l`: `i + p mod l`, less `2³² mod l`
+        // where the 32-bit sum wraps, brought into range.
+        let below_wrap = u32::MAX - p;
+        let wrap = if below_wrap >= 1 << 31 { 0 } else { l.len - ((u32::MAX % l.len + 1) % l.len) };
+        let (pl, wrap_add) = (splat(p % l.len), splat(wrap));
+        cur.map(|i| {
+            let wraps = _mm256_cmpgt_epi32(i, splat(below_wrap));
+            let r = _mm256_add_epi32(_mm256_add_epi32(i, pl), _mm256_and_si256(wraps, wrap_add));
+            reduce(reduce(r, len), len)
+        })
+    }
+
+    /// [`super::super::hash2`] of every lane with the same `b`.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn hash2_lanes(a: V, b: u32) -> V {
+        let mut h = xor(a, splat(b.wrapping_mul(0x9e37_79b9).rotate_left(15)));
+        h = xor(h, _mm256_srli_epi32::<16>(h));
+        h = mul(h, 0x85eb_ca6b);
+        h = xor(h, _mm256_srli_epi32::<13>(h));
+        h = mul(h, 0xc2b2_ae35);
+        xor(h, _mm256_srli_epi32::<16>(h))
+    }
+
+    /// [`super::super::rand_float`] of every lane under `p`.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn rand_float_lanes(i: V, p: u32) -> __m256 {
+        let mut i = xor(i, splat(p));
+        i = xor(i, _mm256_srli_epi32::<17>(i));
+        i = xor(i, _mm256_srli_epi32::<10>(i));
+        i = mul(i, 0xb365_34e5);
+        i = xor(i, _mm256_srli_epi32::<12>(i));
+        i = xor(i, _mm256_srli_epi32::<21>(i));
+        i = mul(i, 0x93fc_4795);
+        i = xor(i, splat(0xdf6e_307f));
+        i = xor(i, _mm256_srli_epi32::<17>(i));
+        i = mul(i, 1 | (p >> 18));
+        unit_lanes(_mm256_srli_epi32::<8>(i), 1.0 / (1u32 << 24) as f32)
+    }
+
+    /// Lanes below 2²⁴ as floats, times `scale`.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn unit_lanes(a: V, scale: f32) -> __m256 {
+        _mm256_mul_ps(_mm256_cvtepi32_ps(a), _mm256_set1_ps(scale))
+    }
+
+    /// Fills `e` with `len` samples from `s.index` of dimension `dim`.
+    ///
+    /// # Safety
+    /// The processor must have AVX2.
+    #[target_feature(enable = "avx2")]
+    pub(super) fn fill(out: &mut Values, s: &PixelSampler, dim: u32, two_d: bool, len: usize) {
+        match (two_d, len > LANES / 2) {
+            (true, true) => fill_n::<2, true>(out, s, dim, len),
+            (true, false) => fill_n::<1, true>(out, s, dim, len),
+            (false, true) => fill_n::<2, false>(out, s, dim, len),
+            (false, false) => fill_n::<1, false>(out, s, dim, len),
+        }
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn fill_n<const N: usize, const TWO_D: bool>(out: &mut Values, s: &PixelSampler, dim: u32, len: usize) {
+        let p = hash2(s.pixel_hash, dim);
+        // Lanes past the run repeat its last sample: a walk started out of
+        // range need not come back into it, and one in range would only
+        // lengthen the walk of them all.
+        let first = _mm256_add_epi32(splat(s.index), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+        let last = splat(s.index + len as u32 - 1);
+        let slots: [V; N] =
+            std::array::from_fn(|v| _mm256_min_epu32(_mm256_add_epi32(first, splat(8 * v as u32)), last));
+        let top = _mm256_set1_ps(ONE_MINUS_EPS);
+        let inv_n = _mm256_set1_ps(s.inv_n);
+        if !TWO_D {
+            let perm = permute(slots, s.n, p);
+            for v in 0..N {
+                let r = rand_float_lanes(slots[v], p ^ 0x9e37_79b9);
+                let x = _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(perm[v]), r), inv_n);
+                store(out, v, _mm256_min_ps(x, top), top);
+            }
+            return;
+        }
+        let (m, k) = (s.cols, s.rows);
+        let perm = permute(slots, s.n, p.wrapping_mul(0x5163_3e2d));
+        // `s / m` and `s % m` by `⌈2³² / m⌉`: exact while `s · m < 2³²`.
+        let (col, row) = if m.len == 1 {
+            ([_mm256_setzero_si256(); N], perm)
+        } else {
+            let magic = u32::MAX / m.len + 1;
+            let row = perm.map(|a| mul_high(a, magic));
+            let col: [V; N] = std::array::from_fn(|v| _mm256_sub_epi32(perm[v], mul(row[v], m.len)));
+            (col, row)
+        };
+        let sx = permute(col, m, p.wrapping_mul(0x68bc_21eb));
+        let sy = permute(row, k, p.wrapping_mul(0x02e5_be93));
+        let (kf, inv_mk) = (_mm256_set1_ps(k.len as f32), _mm256_set1_ps(s.inv_mk));
+        for v in 0..N {
+            let j = hash2_lanes(perm[v], p);
+            let jx = unit_lanes(_mm256_srli_epi32::<16>(j), 1.0 / 65_536.0);
+            let jy = unit_lanes(_mm256_and_si256(j, splat(0xffff)), 1.0 / 65_536.0);
+            let cell = _mm256_add_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(sx[v]), kf), _mm256_cvtepi32_ps(sy[v]));
+            let x = _mm256_mul_ps(_mm256_add_ps(cell, jx), inv_mk);
+            let y = _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(perm[v]), jy), inv_n);
+            store(out, v, _mm256_min_ps(x, top), _mm256_min_ps(y, top));
+        }
+    }
+
+    /// [`permute`] of sixteen values, for the tests.
+    ///
+    /// # Safety
+    /// The processor must have AVX2.
+    #[cfg(test)]
+    #[target_feature(enable = "avx2")]
+    pub(super) fn permute_slots(slots: [u32; 16], l: Span, p: u32) -> [u32; 16] {
+        let mut out = [0u32; 16];
+        let vs: [V; 2] = std::array::from_fn(|v| {
+            // SAFETY: eight u32 from `slots`, unaligned loads allowed.
+            unsafe { _mm256_loadu_si256(slots[8 * v..].as_ptr().cast()) }
+        });
+        for (v, r) in permute(vs, l, p).into_iter().enumerate() {
+            // SAFETY: eight u32 into `out`.
+            unsafe { _mm256_storeu_si256(out[8 * v..].as_mut_ptr().cast(), r) };
+        }
+        out
+    }
+
+    /// Writes the pairs `(x, y)` of vector `v`.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn store(out: &mut Values, v: usize, x: __m256, y: __m256) {
+        // Lanes 0 1 4 5 and 2 3 6 7 interleaved, then their halves in order.
+        let (lo, hi) = (_mm256_unpacklo_ps(x, y), _mm256_unpackhi_ps(x, y));
+        let first = _mm256_permute2f128_ps::<0x20>(lo, hi);
+        let second = _mm256_permute2f128_ps::<0x31>(lo, hi);
+        let out = &mut out[8 * v..8 * v + 8];
+        // SAFETY: `out` holds eight pairs, sixteen floats; unaligned stores
+        // are allowed.
+        unsafe {
+            _mm256_storeu_ps(out.as_mut_ptr().cast(), first);
+            _mm256_storeu_ps(out.as_mut_ptr().add(4).cast(), second);
+        }
+    }
+}
+
+#[cfg(all(test, target_arch = "x86_64"))]
+#[path = "sampler_batch_tests.rs"]
+mod tests;
