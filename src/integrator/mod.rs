@@ -94,8 +94,12 @@ pub(crate) fn surface_at<'a>(
     let mut frame = scene.tex_frame(hit, ray, st.time, footprint);
     let (object, instance) = scene.object_ids(hit);
     let (incident, ng, pixel, view) = (ray.d.normalize(), hit.ng, st.pixel, st.view);
-    frame.ctx = ShadeCtx { incident, ng, object, instance, depth, pixel, view, ..ShadeCtx::default() };
-    frame.ctx.set_footprint(st.spread * st.travelled);
+    // Built apart and stored whole: the footprint read the camera axes back
+    // from the frame just after they were stored there, narrower than
+    // written, a load that waited for the stores to reach the cache.
+    let mut ctx = ShadeCtx { incident, ng, object, instance, depth, pixel, view, ..ShadeCtx::default() };
+    ctx.set_footprint(st.spread * st.travelled);
+    frame.ctx = ctx;
     match scene.textures.apply(hit.textures, &frame, &mut material, &mut ns) {
         Ok(Applied::Lit) => {}
         Ok(Applied::Unlit(c)) => return Surface::Unlit(c),

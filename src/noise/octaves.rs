@@ -4,7 +4,8 @@
 //!
 //! Every lane performs the scalar `noise3`'s `f32` operations in the same
 //! order (IEEE floor, the same masked lattice hash through gathers from a
-//! widened copy of the permutation, the same gradient table, no FMA), so a
+//! widened copy of the permutation that pairs each entry with the next, the
+//! same gradient table, no FMA), so a
 //! lane's value is the scalar one bit for bit; `tests` compares them on
 //! random, huge, negative-zero and non-finite points. Fractal sums then
 //! accumulate the lanes in octave order exactly as before, so fBm and
@@ -38,12 +39,16 @@ mod avx2 {
     use crate::noise::perlin::{GRAD3, P};
     use std::arch::x86_64::*;
 
-    /// The permutation widened to `i32`, for gathers.
-    static P32: [i32; 512] = {
+    /// The permutation widened to `i32` with its next entry in the upper
+    /// half: `P[i] | P[i + 1] << 16`. Cell `i + 1` along an axis hashes to
+    /// `P[q + i + 1]` (its masked index `(i + 1) & 255` reads the same entry,
+    /// `P` repeating every 256), so one gather fetches the hashes of both
+    /// neighbours: 7 gathers a call instead of 14.
+    static PAIR: [i32; 512] = {
         let mut p = [0i32; 512];
         let mut i = 0;
         while i < 512 {
-            p[i] = P[i] as i32;
+            p[i] = P[i] as i32 | (P[(i + 1) & 511] as i32) << 16;
             i += 1;
         }
         p
@@ -81,9 +86,10 @@ mod avx2 {
 
     #[target_feature(enable = "avx2")]
     #[inline]
-    unsafe fn perm(i: __m256i) -> __m256i {
+    unsafe fn perm2(i: __m256i) -> (__m256i, __m256i) {
         // SAFETY: every index is masked to 0..=511 by the callers.
-        _mm256_i32gather_epi32::<4>(P32.as_ptr(), i)
+        let v = _mm256_i32gather_epi32::<4>(PAIR.as_ptr(), i);
+        (_mm256_and_si256(v, _mm256_set1_epi32(0xffff)), _mm256_srli_epi32::<16>(v))
     }
 
     /// `GRAD3[h & 15][c]` per lane.
@@ -93,6 +99,18 @@ mod avx2 {
         let lo = _mm256_loadu_ps(GRAD_SPLIT[c][0].as_ptr());
         let hi = _mm256_loadu_ps(GRAD_SPLIT[c][1].as_ptr());
         _mm256_blendv_ps(_mm256_permutevar8x32_ps(lo, h), _mm256_permutevar8x32_ps(hi, h), high)
+    }
+
+    /// The ramp of the corner with hash `h` at offset `(dx, dy, dz)` from it.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn corner(h: __m256i, dx: __m256, dy: __m256, dz: __m256) -> __m256 {
+        // Bit 3 of the hash, in each lane's sign bit, picks the upper table.
+        let high = _mm256_castsi256_ps(_mm256_slli_epi32::<28>(h));
+        let gx = grad(0, h, high);
+        let gy = grad(1, h, high);
+        let gz = grad(2, h, high);
+        add(add(mul(gx, dx), mul(gy, dy)), mul(gz, dz))
     }
 
     #[target_feature(enable = "avx2")]
@@ -127,18 +145,14 @@ mod avx2 {
         let (xi, fx) = lattice(mul(_mm256_set1_ps(x), f));
         let (yi, fy) = lattice(mul(_mm256_set1_ps(y), f));
         let (zi, fz) = lattice(mul(_mm256_set1_ps(z), f));
-        let one_i = _mm256_set1_epi32(1);
-        let m255 = _mm256_set1_epi32(255);
         let m511 = _mm256_set1_epi32(511);
-        let next = |i: __m256i| _mm256_and_si256(_mm256_add_epi32(i, one_i), m255);
-        let xs = [xi, next(xi)];
-        let ys = [yi, next(yi)];
-        let zs = [zi, next(zi)];
-        let a = [perm(xs[0]), perm(xs[1])];
         let idx = |p: __m256i, q: __m256i| _mm256_and_si256(_mm256_add_epi32(p, q), m511);
-        // b[a + 2b] = P[(P[xs[a]] + ys[b]) & 511]
-        let b =
-            [perm(idx(a[0], ys[0])), perm(idx(a[1], ys[0])), perm(idx(a[0], ys[1])), perm(idx(a[1], ys[1]))];
+        // a[i] = P[xs[i]]; b[a + 2b] = P[(a[a] + ys[b]) & 511], both
+        // neighbours of each from one gather (`PAIR`).
+        let a = perm2(xi);
+        let (b0, b2) = perm2(idx(a.0, yi));
+        let (b1, b3) = perm2(idx(a.1, yi));
+        let b = [b0, b1, b2, b3];
         let zero = _mm256_setzero_ps();
         let one = _mm256_set1_ps(1.0);
         // The scalar code subtracts the corner as a float, 0.0 included
@@ -147,15 +161,11 @@ mod avx2 {
         let dy = [sub(fy, zero), sub(fy, one)];
         let dz = [sub(fz, zero), sub(fz, one)];
         let mut n = [zero; 8];
-        for (k, slot) in n.iter_mut().enumerate() {
-            let (ca, cb, cc) = (k & 1, (k >> 1) & 1, k >> 2);
-            let h = perm(idx(b[ca + 2 * cb], zs[cc]));
-            // Bit 3 of the hash, in each lane's sign bit, picks the upper table.
-            let high = _mm256_castsi256_ps(_mm256_slli_epi32::<28>(h));
-            let gx = grad(0, h, high);
-            let gy = grad(1, h, high);
-            let gz = grad(2, h, high);
-            *slot = add(add(mul(gx, dx[ca]), mul(gy, dy[cb])), mul(gz, dz[cc]));
+        for k in 0..4 {
+            let (ca, cb) = (k & 1, k >> 1);
+            let (h0, h1) = perm2(idx(b[k], zi));
+            n[k] = corner(h0, dx[ca], dy[cb], dz[0]);
+            n[k + 4] = corner(h1, dx[ca], dy[cb], dz[1]);
         }
         let [n000, n100, n010, n110, n001, n101, n011, n111] = n;
         let neg = |v: __m256| _mm256_xor_ps(v, _mm256_set1_ps(-0.0));

@@ -472,6 +472,24 @@ impl IoBlock {
         }
     }
 
+    /// The three channels the entry wrapper wrote, each read on its own:
+    /// LuaJIT stores them one double at a time, and a copy of the record
+    /// read two of them in one 16-byte load, which no store can forward to
+    /// (the load waited for both stores to reach the cache).
+    #[inline(always)]
+    pub(crate) fn channels(&self) -> [f64; 3] {
+        // SAFETY: see the module doc; the Lua call has returned. Volatile
+        // only so that the three loads are not merged into wider ones.
+        unsafe {
+            let o = self.out;
+            [
+                std::ptr::addr_of!((*o).r).read_volatile(),
+                std::ptr::addr_of!((*o).g).read_volatile(),
+                std::ptr::addr_of!((*o).b).read_volatile(),
+            ]
+        }
+    }
+
     /// The result the entry wrapper wrote.
     pub(crate) fn out(&self) -> Out {
         // SAFETY: see the module doc; the Lua call has returned.

@@ -36,8 +36,7 @@ impl ThreadState {
         self.io.begin(|s| fill_shade(self.avx, s, input, random));
         let status = self.caller.call(f);
         if status == mlua::ffi::LUA_OK && !self.io.timed_out() && super::debug_pixel().is_none() {
-            let o = self.io.out();
-            *rgb = [o.r, o.g, o.b];
+            store_channels(rgb, self.io.channels());
             return 0;
         }
         ran(status)
@@ -195,8 +194,7 @@ impl ThreadState {
         self.io.begin3(|k, s| fill_shade(self.avx, s, &inputs[k], random[k]));
         let status = self.caller.call(f);
         if status == mlua::ffi::LUA_OK && !self.io.timed_out() {
-            let o = self.io.out();
-            *h = [o.r, o.g, o.b];
+            store_channels(h, self.io.channels());
             return 0;
         }
         ran(status)
@@ -213,6 +211,26 @@ impl ThreadState {
             let o = self.io.out();
             [o.r, o.g, o.b]
         })
+    }
+}
+
+/// Stores a call's channels where its caller reads them: the first two in
+/// one 16-byte store, because the callers convert them to `f32` two at a
+/// time (`cvtpd2ps` of a 16-byte load), which two 8-byte stores could not
+/// forward to (a stall of about 1 ns per call).
+#[inline(always)]
+fn store_channels(out: &mut [f64; 3], c: [f64; 3]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_set_pd, _mm_storeu_pd};
+        // SAFETY: `out` has room for two doubles at its start (SSE2 is part
+        // of x86_64).
+        unsafe { _mm_storeu_pd(out.as_mut_ptr(), _mm_set_pd(c[1], c[0])) };
+        out[2] = c[2];
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        *out = c;
     }
 }
 

@@ -198,18 +198,38 @@ pub fn image_names(descs: &[ImageDesc]) -> Vec<(String, usize)> {
     names
 }
 
+/// The world point of object-space `p` near the hit of frame `f`.
+#[inline(always)]
+fn world_point(f: &TexFrame, p: Vec3) -> Vec3 {
+    if p == f.p_object {
+        return f.p_world;
+    }
+    match &f.to_world {
+        // The world point of an offset lies as far from the hit as its object point.
+        Some(xf) => f.p_world + xf.vector(p - f.p_object),
+        None => f.p_world + (p - f.p_object),
+    }
+}
+
+/// `base` (the shading point of frame `f`) moved to object-space `p` with
+/// texture coordinates `uv`: what [`input`] gives there, without computing
+/// again what the points share.
+#[inline(always)]
+fn moved(f: &TexFrame, base: &ShadeInput, p: Vec3, uv: Vec2) -> ShadeInput {
+    let pw = world_point(f, p);
+    ShadeInput {
+        p: p.to_array(),
+        pw: pw.to_array(),
+        pc: f.ctx.view.to_camera(pw).to_array(),
+        uv: uv.to_array(),
+        ..*base
+    }
+}
+
 /// The shading point a script sees at object-space `p` with texture
 /// coordinates `uv`, in frame `f` whose world shading normal is now `n`.
 fn input(f: &TexFrame, p: Vec3, uv: Vec2, n: Vec3) -> ShadeInput {
-    let pw = if p == f.p_object {
-        f.p_world
-    } else {
-        match &f.to_world {
-            // The world point of an offset lies as far from the hit as its object point.
-            Some(xf) => f.p_world + xf.vector(p - f.p_object),
-            None => f.p_world + (p - f.p_object),
-        }
-    };
+    let pw = world_point(f, p);
     let c = &f.ctx;
     let to_object = |v: Vec3| match &f.to_world {
         Some(xf) => xf.inv_vector(v),
@@ -267,8 +287,13 @@ impl Textures {
             DecalMode::BumpNormal => {
                 if map.bump_factor != 0.0 {
                     let world_n = *n;
+                    // The three points are built in place: `pts.map(input)` built
+                    // them elsewhere and copied 468 bytes (a `memmove` call) per hit.
                     let local = bump::height_bump(f, map.bump_factor, bump::bump_step(f), |pts| {
-                        set.heights3(id, &pts.map(|(p, uv)| input(f, p, uv, world_n))).map_err(Box::new)
+                        let [(p0, uv0), (pa, uva), (pb, uvb)] = pts;
+                        let base = input(f, p0, uv0, world_n);
+                        let three = [base, moved(f, &base, pa, uva), moved(f, &base, pb, uvb)];
+                        set.heights3(id, &three).map_err(Box::new)
                     })?;
                     // No slope: the normal stays exactly as the renderer had it.
                     if let Some(local) = local {
@@ -512,6 +537,32 @@ mod tests {
         let descs = [map("function height(s) return 0 end", DecalMode::Material, &[])];
         let e = compile(&descs, DEFAULT, None).unwrap_err();
         assert!(e.message.contains("defines none of color, specular, roughness"), "{}", e.message);
+    }
+
+    #[test]
+    fn a_moved_point_is_the_point_input_builds_there() {
+        let xf = crate::math::Transform::scaling(Vec3::new(2.0, 1.0, 0.5))
+            .and_then(|s| crate::math::Transform::rotation(30.0, Vec3::Y).map(|r| s.then(&r)))
+            .unwrap();
+        let mut f = frame();
+        f.to_world = Some(xf);
+        f.ctx.view = crate::texture::View {
+            eye: Vec3::new(0.0, 1.0, 5.0),
+            right: Vec3::X,
+            up: Vec3::Y,
+            back: Vec3::Z,
+        };
+        f.ctx.incident = Vec3::new(0.0, -0.6, -0.8);
+        f.ctx.set_footprint(0.01);
+        let n = Vec3::new(0.0, 0.6, 0.8);
+        let base = input(&f, f.p_object, f.uv, n);
+        for (p, uv) in [
+            (f.p_object + Vec3::new(1e-3, 0.0, 0.0), f.uv + Vec2::new(1e-3, 0.0)),
+            (f.p_object + Vec3::new(0.0, -2e-3, 5e-4), f.uv + Vec2::new(0.0, 2e-3)),
+            (f.p_object, f.uv),
+        ] {
+            assert_eq!(moved(&f, &base, p, uv), input(&f, p, uv, n), "at {p}");
+        }
     }
 
     const DEFAULT: Duration = crate::shader::DEFAULT_TIMEOUT;
