@@ -215,9 +215,10 @@ fn render_tiles(
             (Tile::new(x0, y0, x1, y1, opts.filter), RayStats::default())
         })
         .collect();
+    let pass_floor = if progress.is_some() { 1 } else { BATCH_PASS };
     let mut taken = 0;
     while taken < spp && !stop() {
-        let n = pass_size(taken, spp);
+        let n = pass_size(taken, spp, pass_floor);
         if let (Some(limit), true) = (opts.time_limit, taken > 0) {
             // Stop if this pass would end after the limit, at the pace so far.
             let per_sample = start.elapsed().as_secs_f64() / f64::from(taken);
@@ -304,10 +305,18 @@ fn merged(w: u32, h: u32, tiles: &[(Tile, RayStats)]) -> Film {
 }
 
 /// Samples per pixel of the pass after `taken` of `spp`: 1, 1, 2, 4, ...,
-/// at most an eighth of `spp`, never past it.
-fn pass_size(taken: u32, spp: u32) -> u32 {
-    taken.max(1).min(spp.div_ceil(8)).min(spp - taken)
+/// at most an eighth of `spp` (or `floor`, where that is more), never past
+/// it.
+fn pass_size(taken: u32, spp: u32, floor: u32) -> u32 {
+    taken.max(1).min(spp.div_ceil(8).max(floor)).min(spp - taken)
 }
+
+/// How long a pass may always grow when nobody watches the passes (only
+/// `--time` and the ETA use them): a pixel's samples of one pass are what
+/// the sampler batches (sixteen lanes, runs of three or more), and an
+/// eighth of 16 or 100 samples (passes of 2 or 13) left its lanes idle. A
+/// preview (`luster watch`) keeps its finer steps.
+const BATCH_PASS: u32 = 16;
 
 #[cfg(test)]
 mod tests {
@@ -349,5 +358,31 @@ mod tests {
             }
         }
         assert!(merged(0, 0, &[]).pixels.is_empty());
+    }
+
+    /// Passes cover the samples exactly; a preview grows to an eighth of
+    /// them, a plain render to a sampler batch at least.
+    #[test]
+    fn passes_cover_the_samples_and_grow_to_their_cap() {
+        let passes = |spp: u32, floor: u32| {
+            let (mut taken, mut out) = (0, Vec::new());
+            while taken < spp {
+                let n = pass_size(taken, spp, floor);
+                out.push(n);
+                taken += n;
+            }
+            out
+        };
+        assert_eq!(passes(16, 1), [1, 1, 2, 2, 2, 2, 2, 2, 2]);
+        assert_eq!(passes(16, BATCH_PASS), [1, 1, 2, 4, 8]);
+        assert_eq!(passes(100, BATCH_PASS), [1, 1, 2, 4, 8, 16, 16, 16, 16, 16, 4]);
+        assert_eq!(passes(900, BATCH_PASS)[..8], [1, 1, 2, 4, 8, 16, 32, 64]);
+        for spp in 1..300 {
+            for floor in [1, BATCH_PASS] {
+                let p = passes(spp, floor);
+                assert_eq!(p.iter().sum::<u32>(), spp);
+                assert!(p.iter().all(|&n| n >= 1 && n <= spp.div_ceil(8).max(floor)));
+            }
+        }
     }
 }
