@@ -125,6 +125,69 @@ impl Brdf {
     }
 }
 
+impl Brdf {
+    /// This BRDF as [`DiffuseOnly`] on a material of colours `kd` and `ks`,
+    /// where it is one.
+    #[inline(always)]
+    pub fn diffuse_only(&self, kd: Vec3, ks: Vec3) -> Option<DiffuseOnly<'_>> {
+        match self {
+            // `d / (d + 0)` is exactly 1 for a finite `d > 0`, so the mixture
+            // always takes the diffuse part and its lobe weighs nothing.
+            Brdf::Phong(phong) if ks == Vec3::ZERO && diffuse_probability(kd, ks) == 1.0 => {
+                Some(DiffuseOnly { brdf: self, phong })
+            }
+            _ => None,
+        }
+    }
+}
+
+/// A Phong-family BRDF on a material without specular colour and with some
+/// diffuse colour (every wall of the course's Cornell boxes): its value and
+/// density need only the cosines of the two directions, and its sample is
+/// the cosine-weighted one. The same operations as [`Brdf::eval`],
+/// [`Brdf::pdf`] and [`Brdf::sample`], inlined, so the same bits.
+#[derive(Clone, Copy, Debug)]
+pub struct DiffuseOnly<'a> {
+    brdf: &'a Brdf,
+    phong: &'a PhongFamily,
+}
+
+impl DiffuseOnly<'_> {
+    /// `f` for directions at cosines `cos_i` (light) and `cos_o` (viewer).
+    #[inline(always)]
+    pub fn eval(&self, kd: Vec3, ks: Vec3, cos_i: f32, cos_o: f32) -> Vec3 {
+        self.phong.eval_diffuse(kd, ks, cos_i, cos_o)
+    }
+
+    /// The density [`Brdf::sample`] draws a light direction at cosine
+    /// `cos_i` with (`1 · p_cos + 0 · p_lobe`, the same bits as `p_cos`).
+    #[inline(always)]
+    pub fn pdf(&self, cos_o: f32, cos_i: f32) -> f32 {
+        if cos_o <= 0.0 || cos_i <= 0.0 {
+            return 0.0;
+        }
+        power_cosine_pdf(1.0, cos_i)
+    }
+
+    /// [`Brdf::sample`]: the mixture's choice always falls on the diffuse
+    /// part (the chance is 1) unless `choice` is not below 1.
+    #[inline(always)]
+    pub fn sample(&self, kd: Vec3, ks: Vec3, wo: Vec3, choice: f32, u: (f32, f32)) -> Option<Sample> {
+        if choice.partial_cmp(&1.0) != Some(std::cmp::Ordering::Less) {
+            return self.brdf.sample(kd, ks, wo, choice, u);
+        }
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let wi = power_cosine(1.0, u);
+        if wi.z <= 0.0 {
+            return None;
+        }
+        let pdf = self.pdf(wo.z, wi.z);
+        (pdf > 0.0).then(|| Sample { wi, f: self.eval(kd, ks, wi.z, wo.z), pdf })
+    }
+}
+
 /// Chance of sampling the diffuse part: its share of `kd + ks` by luminance.
 #[inline]
 fn diffuse_probability(kd: Vec3, ks: Vec3) -> f32 {

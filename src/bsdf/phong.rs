@@ -72,6 +72,23 @@ impl PhongFamily {
         // A material without a specular colour (the course's Cornell walls)
         // skips the `powf`: `ks * lobe` is zero either way.
         let lobe = if ks == Vec3::ZERO { 0.0 } else { self.cos_alpha(wi, wo).powf(self.exponent) };
+        self.combine(kd, ks, lobe, cos_i)
+    }
+
+    /// [`eval`](Self::eval) for a material without specular colour, from the
+    /// two directions' cosines alone (the lobe weighs nothing, so neither
+    /// direction is needed whole): the same operations, so the same bits.
+    #[inline(always)]
+    pub fn eval_diffuse(&self, kd: Vec3, ks: Vec3, cos_i: f32, cos_o: f32) -> Vec3 {
+        if cos_i <= 0.0 || cos_o <= 0.0 {
+            return Vec3::ZERO;
+        }
+        self.combine(kd, ks, 0.0, cos_i)
+    }
+
+    /// The variant's sum of the diffuse term and the lobe's value `lobe`.
+    #[inline(always)]
+    fn combine(&self, kd: Vec3, ks: Vec3, lobe: f32, cos_i: f32) -> Vec3 {
         let p = self.exponent;
         match self.variant {
             Variant::Original => kd + ks * (lobe / cos_i),

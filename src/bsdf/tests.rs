@@ -345,3 +345,34 @@ fn roughness_widens_the_microfacet_highlight() {
     let (narrow, wide) = (width(0.2), width(0.4));
     assert!(narrow > 0.0 && wide > 3.0 * narrow && wide < 5.0 * narrow, "{narrow} vs {wide}");
 }
+
+/// A diffuse-only view gives the bits of the full BRDF's value, density and
+/// sample for every Phong variant, and exists only where the lobe weighs
+/// nothing.
+#[test]
+fn diffuse_only_matches_the_full_brdf_bit_for_bit() {
+    let mut rng = Pcg(7);
+    let ks = Vec3::ZERO;
+    for (name, brdf) in all_models(40.0).into_iter().take(6) {
+        let d = brdf.diffuse_only(KD, ks).expect("a Phong model without specular colour");
+        assert!(brdf.diffuse_only(KD, KS).is_none() && brdf.diffuse_only(Vec3::ZERO, ks).is_none());
+        for _ in 0..2000 {
+            let wo = from_angles(rng.next() * 1.7, rng.next() * 6.3);
+            let wi = from_angles(rng.next() * 1.7, rng.next() * 6.3);
+            let full = brdf.eval(KD, ks, wi, wo);
+            assert_eq!(
+                d.eval(KD, ks, wi.z, wo.z).to_array().map(f32::to_bits),
+                full.to_array().map(f32::to_bits)
+            );
+            assert_eq!(d.pdf(wo.z, wi.z).to_bits(), brdf.pdf(KD, ks, wo, wi).to_bits(), "{name}");
+            let (choice, u) = (rng.next(), (rng.next(), rng.next()));
+            let (a, b) = (d.sample(KD, ks, wo, choice, u), brdf.sample(KD, ks, wo, choice, u));
+            assert_eq!(a.is_some(), b.is_some(), "{name}");
+            if let (Some(a), Some(b)) = (a, b) {
+                assert_eq!((a.wi, a.f, a.pdf.to_bits()), (b.wi, b.f, b.pdf.to_bits()), "{name}");
+            }
+        }
+    }
+    let ts = &all_models(40.0)[6].1;
+    assert!(ts.diffuse_only(KD, ks).is_none());
+}

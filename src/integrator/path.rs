@@ -144,6 +144,10 @@ fn li(
         }
         None => (f32::INFINITY, escaped(scene, ray, came, p, st)),
     };
+    // Nothing on the way dims the light or adds to it.
+    if scene.volumes.media.is_empty() {
+        return color;
+    }
     if past_limit(scene, depth, p) {
         // The light found past the depth limit arrives dimmed by the media
         // on the way; scattering there would be one bounce too many.
@@ -421,6 +425,12 @@ struct At {
 fn light_terms(m: &Material, at: &At, wi: Vec3, cos: f32, p: &PathParams) -> (Vec3, f32) {
     match &m.brdf {
         Some(b) if p.mis => {
+            // Without a lobe only the cosines count: the local `z` of `wi` is
+            // `n·wi`, the bits of `cos`.
+            if let Some(d) = b.diffuse_only(m.diffuse, m.specular) {
+                let f = d.eval(m.diffuse, m.specular, cos, at.wo.z) * cos;
+                return (f, d.pdf(at.wo.z, cos));
+            }
             let local = at.frame.to_local(wi);
             let f = b.eval(m.diffuse, m.specular, local, at.wo) * cos;
             (f, b.pdf(m.diffuse, m.specular, at.wo, local))
@@ -440,11 +450,12 @@ fn light_terms(m: &Material, at: &At, wi: Vec3, cos: f32, p: &PathParams) -> (Ve
 /// `cos`, so `wi` need not be brought into the frame.
 #[inline]
 fn brdf_cos(b: &Brdf, m: &Material, at: &At, wi: Vec3, cos: f32) -> Vec3 {
-    let local = match b {
-        Brdf::Phong(_) if m.specular == Vec3::ZERO => Vec3::new(0.0, 0.0, cos),
-        _ => at.frame.to_local(wi),
-    };
-    b.eval(m.diffuse, m.specular, local, at.wo) * cos
+    match b {
+        Brdf::Phong(b) if m.specular == Vec3::ZERO => {
+            b.eval_diffuse(m.diffuse, m.specular, cos, at.wo.z) * cos
+        }
+        _ => b.eval(m.diffuse, m.specular, at.frame.to_local(wi), at.wo) * cos,
+    }
 }
 
 /// The random bounce: a direction drawn as the variant says, the light it
@@ -473,9 +484,11 @@ fn bounce(
     // The BRDF's sample carries its value: no second evaluation.
     let (wi, pdf, f) = match (&m.brdf, p.mis) {
         (Some(b), true) => {
-            let Some(s) = b.sample(m.diffuse, m.specular, at.wo, choice, u) else {
-                return Vec3::ZERO;
+            let s = match b.diffuse_only(m.diffuse, m.specular) {
+                Some(d) => d.sample(m.diffuse, m.specular, at.wo, choice, u),
+                None => b.sample(m.diffuse, m.specular, at.wo, choice, u),
             };
+            let Some(s) = s else { return Vec3::ZERO };
             (frame.to_world(s.wi), s.pdf, Some(s.f))
         }
         _ => {

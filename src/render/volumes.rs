@@ -48,15 +48,24 @@ use std::f32::consts::PI;
 /// course's range).
 pub const MIN_TRANSMITTANCE: f32 = 1e-4;
 
-/// The closest surface or hypertexture hit along `ray`.
+/// The closest surface or hypertexture hit along `ray`. Inlined, so that a
+/// scene without hypertextures (every path-traced course scene) pays a
+/// length test, not a call, per ray.
+#[inline]
 pub fn trace(scene: &Scene, ray: &Ray, cull_back_faces: bool, st: &mut PathState) -> Option<Hit> {
-    let vols = &scene.volumes;
-    if vols.surfaces.is_empty() {
+    if scene.volumes.surfaces.is_empty() {
         // Straight into the caller's slot: a hit kept in a local and copied
         // out was read back in wide loads before the narrow stores that
         // wrote it had landed.
         return scene.intersect(ray, st.time, cull_back_faces);
     }
+    trace_surfaces(scene, ray, cull_back_faces, st)
+}
+
+/// [`trace`] in a scene with hypertexture surfaces.
+#[inline(never)]
+fn trace_surfaces(scene: &Scene, ray: &Ray, cull_back_faces: bool, st: &mut PathState) -> Option<Hit> {
+    let vols = &scene.volumes;
     let hit = scene.intersect(ray, st.time, cull_back_faces);
     let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
     match vols.surface_hit(ray, scene.intersection_epsilon, t_max, &probe(ray, st)) {
@@ -83,12 +92,23 @@ pub fn trace(scene: &Scene, ray: &Ray, cull_back_faces: bool, st: &mut PathState
 
 /// How much light gets through along the shadow ray `ray` up to `t_max`:
 /// zero when a surface or hypertexture blocks it, else the media's
-/// transmittance.
+/// transmittance. Inlined: without volumes it is the occlusion test alone.
+#[inline]
 pub fn shadow(scene: &Scene, ray: &Ray, t_max: f32, st: &mut PathState) -> Vec3 {
     st.stats.shadow += 1;
     if scene.occluded(ray, t_max, st.time) {
         return Vec3::ZERO;
     }
+    let vols = &scene.volumes;
+    if vols.surfaces.is_empty() && vols.media.is_empty() {
+        return Vec3::ONE;
+    }
+    shadow_volumes(scene, ray, t_max, st)
+}
+
+/// [`shadow`] past the surfaces, in a scene with volumes.
+#[inline(never)]
+fn shadow_volumes(scene: &Scene, ray: &Ray, t_max: f32, st: &mut PathState) -> Vec3 {
     let vols = &scene.volumes;
     if !vols.surfaces.is_empty() {
         match vols.surface_blocks(ray, scene.intersection_epsilon, t_max, &probe(ray, st)) {
@@ -150,11 +170,20 @@ fn transmittance(scene: &Scene, v: &Volume, ray: &Ray, t_lo: f32, t_hi: f32, st:
 /// The radiance arriving at `ray`'s origin when `behind` arrives from
 /// `t_end` (a surface's radiance, or the background at infinity): what the
 /// media in between absorb, scatter in and emit.
+///
+/// Inlined: without media it returns `behind`, and the call is not made.
+#[inline]
 pub fn through_media(scene: &Scene, ray: &Ray, t_end: f32, behind: Vec3, st: &mut PathState) -> Vec3 {
-    let media = &scene.volumes.media;
-    if media.is_empty() {
+    if scene.volumes.media.is_empty() {
         return behind;
     }
+    march(scene, ray, t_end, behind, st)
+}
+
+/// [`through_media`] where the scene has media.
+#[inline(never)]
+fn march(scene: &Scene, ray: &Ray, t_end: f32, behind: Vec3, st: &mut PathState) -> Vec3 {
+    let media = &scene.volumes.media;
     // Spans of each medium on the ray, and every place one begins or ends.
     let mut spans: Vec<(f32, f32, usize)> = Vec::new();
     let mut cuts: Vec<f32> = Vec::new();
