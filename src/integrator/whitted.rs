@@ -55,7 +55,7 @@
 //! plausible light), and a camera ray may spawn at most [`SECONDARY_BUDGET`](super::SECONDARY_BUDGET)
 //! reflection and refraction rays. Neither changes any course image.
 
-use super::{light_reaching, surface_at, PathState, Surface};
+use super::{light_reaching_inline, surface_at, PathState, Surface};
 use crate::bsdf::fresnel;
 use crate::bsdf::Frame;
 use crate::material::Material;
@@ -222,11 +222,37 @@ pub(crate) fn direct(
             light.skip_sample(&mut st.sampler);
             continue;
         }
-        if let Some((ls, cos, tr)) = light_reaching(scene, light, origin, hit.p, n, st) {
-            color += reflectance_out_of_line(m, n, ls.wi, ray.d, cos) * (tr * ls.e);
-        }
+        color = light_term(scene, light, m, origin, hit.p, n, ray.d, st, color);
     }
     color
+}
+
+/// `color` plus what `light` adds at the hit, `reflectance · tr · E` (the
+/// same `color` when it does not reach it). Never inlined: `direct` is
+/// inlined into the recursive `traced`, and whether `reflectance` (with every
+/// BRDF's `eval` and their `powf`s) went in too was up to how thin LTO split
+/// the crate: when it did, `traced` doubled in code and stack frame and whole
+/// renders of `benches/scenes/film.xml` took 10–17% more CPU
+/// (docs/performance.md, session 12). One call per light, its sum in
+/// registers: the light's sample and then the reflectance, each called
+/// from `traced` on its own, came back through memory, read at once.
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn light_term(
+    scene: &Scene,
+    light: &crate::light::Light,
+    m: &Material,
+    origin: Vec3,
+    p: Vec3,
+    n: Vec3,
+    d: Vec3,
+    st: &mut PathState,
+    color: Vec3,
+) -> Vec3 {
+    match light_reaching_inline(scene, light, origin, p, n, st) {
+        Some((ls, cos, tr)) => color + reflectance(m, n, ls.wi, d, cos) * (tr * ls.e),
+        None => color,
+    }
 }
 
 /// What the surface sends towards a viewer along `-d` per unit irradiance
@@ -241,17 +267,6 @@ pub(crate) fn reflectance(m: &Material, n: Vec3, l: Vec3, d: Vec3, cos: f32) -> 
             brdf.eval(m.diffuse, m.specular, frame.to_local(l), frame.to_local(-d)) * cos
         }
     }
-}
-
-/// [`reflectance`] as a call. `direct` is inlined into the recursive
-/// `traced`, and whether `reflectance` (with every BRDF's `eval` and their
-/// `powf`s) went in too was up to how thin LTO split the crate: when it did,
-/// `traced` doubled in code and stack frame and whole renders of
-/// `benches/scenes/film.xml` took 10–17% more CPU (docs/performance.md,
-/// session 12).
-#[inline(never)]
-fn reflectance_out_of_line(m: &Material, n: Vec3, l: Vec3, d: Vec3, cos: f32) -> Vec3 {
-    reflectance(m, n, l, d, cos)
 }
 
 /// Diffuse plus Blinn-Phong specular reflectance towards `l` for a viewer
