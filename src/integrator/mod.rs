@@ -119,24 +119,10 @@ pub(crate) fn surface_at<'a>(
 /// What `light` sends to the surface point `p` with normal `n`, shadow rays
 /// leaving from `origin`: the sample, `n·wi`, and the transmittance along the
 /// shadow ray. `None` when the light is behind the surface, black or blocked.
-/// Never inlined: inside the recursive ray tracer's `traced` it grew that
-/// function by half and slowed its renders (as `reflectance` did, see
-/// `whitted::reflectance_out_of_line`).
-#[inline(never)]
-pub(crate) fn light_reaching(
-    scene: &Scene,
-    light: &Light,
-    origin: Vec3,
-    p: Vec3,
-    n: Vec3,
-    st: &mut PathState,
-) -> Option<(LightSample, f32, Vec3)> {
-    light_reaching_inline(scene, light, origin, p, n, st)
-}
-
-/// [`light_reaching`] inlined into its caller (the path tracer's light
-/// samples): its result returned through memory was read back in wider
-/// loads than it was stored with, a stall per light sample.
+/// Always inlined into its callers (the path tracer's light samples, the
+/// recursive tracer's per-light term): its result returned through memory
+/// was read back in wider loads than it was stored with, a stall per light
+/// sample.
 #[inline(always)]
 pub(crate) fn light_reaching_inline(
     scene: &Scene,

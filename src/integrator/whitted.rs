@@ -55,7 +55,7 @@
 //! plausible light), and a camera ray may spawn at most [`SECONDARY_BUDGET`](super::SECONDARY_BUDGET)
 //! reflection and refraction rays. Neither changes any course image.
 
-use super::{light_reaching, surface_at, PathState, Surface};
+use super::{light_reaching_inline, surface_at, PathState, Surface};
 use crate::bsdf::fresnel;
 use crate::bsdf::Frame;
 use crate::material::Material;
@@ -222,11 +222,37 @@ pub(crate) fn direct(
             light.skip_sample(&mut st.sampler);
             continue;
         }
-        if let Some((ls, cos, tr)) = light_reaching(scene, light, origin, hit.p, n, st) {
-            color += reflectance_out_of_line(m, n, ls.wi, ray.d, cos) * (tr * ls.e);
-        }
+        color = light_term(scene, light, m, origin, hit.p, n, ray.d, st, color);
     }
     color
+}
+
+/// `color` plus what `light` adds at the hit, `reflectance · tr · E` (the
+/// same `color` when it does not reach it). Never inlined: `direct` is
+/// inlined into the recursive `traced`, and whether `reflectance` (with every
+/// BRDF's `eval` and their `powf`s) went in too was up to how thin LTO split
+/// the crate: when it did, `traced` doubled in code and stack frame and whole
+/// renders of `benches/scenes/film.xml` took 10–17% more CPU
+/// (docs/performance.md, session 12). One call per light, its sum in
+/// registers: the light's sample and then the reflectance, each called
+/// from `traced` on its own, came back through memory, read at once.
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn light_term(
+    scene: &Scene,
+    light: &crate::light::Light,
+    m: &Material,
+    origin: Vec3,
+    p: Vec3,
+    n: Vec3,
+    d: Vec3,
+    st: &mut PathState,
+    color: Vec3,
+) -> Vec3 {
+    match light_reaching_inline(scene, light, origin, p, n, st) {
+        Some((ls, cos, tr)) => color + reflectance(m, n, ls.wi, d, cos) * (tr * ls.e),
+        None => color,
+    }
 }
 
 /// What the surface sends towards a viewer along `-d` per unit irradiance
@@ -243,17 +269,6 @@ pub(crate) fn reflectance(m: &Material, n: Vec3, l: Vec3, d: Vec3, cos: f32) -> 
     }
 }
 
-/// [`reflectance`] as a call. `direct` is inlined into the recursive
-/// `traced`, and whether `reflectance` (with every BRDF's `eval` and their
-/// `powf`s) went in too was up to how thin LTO split the crate: when it did,
-/// `traced` doubled in code and stack frame and whole renders of
-/// `benches/scenes/film.xml` took 10–17% more CPU (docs/performance.md,
-/// session 12).
-#[inline(never)]
-fn reflectance_out_of_line(m: &Material, n: Vec3, l: Vec3, d: Vec3, cos: f32) -> Vec3 {
-    reflectance(m, n, l, d, cos)
-}
-
 /// Diffuse plus Blinn-Phong specular reflectance towards `l` for a viewer
 /// along `-d`, with `cos = n · l` already known to be positive.
 #[inline]
@@ -264,7 +279,35 @@ fn blinn_phong(m: &Material, n: Vec3, l: Vec3, d: Vec3, cos: f32) -> Vec3 {
         return m.diffuse * cos;
     }
     let h = (l - d).normalize();
-    m.diffuse * cos + m.specular * n.dot(h).max(0.0).powf(m.phong)
+    m.diffuse * cos + m.specular * phong_power(n.dot(h).max(0.0), m.phong)
+}
+
+/// `x^e` for the Blinn-Phong lobe. The course's exponents are whole numbers
+/// (1 to a few thousand): for those, repeated squaring in `f64`, a handful
+/// of multiplications against a `powf` call (3.6% of the POV-Ray scene's
+/// profile). Its relative error, about `2⁻⁵⁰`, is far under an `f32` step, so
+/// the result is the correctly rounded power; libm's `powf` (within 0.82 of
+/// a step) differs from it only where the exact power lies near a rounding
+/// boundary, by one step. Other exponents go to `powf`.
+#[inline]
+pub(crate) fn phong_power(x: f32, e: f32) -> f32 {
+    let k = e as u32;
+    if k as f32 != e || k > 1 << 16 {
+        return x.powf(e);
+    }
+    // Factors of at most 1 (as `n·h` is) keep every partial product at or
+    // above the result, so nothing underflows that the result would not.
+    let (mut acc, mut base, mut k) = (1.0f64, f64::from(x), k);
+    while k > 0 {
+        if k & 1 == 1 {
+            acc *= base;
+        }
+        k >>= 1;
+        if k > 0 {
+            base *= base;
+        }
+    }
+    acc as f32
 }
 
 /// `dir` moved by the course's glossy model: `dir + r (ξ₁ - ½) u + r (ξ₂ - ½) v`
@@ -310,6 +353,31 @@ pub fn reflect(d: Vec3, n: Vec3) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn whole_exponents_are_powers_within_a_rounding_step_of_powf() {
+        let mut differ = 0;
+        let mut total = 0;
+        for e in [1.0f32, 2.0, 3.0, 10.0, 50.0, 100.0, 150.0, 500.0, 1000.0] {
+            for i in 0..=20_000 {
+                let x = i as f32 / 20_000.0;
+                let (ours, libm) = (phong_power(x, e), x.powf(e));
+                total += 1;
+                if ours != libm {
+                    differ += 1;
+                    // One step apart (the bit patterns of positive floats are ordered).
+                    assert_eq!(ours.to_bits().abs_diff(libm.to_bits()), 1, "{x}^{e}: {ours} vs {libm}");
+                }
+            }
+        }
+        assert!(differ * 100 < total, "{differ} of {total} differ");
+        assert_eq!((phong_power(0.0, 0.0), phong_power(0.3, 0.0), phong_power(0.0, 50.0)), (1.0, 1.0, 0.0));
+        assert_eq!(phong_power(1.0, 500.0), 1.0);
+        // Other exponents are libm's.
+        for e in [0.5f32, 2.5, 1e9, -3.0] {
+            assert_eq!(phong_power(0.7, e), 0.7f32.powf(e), "{e}");
+        }
+    }
 
     #[test]
     fn the_glossy_frame_is_orthonormal_and_turned_as_the_courses() {
