@@ -67,15 +67,10 @@ impl WatertightRay {
         if d[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
-        WatertightRay {
-            o: ray.o.to_array(),
-            kx,
-            ky,
-            kz,
-            sx: -d[kx] / d[kz],
-            sy: -d[ky] / d[kz],
-            sz: 1.0 / d[kz],
-        }
+        // The three quotients as one 4-lane division: each lane is the
+        // same correctly rounded quotient as a scalar division.
+        let s = glam::Vec4::new(-d[kx], -d[ky], 1.0, 1.0) / glam::Vec4::splat(d[kz]);
+        WatertightRay { o: ray.o.to_array(), kx, ky, kz, sx: s.x, sy: s.y, sz: s.z }
     }
 
     /// Intersects `tri`, returning a hit with `t_min < t < t_max`.

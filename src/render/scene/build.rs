@@ -8,7 +8,7 @@ use crate::geometry::{Ellipsoid, Mesh, Plane, Sphere};
 use crate::integrator::Integrator;
 use crate::light::{AreaLight, Environment, Light, LightMesh, LightPick, LightSphere, PointLight, SpotLight};
 use crate::material::Material;
-use crate::math::{Aabb, Vec2};
+use crate::math::{Aabb, Vec2, Vec3};
 use crate::render::camera::Camera;
 use crate::scene::description::{Description, MeshSource, Shape};
 use crate::scene::ply::read_ply;
@@ -139,7 +139,9 @@ impl Scene {
                 }
             }
             let light = light_of_object.get(&i).copied().unwrap_or(super::NO_LIGHT);
-            prims.push(Prim { geom, material, motion: o.motion, xf, textures: tex, object: i as u32, light });
+            let world = xf.is_none() && o.motion == Vec3::ZERO;
+            let (motion, object) = (o.motion, i as u32);
+            prims.push(Prim { geom, material, motion, xf, textures: tex, object, light, world });
         }
         let bounds: Vec<Aabb> = prims.iter().map(|p| prim_bounds(p, &meshes, &ellipsoids)).collect();
         // Finite input can still overflow f32 once transformed (3e38 under a

@@ -53,6 +53,9 @@ struct Prim {
     object: u32,
     /// Index into [`Scene::lights`] when the object emits (`NO_LIGHT` if not).
     light: u32,
+    /// No transform and no motion (see [`Prim::in_world`]), worked out at
+    /// build time: the traversal asks for every object it tests.
+    world: bool,
 }
 
 /// [`Prim::light`] of an object that does not emit.
@@ -61,9 +64,9 @@ const NO_LIGHT: u32 = u32::MAX;
 impl Prim {
     /// Whether the object's space is world space at every time (no
     /// transform, no motion): the world ray's prepared forms serve it.
-    #[inline]
+    #[inline(always)]
     fn in_world(&self) -> bool {
-        self.xf.is_none() && self.motion == Vec3::ZERO
+        self.world
     }
 
     /// The watertight form of the object-space ray `local`: the world ray's

@@ -123,28 +123,36 @@ impl<const AVX: bool> ClosestLeaf for TopClosest<'_, AVX> {
         let mut hit = false;
         for pi in range {
             let p = &scene.prims[pi];
-            let local = p.to_local(self.ray, self.time);
+            // An object in world space sees the world ray itself (`to_local`
+            // would give the same bits: `o − 0·t` is `o`).
+            let moved;
+            let local = if p.in_world() {
+                self.ray
+            } else {
+                moved = p.to_local(self.ray, self.time);
+                &moved
+            };
             match p.geom {
                 Geom::Mesh(m) => {
                     let mut own = None;
-                    let wr = p.watertight(&mut self.world, self.ray, &local, &mut own);
+                    let wr = p.watertight(&mut self.world, self.ray, local, &mut own);
                     let pre = p.in_world().then_some(self.tr);
                     let accel = scene.meshes[m as usize].accel();
-                    if let Some(h) = accel.intersect_with::<AVX>(&local, wr, pre, t_min, *t_max, self.cull) {
+                    if let Some(h) = accel.intersect_with::<AVX>(local, wr, pre, t_min, *t_max, self.cull) {
                         *t_max = h.t;
                         *self.best = Some(Closest::Triangle(pi, h));
                         hit = true;
                     }
                 }
                 Geom::Sphere(s) => {
-                    if let Some(t) = s.intersect(&local, t_min, *t_max) {
+                    if let Some(t) = s.intersect(local, t_min, *t_max) {
                         *t_max = t;
                         *self.best = Some(Closest::Sphere(pi));
                         hit = true;
                     }
                 }
                 Geom::Ellipsoid(e) => {
-                    if let Some(t) = scene.ellipsoids[e as usize].intersect(&local, t_min, *t_max) {
+                    if let Some(t) = scene.ellipsoids[e as usize].intersect(local, t_min, *t_max) {
                         *t_max = t;
                         *self.best = Some(Closest::Ellipsoid(pi));
                         hit = true;
@@ -179,16 +187,22 @@ impl<const AVX: bool> AnyLeaf for TopAny<'_, AVX> {
         // from the AVX2 caller (see `ClosestLeaf`).
         for pi in range {
             let p = &scene.prims[pi];
-            let local = p.to_local(self.ray, self.time);
+            let moved;
+            let local = if p.in_world() {
+                self.ray
+            } else {
+                moved = p.to_local(self.ray, self.time);
+                &moved
+            };
             let blocked = match p.geom {
                 Geom::Mesh(m) => {
                     let mut own = None;
-                    let wr = p.watertight(&mut self.world, self.ray, &local, &mut own);
+                    let wr = p.watertight(&mut self.world, self.ray, local, &mut own);
                     let pre = p.in_world().then_some(self.tr);
-                    scene.meshes[m as usize].accel().occluded_with::<AVX>(&local, wr, pre, t_min, t_max)
+                    scene.meshes[m as usize].accel().occluded_with::<AVX>(local, wr, pre, t_min, t_max)
                 }
-                Geom::Sphere(s) => s.intersect(&local, t_min, t_max).is_some(),
-                Geom::Ellipsoid(e) => scene.ellipsoids[e as usize].intersect(&local, t_min, t_max).is_some(),
+                Geom::Sphere(s) => s.intersect(local, t_min, t_max).is_some(),
+                Geom::Ellipsoid(e) => scene.ellipsoids[e as usize].intersect(local, t_min, t_max).is_some(),
             };
             if blocked {
                 return true;
