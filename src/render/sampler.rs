@@ -129,9 +129,23 @@ impl PixelSampler {
         mix64(key.wrapping_add(u64::from(dim + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15)))
     }
 
-    /// The next 2D dimension: a point of `[0, 1)²`.
+    /// The next 2D dimension: a point of `[0, 1)²`. Inlined is only a
+    /// batched run's memo hit, the common case; the rest is out of line.
     #[inline]
     pub fn next_2d(&mut self) -> (f32, f32) {
+        let dim = self.dim;
+        if self.index < self.batch_end && dim < self.stratified {
+            if let Some([x, y]) = batch::hit(self, dim, true) {
+                self.dim += 1;
+                return (x, y);
+            }
+        }
+        self.next_2d_cold()
+    }
+
+    /// [`next_2d`](Self::next_2d) without a memo hit.
+    #[inline(never)]
+    fn next_2d_cold(&mut self) -> (f32, f32) {
         let dim = self.dim;
         self.dim += 1;
         if self.n.len == 1 {
@@ -142,7 +156,7 @@ impl PixelSampler {
             return (unit((h >> 32) as u32), unit(h as u32));
         }
         if self.index < self.batch_end {
-            if let Some([x, y]) = batch::draw(self, dim, true) {
+            if let Some([x, y]) = batch::miss(self, dim, true) {
                 return (x, y);
             }
         }
@@ -162,9 +176,23 @@ impl PixelSampler {
         self.n.len
     }
 
-    /// The next 1D dimension: a value in `[0, 1)` stratified over the samples.
+    /// The next 1D dimension: a value in `[0, 1)` stratified over the
+    /// samples. Inlined as [`next_2d`](Self::next_2d) is.
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
+        let dim = self.dim;
+        if self.index < self.batch_end && dim < self.stratified {
+            if let Some([v, _]) = batch::hit(self, dim, false) {
+                self.dim += 1;
+                return v;
+            }
+        }
+        self.next_1d_cold()
+    }
+
+    /// [`next_1d`](Self::next_1d) without a memo hit.
+    #[inline(never)]
+    fn next_1d_cold(&mut self) -> f32 {
         let dim = self.dim;
         self.dim += 1;
         if self.n.len == 1 {
@@ -174,7 +202,7 @@ impl PixelSampler {
             return unit((self.independent(dim) >> 32) as u32);
         }
         if self.index < self.batch_end {
-            if let Some([v, _]) = batch::draw(self, dim, false) {
+            if let Some([v, _]) = batch::miss(self, dim, false) {
                 return v;
             }
         }

@@ -21,7 +21,7 @@
 //! otherwise cost a batch per sample.
 
 use super::PixelSampler;
-use std::cell::RefCell;
+use std::cell::UnsafeCell;
 
 /// Samples computed by one batch: two vectors of eight, whose walks
 /// interleave.
@@ -60,8 +60,8 @@ pub(super) struct Memo {
 const NO_TAG: Tag = Tag { pixel: 0, count: 0, key: 0, first: 0, len: 0 };
 
 thread_local! {
-    static MEMO: RefCell<Memo> = const {
-        RefCell::new(Memo { tags: [NO_TAG; SLOTS], hot: [false; SLOTS], values: [[[0.0; 2]; LANES]; SLOTS] })
+    static MEMO: UnsafeCell<Memo> = const {
+        UnsafeCell::new(Memo { tags: [NO_TAG; SLOTS], hot: [false; SLOTS], values: [[[0.0; 2]; LANES]; SLOTS] })
     };
 }
 
@@ -86,36 +86,45 @@ pub(super) fn memo(count: u32) -> Handle {
 }
 
 /// A pointer to a thread's memo.
-pub(super) type Handle = *const RefCell<Memo>;
+pub(super) type Handle = *const UnsafeCell<Memo>;
 
-/// Stratified dimension `dim` of sample `s.index` (below `s.batch_end`, so
-/// `s.memo` is not null) from the memo, or `None` where the caller draws it
-/// alone. Only the lookup is inlined: the rest would make every caller's
-/// scalar draw slower too.
+/// The memo key of a dimension: `2·dim + (1 if 2D)`.
 #[inline(always)]
-pub(super) fn draw(s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> {
-    let key = dim.wrapping_mul(2) | u32::from(two_d);
-    let slot = key as usize % SLOTS;
-    // SAFETY: `memo` set `s.memo` on this thread (see there), and a sampler
-    // with samples to batch has a non-null one.
-    let memo = unsafe { &*s.memo };
-    {
-        let memo = memo.borrow();
-        let tag = &memo.tags[slot];
-        let off = s.index.wrapping_sub(tag.first);
-        if tag.pixel == s.pixel_hash && tag.count == s.n.len && tag.key == key && off < tag.len {
-            return Some(memo.values[slot][off as usize % LANES]);
-        }
-    }
-    miss(&mut memo.borrow_mut(), slot, s, dim, two_d)
+fn key(dim: u32, two_d: bool) -> u32 {
+    dim.wrapping_mul(2) | u32::from(two_d)
 }
 
-/// [`draw`] where the memo does not hold the value: the dimension's first
-/// use in this pixel is drawn alone, unless the pixel before batched it;
-/// a later use batches the samples from this one on.
+/// Stratified dimension `dim` of sample `s.index` (below `s.batch_end`, so
+/// `s.memo` is not null) where the memo holds it, or `None`, after which
+/// the caller calls [`miss`]. Only this lookup is inlined into the
+/// sampler's draws: the rest would make every caller's draw slower.
+#[inline(always)]
+pub(super) fn hit(s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> {
+    let key = key(dim, two_d);
+    let slot = key as usize % SLOTS;
+    // SAFETY: `memo` set `s.memo` on this thread (see there), and a sampler
+    // with samples to batch has a non-null one. The shared reference lives
+    // only in this function, which calls nothing that reaches the memo.
+    let memo = unsafe { &*(*s.memo).get() };
+    let tag = &memo.tags[slot];
+    let off = s.index.wrapping_sub(tag.first);
+    if tag.pixel == s.pixel_hash && tag.count == s.n.len && tag.key == key && off < tag.len {
+        return Some(memo.values[slot][off as usize % LANES]);
+    }
+    None
+}
+
+/// [`hit`] found nothing: the dimension's first use in this pixel is drawn
+/// alone (`None`), unless the pixel before batched it; a later use batches
+/// the samples from this one on.
 #[inline(never)]
-fn miss(memo: &mut Memo, slot: usize, s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> {
-    let key = dim.wrapping_mul(2) | u32::from(two_d);
+pub(super) fn miss(s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> {
+    let key = key(dim, two_d);
+    let slot = key as usize % SLOTS;
+    // SAFETY: as in `hit`, the memo is this thread's; the one reference to
+    // it lives in this call, which is not re-entered (`lanes::fill` only
+    // writes the values it is given), so it is exclusive.
+    let memo = unsafe { &mut *(*s.memo).get() };
     let tag = &mut memo.tags[slot];
     let this_pixel = tag.pixel == s.pixel_hash && tag.count == s.n.len;
     if tag.key != key || !(this_pixel || memo.hot[slot]) {
@@ -123,15 +132,15 @@ fn miss(memo: &mut Memo, slot: usize, s: &PixelSampler, dim: u32, two_d: bool) -
         *tag = Tag { pixel: s.pixel_hash, count: s.n.len, key, first: s.index, len: 0 };
         return None;
     }
-    fill(memo, slot, s, dim, two_d)
+    fill(memo, slot, key, s, dim, two_d)
 }
 
-/// Fills entry `slot` from sample `s.index` on; `None` where fewer than
-/// two samples are left to draw (or, never, no lanes to do it with).
+/// Fills entry `slot` (of `key`) from sample `s.index` on; `None` where
+/// fewer than two samples are left to draw (or, never, no lanes to do it
+/// with).
 #[inline]
-fn fill(memo: &mut Memo, slot: usize, s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> {
+fn fill(memo: &mut Memo, slot: usize, key: u32, s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> {
     let len = (s.batch_end - s.index).min(LANES as u32);
-    let key = dim.wrapping_mul(2) | u32::from(two_d);
     memo.tags[slot] = Tag { pixel: s.pixel_hash, count: s.n.len, key, first: s.index, len: 0 };
     if len < 2 || cfg!(not(target_arch = "x86_64")) {
         return None;
