@@ -51,6 +51,46 @@ pub struct Material {
     /// own materials emit nothing; object lights carry their radiance
     /// separately, as lights).
     pub emission: Vec3,
+    /// Facts the path tracer asks at every vertex, worked out from the
+    /// fields above by [`from_desc`](Self::from_desc) and
+    /// [`refresh`](Self::refresh): a material changed after either (a
+    /// texture map's copy) calls `refresh` again.
+    pub traits: Traits,
+}
+
+/// What a [`Material`]'s colours and model imply, tested per path vertex:
+/// an integer's worth of flags instead of several `Vec3` comparisons each
+/// time (they cost the path tracer ~100 instructions per path).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Traits {
+    /// Some diffuse or specular colour above zero: light samples and
+    /// bounces are taken there.
+    pub reflects: bool,
+    /// The emission is not zero.
+    pub emits: bool,
+    /// A Phong-family BRDF without specular colour: its value, the same for
+    /// every pair of directions above the surface (see
+    /// [`PhongFamily::diffuse_value`](crate::bsdf::PhongFamily::diffuse_value)).
+    pub phong_diffuse: Option<Vec3>,
+    /// That BRDF's sampler always takes the diffuse part
+    /// ([`Brdf::diffuse_only`]).
+    pub diffuse_only: bool,
+}
+
+impl Traits {
+    /// The traits of `m`'s current fields.
+    pub fn of(m: &Material) -> Traits {
+        let phong_diffuse = match &m.brdf {
+            Some(Brdf::Phong(b)) if m.specular == Vec3::ZERO => Some(b.diffuse_value(m.diffuse, m.specular)),
+            _ => None,
+        };
+        Traits {
+            reflects: m.diffuse.max_element() > 0.0 || m.specular.max_element() > 0.0,
+            emits: m.emission != Vec3::ZERO,
+            phong_diffuse,
+            diffuse_only: m.brdf.as_ref().is_some_and(|b| b.diffuse_only(m.diffuse, m.specular).is_some()),
+        }
+    }
 }
 
 impl Default for Material {
@@ -66,6 +106,7 @@ impl Default for Material {
             roughness: 0.0,
             brdf: None,
             emission: Vec3::ZERO,
+            traits: Traits::default(),
         }
     }
 }
@@ -81,7 +122,7 @@ impl Material {
             }
             MaterialKind::Conductor => Specular::Conductor { n: d.refraction_index, k: d.absorption_index },
         };
-        Material {
+        let mut m = Material {
             ambient: d.ambient,
             diffuse: d.diffuse,
             specular: d.specular,
@@ -94,6 +135,15 @@ impl Material {
                 .as_ref()
                 .map(|b| Brdf::from_desc(b, d.phong_exponent, d.refraction_index, d.absorption_index)),
             emission: Vec3::ZERO,
-        }
+            traits: Traits::default(),
+        };
+        m.refresh();
+        m
+    }
+
+    /// Works out [`traits`](Self::traits) again after the fields changed.
+    #[inline]
+    pub fn refresh(&mut self) {
+        self.traits = Traits::of(self);
     }
 }

@@ -139,6 +139,17 @@ impl Brdf {
             _ => None,
         }
     }
+
+    /// [`diffuse_only`](Self::diffuse_only) for a material whose
+    /// [`Traits::diffuse_only`](crate::material::Traits::diffuse_only) says
+    /// it is one: the colour tests were made once, when the traits were.
+    #[inline(always)]
+    pub fn assume_diffuse_only(&self) -> Option<DiffuseOnly<'_>> {
+        match self {
+            Brdf::Phong(phong) => Some(DiffuseOnly { brdf: self, phong }),
+            _ => None,
+        }
+    }
 }
 
 /// A Phong-family BRDF on a material without specular colour and with some
@@ -163,10 +174,7 @@ impl DiffuseOnly<'_> {
     /// `cos_i` with (`1 · p_cos + 0 · p_lobe`, the same bits as `p_cos`).
     #[inline(always)]
     pub fn pdf(&self, cos_o: f32, cos_i: f32) -> f32 {
-        if cos_o <= 0.0 || cos_i <= 0.0 {
-            return 0.0;
-        }
-        power_cosine_pdf(1.0, cos_i)
+        diffuse_pdf(cos_o, cos_i)
     }
 
     /// [`Brdf::sample`]: the mixture's choice always falls on the diffuse
@@ -186,6 +194,15 @@ impl DiffuseOnly<'_> {
         let pdf = self.pdf(wo.z, wi.z);
         (pdf > 0.0).then(|| Sample { wi, f: self.eval(kd, ks, wi.z, wo.z), pdf })
     }
+}
+
+/// [`DiffuseOnly::pdf`], for a caller that knows the material is one.
+#[inline(always)]
+pub fn diffuse_pdf(cos_o: f32, cos_i: f32) -> f32 {
+    if cos_o <= 0.0 || cos_i <= 0.0 {
+        return 0.0;
+    }
+    power_cosine_pdf(1.0, cos_i)
 }
 
 /// Chance of sampling the diffuse part: its share of `kd + ks` by luminance.

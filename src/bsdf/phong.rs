@@ -86,6 +86,15 @@ impl PhongFamily {
         self.combine(kd, ks, 0.0, cos_i)
     }
 
+    /// What [`eval_diffuse`](Self::eval_diffuse) gives for any `cos_i > 0`
+    /// and `cos_o > 0`, the same bits: its lobe is zero, and so is `0 / cos_i`
+    /// (the original variant's division) for every such `cos_i`. A material
+    /// works it out once ([`crate::material::Traits`]).
+    #[inline]
+    pub fn diffuse_value(&self, kd: Vec3, ks: Vec3) -> Vec3 {
+        self.combine(kd, ks, 0.0, 1.0)
+    }
+
     /// The variant's sum of the diffuse term and the lobe's value `lobe`.
     #[inline(always)]
     fn combine(&self, kd: Vec3, ks: Vec3, lobe: f32, cos_i: f32) -> Vec3 {

@@ -113,6 +113,8 @@ pub(crate) fn surface_at<'a>(
     if ns.dot(hit.ng) < 0.0 {
         ns = -ns;
     }
+    // The maps may have changed the colours, the model or the emission.
+    material.refresh();
     Surface::Lit(Cow::Owned(material), ns)
 }
 
@@ -134,7 +136,7 @@ pub(crate) fn light_reaching_inline(
 ) -> Option<(LightSample, f32, Vec3)> {
     let ls = light.sample(origin, p, Some(n), st.time, &mut st.sampler)?;
     let cos = n.dot(ls.wi);
-    if cos <= 0.0 || ls.e == Vec3::ZERO {
+    if cos <= 0.0 || is_black(ls.e) {
         return None;
     }
     // A point source's shadow ray reaches a little past it, so a light lying
@@ -146,5 +148,13 @@ pub(crate) fn light_reaching_inline(
     let eps = scene.shadow_epsilon;
     let t_max = if ls.point_source { ls.dist + eps } else { ls.dist - eps };
     let tr = crate::render::volumes::shadow(scene, &Ray::new(origin, ls.wi), t_max, st);
-    (tr != Vec3::ZERO).then_some((ls, cos, tr))
+    (!is_black(tr)).then_some((ls, cos, tr))
+}
+
+/// `v == Vec3::ZERO` without the branches of glam's derived `PartialEq`,
+/// which tests the three components one after another: the same answer
+/// (`-0.0` is zero, NaN is not).
+#[inline(always)]
+pub(crate) fn is_black(v: Vec3) -> bool {
+    (v.x == 0.0) & (v.y == 0.0) & (v.z == 0.0)
 }

@@ -28,10 +28,10 @@
 //! light that ambient light stood in for.
 
 use super::whitted::{glossy, reflect, reflectance};
-use super::{light_reaching_inline, surface_at, PathState, Surface};
+use super::{is_black, light_reaching_inline, surface_at, PathState, Surface};
 use crate::bsdf::fresnel;
 use crate::bsdf::sampling::{power_cosine, power_cosine_pdf};
-use crate::bsdf::{Brdf, Frame};
+use crate::bsdf::{diffuse_pdf, Brdf, Frame};
 use crate::light::{Light, ShadedLight};
 use crate::material::{Material, Specular};
 use crate::math::{Ray, Vec3};
@@ -151,7 +151,7 @@ fn li(
     if past_limit(scene, depth, p) {
         // The light found past the depth limit arrives dimmed by the media
         // on the way; scattering there would be one bounce too many.
-        if color == Vec3::ZERO {
+        if is_black(color) {
             return color;
         }
         return color * volumes::media_transmittance(scene, ray, t, st);
@@ -231,7 +231,7 @@ fn shade(
     // is a light ([`Light::Shaded`]); where it is not (the probes found no
     // emission, or the shape cannot be sampled) only bounces find it, so it
     // counts in full.
-    if m.emission != Vec3::ZERO {
+    if m.traits.emits {
         let w = match scene.light_of(hit) {
             Some(li) if matches!(scene.lights[li], Light::Shaded(_)) => {
                 hit_weight(scene, li, came, ray, hit, p, st.time)
@@ -245,12 +245,10 @@ fn shade(
         return color;
     }
     let inside_dielectric = !entering && matches!(m.kind, Specular::Dielectric { .. });
-    let reflects = m.diffuse.max_element() > 0.0 || m.specular.max_element() > 0.0;
     let origin = hit.p + ng * eps;
-    if reflects && !inside_dielectric {
+    if m.traits.reflects && !inside_dielectric {
         let more = depth < MAX_BOUNCES && (p.russian_roulette || depth < scene.max_depth);
-        let frame = Frame::new(n);
-        let at = At { n, wo: frame.to_local(-ray.d), frame, d: ray.d };
+        let at = At::new(m, n, ray.d);
         if p.next_event || p.mis {
             color += next_event(scene, m, hit, &at, origin, depth, p, st);
         }
@@ -348,7 +346,7 @@ fn shaded_sample(
     } else {
         volumes::shadow(scene, &r, h.t - eps, st)
     };
-    if tr == Vec3::ZERO {
+    if is_black(tr) {
         return Vec3::ZERO;
     }
     let before = st.travelled;
@@ -356,7 +354,7 @@ fn shaded_sample(
     let s = surface_at(scene, &r, &h, depth + 1, st);
     st.travelled = before;
     let Surface::Lit(e, _) = s else { return Vec3::ZERO };
-    if e.emission == Vec3::ZERO {
+    if !e.traits.emits {
         return Vec3::ZERO;
     }
     let (f, bsdf_pdf) = light_terms(m, at, wi, cos, p);
@@ -410,12 +408,46 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
 
 /// The shading point's frame, shared by its light samples and its bounce:
 /// the facing shading normal `n`, the frame around it, the direction to the
-/// viewer in that frame, and the incoming ray's direction `d`.
+/// viewer in that frame, the incoming ray's direction `d`, and for a
+/// Phong-family BRDF without specular colour its value `f` for directions
+/// above the surface (zero where the viewer is below it), the same for every
+/// light sample and bounce. Where `f` is set, `wo` holds only its `z` (`x`
+/// and `y` are zero): that BRDF's value, density and sample need no more, and
+/// the two dot products cost ~25 instructions a path.
 struct At {
     n: Vec3,
     frame: Frame,
     wo: Vec3,
     d: Vec3,
+    f: Option<Vec3>,
+}
+
+impl At {
+    #[inline(always)]
+    fn new(m: &Material, n: Vec3, d: Vec3) -> At {
+        let frame = Frame::new(n);
+        // [`PhongFamily::eval_diffuse`]'s test of the viewer's cosine. The
+        // local `z` of `-d` is `-d·n`, as [`Frame::to_local`] works it out.
+        let (wo, f) = match m.traits.phong_diffuse {
+            Some(f) => {
+                let z = (-d).dot(n);
+                (Vec3::new(0.0, 0.0, z), Some(if z <= 0.0 { Vec3::ZERO } else { f }))
+            }
+            None => (frame.to_local(-d), None),
+        };
+        At { n, frame, wo, d, f }
+    }
+
+    /// The whole view direction in the frame, where `wo` may hold its `z`
+    /// alone.
+    #[inline]
+    fn wo_full(&self) -> Vec3 {
+        if self.f.is_some() {
+            self.frame.to_local(-self.d)
+        } else {
+            self.wo
+        }
+    }
 }
 
 /// For a light sample from `wi` (`cos = n·wi > 0`): the reflectance times
@@ -427,13 +459,13 @@ fn light_terms(m: &Material, at: &At, wi: Vec3, cos: f32, p: &PathParams) -> (Ve
         Some(b) if p.mis => {
             // Without a lobe only the cosines count: the local `z` of `wi` is
             // `n·wi`, the bits of `cos`.
-            if let Some(d) = b.diffuse_only(m.diffuse, m.specular) {
-                let f = d.eval(m.diffuse, m.specular, cos, at.wo.z) * cos;
-                return (f, d.pdf(at.wo.z, cos));
+            if let (true, Some(f)) = (m.traits.diffuse_only, at.f) {
+                return (f * cos, diffuse_pdf(at.wo.z, cos));
             }
             let local = at.frame.to_local(wi);
-            let f = b.eval(m.diffuse, m.specular, local, at.wo) * cos;
-            (f, b.pdf(m.diffuse, m.specular, at.wo, local))
+            let wo = at.wo_full();
+            let f = b.eval(m.diffuse, m.specular, local, wo) * cos;
+            (f, b.pdf(m.diffuse, m.specular, wo, local))
         }
         Some(b) => (brdf_cos(b, m, at, wi, cos), 0.0),
         None => {
@@ -447,14 +479,13 @@ fn light_terms(m: &Material, at: &At, wi: Vec3, cos: f32, p: &PathParams) -> (Ve
 /// Phong-family BRDF without a specular colour (every material of the
 /// course's path-traced boxes) is its diffuse term whatever `wi`, which it
 /// only checks for `wi.z > 0`: the local `z` is `wi·n`, the same bits as
-/// `cos`, so `wi` need not be brought into the frame.
-#[inline]
+/// `cos`, so `wi` need not be brought into the frame, and the term is the
+/// vertex's `at.f`.
+#[inline(always)]
 fn brdf_cos(b: &Brdf, m: &Material, at: &At, wi: Vec3, cos: f32) -> Vec3 {
-    match b {
-        Brdf::Phong(b) if m.specular == Vec3::ZERO => {
-            b.eval_diffuse(m.diffuse, m.specular, cos, at.wo.z) * cos
-        }
-        _ => b.eval(m.diffuse, m.specular, at.frame.to_local(wi), at.wo) * cos,
+    match at.f {
+        Some(f) => f * cos,
+        None => b.eval(m.diffuse, m.specular, at.frame.to_local(wi), at.wo) * cos,
     }
 }
 
@@ -481,31 +512,49 @@ fn bounce(
         0.0
     };
     let u = st.sampler.next_2d();
-    // The BRDF's sample carries its value: no second evaluation.
-    let (wi, pdf, f) = match (&m.brdf, p.mis) {
+    // Each arm tests the direction (`n·wi > 0`, `p > 0`) before its
+    // `f cos`: the same tests as one after the match, without carrying an
+    // optional value out of it.
+    let (wi, pdf, f_cos) = match (&m.brdf, p.mis) {
         (Some(b), true) => {
-            let s = match b.diffuse_only(m.diffuse, m.specular) {
-                Some(d) => d.sample(m.diffuse, m.specular, at.wo, choice, u),
-                None => b.sample(m.diffuse, m.specular, at.wo, choice, u),
+            let only = if m.traits.diffuse_only { b.assume_diffuse_only() } else { None };
+            let s = match only {
+                // Only the mixture's fallback (a choice not below 1) needs
+                // more of the view direction than its `z` (see [`At`]).
+                Some(d) if choice < 1.0 => d.sample(m.diffuse, m.specular, at.wo, choice, u),
+                Some(d) => d.sample(m.diffuse, m.specular, at.wo_full(), choice, u),
+                None => b.sample(m.diffuse, m.specular, at.wo_full(), choice, u),
             };
             let Some(s) = s else { return Vec3::ZERO };
-            (frame.to_world(s.wi), s.pdf, Some(s.f))
+            // The BRDF's sample carries its value: no second evaluation.
+            let wi = frame.to_world(s.wi);
+            let cos = n.dot(wi);
+            if cos <= 0.0 || s.pdf <= 0.0 {
+                return Vec3::ZERO;
+            }
+            (wi, s.pdf, s.f * cos)
         }
-        _ => {
-            let e = if p.importance || p.mis { 1.0 } else { 0.0 };
-            let local = power_cosine(e, u);
-            (frame.to_world(local), power_cosine_pdf(e, local.z), None)
+        (b, _) => {
+            // The exponent a constant in each arm: its tests fold away.
+            let (local, pdf) = if p.importance || p.mis {
+                let local = power_cosine(1.0, u);
+                (local, power_cosine_pdf(1.0, local.z))
+            } else {
+                let local = power_cosine(0.0, u);
+                (local, power_cosine_pdf(0.0, local.z))
+            };
+            let wi = frame.to_world(local);
+            let cos = n.dot(wi);
+            if cos <= 0.0 || pdf <= 0.0 {
+                return Vec3::ZERO;
+            }
+            let f_cos = match b {
+                // The frame and view direction [`reflectance`] would build again.
+                Some(b) => brdf_cos(b, m, at, wi, cos),
+                None => reflectance(m, n, wi, at.d, cos),
+            };
+            (wi, pdf, f_cos)
         }
-    };
-    let cos = n.dot(wi);
-    if cos <= 0.0 || pdf <= 0.0 {
-        return Vec3::ZERO;
-    }
-    let f_cos = match (f, &m.brdf) {
-        (Some(f), _) => f * cos,
-        // The frame and view direction [`reflectance`] would build again.
-        (None, Some(b)) => brdf_cos(b, m, at, wi, cos),
-        (None, None) => reflectance(m, n, wi, at.d, cos),
     };
     let weight = f_cos / pdf;
     let next = beta * weight;

@@ -63,6 +63,22 @@ impl PathState {
         PathState { screen, spread, ..self }
     }
 
+    /// Readies the state for the next camera sample of a tile, at image
+    /// position `screen` of pixel `pixel`, with its shutter `time`: what
+    /// [`new`](Self::new) and [`for_pixel`](Self::for_pixel) give, keeping
+    /// the counts, the spread and the view, without building the whole state
+    /// again (its copies cost the render loop ~30 instructions a sample). The
+    /// sampler is set by the caller, which draws the camera's dimensions
+    /// from it first.
+    #[inline]
+    pub fn next_sample(&mut self, time: f32, screen: Vec2, pixel: [u32; 2]) {
+        self.budget = SECONDARY_BUDGET;
+        self.time = time;
+        self.screen = screen;
+        self.travelled = 0.0;
+        self.pixel = pixel;
+    }
+
     /// Records a shader failure (the first one counts); the path then
     /// contributes black and the render stops.
     pub fn fail(&mut self, e: ShaderError) {

@@ -240,7 +240,8 @@ impl Light {
                 let dist = to.length();
                 let wi = to / dist;
                 let pdf = l.pdf(p, q, nq);
-                if pdf <= 0.0 || !pdf.is_finite() {
+                // `pdf <= 0 || !pdf.is_finite()` in one test (NaN fails both).
+                if !(pdf > 0.0 && pdf < f32::INFINITY) {
                     return None;
                 }
                 Some(LightSample { wi, dist, e: l.radiance / pdf, point_source: false, pdf })

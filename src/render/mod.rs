@@ -234,14 +234,20 @@ fn render_tiles(
         // the samples on one of two threads for hw4 sphere_perlin_bump.
         tiles.par_iter_mut().with_max_len(1).for_each(|(tile, stats)| {
             let (x0, y0, x1, y1) = tile.bounds();
+            // One state for the tile, readied per sample: the view, spread
+            // and counts carry over.
+            let first = PixelSampler::new(opts.seed, x0, y0, 0, spp);
+            let mut st = PathState::new(*stats, 0.0, first).for_pixel(Vec2::ZERO, spread);
+            st.view = view;
             'rows: for y in y0..y1 {
                 if stop() {
                     break;
                 }
                 for x in x0..x1 {
-                    let pixel = PixelSampler::new(opts.seed, x, y, 0, spp).batched(samples.clone());
+                    st.sampler = PixelSampler::new(opts.seed, x, y, 0, spp).batched(samples.clone());
                     for s in samples.clone() {
-                        let mut sampler = pixel.at(s);
+                        st.sampler.restart(s);
+                        let sampler = &mut st.sampler;
                         let (jx, jy) = if spp == 1 { (0.5, 0.5) } else { sampler.next_2d() };
                         // A pinhole ignores the lens: its draw would cost a
                         // stratified dimension for nothing.
@@ -256,19 +262,18 @@ fn render_tiles(
                         };
                         let ray = camera.lens_ray(x as f32 + jx, y as f32 + jy, lens);
                         let screen = Vec2::new((x as f32 + jx) / w as f32, (y as f32 + jy) / h as f32);
-                        let mut st = PathState::new(*stats, time, sampler).for_pixel(screen, spread);
-                        (st.pixel, st.view) = ([x, y], view);
+                        st.next_sample(time, screen, [x, y]);
                         st.stats.primary += 1;
                         let l = integrator.radiance(scene, &ray, &mut st);
                         tile.add_sample(x, y, jx, jy, l);
-                        *stats = st.stats;
-                        if let Some(e) = st.error {
+                        if let Some(e) = st.error.take() {
                             let _ = failed.set(e);
                             break 'rows;
                         }
                     }
                 }
             }
+            *stats = st.stats;
             on_tile(tile.len() as u64 * u64::from(n));
         });
         taken += n;

@@ -108,6 +108,16 @@ impl PixelSampler {
         PixelSampler { index, dim: 0, slot: self.n.rem(index), stratified: u32::MAX, ..*self }
     }
 
+    /// Makes this sampler [`at(index)`](Self::at) in place: a pixel's state
+    /// kept across its samples is not copied whole for each.
+    #[inline]
+    pub fn restart(&mut self, index: u32) {
+        self.index = index;
+        self.dim = 0;
+        self.slot = self.n.rem(index);
+        self.stratified = u32::MAX;
+    }
+
     /// Passes over the next call without drawing it, for a value that would
     /// go unused: the later calls keep the values they would have had.
     #[inline]
