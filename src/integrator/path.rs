@@ -258,11 +258,16 @@ fn shade(
             color += bounce(scene, m, &at, origin, depth, beta, p, st);
         }
     }
-    if depth < scene.max_depth || (p.russian_roulette && depth < MAX_BOUNCES) {
+    // A material without a specular part (most) skips the depth tests and
+    // the set-up of the specular rays.
+    let specular_part = !matches!(m.kind, Specular::None);
+    if specular_part && (depth < scene.max_depth || (p.russian_roulette && depth < MAX_BOUNCES)) {
         color += specular(scene, m, hit, n, ng, ray, entering, depth, beta, p, st);
     }
-    if let (true, Specular::Dielectric { absorption, .. }) = (inside_dielectric, m.kind) {
-        color *= (-absorption * hit.t).exp();
+    if inside_dielectric {
+        if let Specular::Dielectric { absorption, .. } = &m.kind {
+            color *= (-*absorption * hit.t).exp();
+        }
     }
     color
 }
@@ -453,7 +458,7 @@ impl At {
 /// For a light sample from `wi` (`cos = n·wi > 0`): the reflectance times
 /// the cosine, and the density with which [`bounce`] would draw `wi` (zero
 /// unless MIS needs it), the BRDF's local directions worked out once.
-#[inline]
+#[inline(always)]
 fn light_terms(m: &Material, at: &At, wi: Vec3, cos: f32, p: &PathParams) -> (Vec3, f32) {
     match &m.brdf {
         Some(b) if p.mis => {

@@ -139,16 +139,24 @@ impl PixelSampler {
         mix64(key.wrapping_add(u64::from(dim + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15)))
     }
 
-    /// The next 2D dimension: a point of `[0, 1)²`. Inlined is only a
-    /// batched run's memo hit, the common case; the rest is out of line.
+    /// The next 2D dimension: a point of `[0, 1)²`. Inlined are a batched
+    /// run's memo hit and an independent draw past the stratified calls,
+    /// the common cases (a path's deep bounces draw the latter: called, its
+    /// few instructions came with as many again); the rest is out of line.
     #[inline]
     pub fn next_2d(&mut self) -> (f32, f32) {
         let dim = self.dim;
-        if self.index < self.batch_end && dim < self.stratified {
-            if let Some([x, y]) = batch::hit(self, dim, true) {
-                self.dim += 1;
-                return (x, y);
+        if dim < self.stratified {
+            if self.index < self.batch_end {
+                if let Some([x, y]) = batch::hit(self, dim, true) {
+                    self.dim += 1;
+                    return (x, y);
+                }
             }
+        } else if self.n.len != 1 {
+            self.dim += 1;
+            let h = self.independent(dim);
+            return (unit((h >> 32) as u32), unit(h as u32));
         }
         self.next_2d_cold()
     }
@@ -191,11 +199,16 @@ impl PixelSampler {
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
         let dim = self.dim;
-        if self.index < self.batch_end && dim < self.stratified {
-            if let Some([v, _]) = batch::hit(self, dim, false) {
-                self.dim += 1;
-                return v;
+        if dim < self.stratified {
+            if self.index < self.batch_end {
+                if let Some([v, _]) = batch::hit(self, dim, false) {
+                    self.dim += 1;
+                    return v;
+                }
             }
+        } else if self.n.len != 1 {
+            self.dim += 1;
+            return unit((self.independent(dim) >> 32) as u32);
         }
         self.next_1d_cold()
     }
