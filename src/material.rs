@@ -147,3 +147,36 @@ impl Material {
         self.traits = Traits::of(self);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bsdf::{Lobe, PhongFamily, Variant};
+
+    /// The traits follow the fields they are worked out from, and a changed
+    /// material has them again after `refresh`.
+    #[test]
+    fn traits_follow_the_fields() {
+        let phong =
+            Brdf::Phong(PhongFamily { lobe: Lobe::Phong, variant: Variant::Normalized, exponent: 10.0 });
+        let mut m = Material { diffuse: Vec3::splat(0.5), brdf: Some(phong), ..Material::default() };
+        m.refresh();
+        let want = Vec3::splat(0.5) * std::f32::consts::FRAC_1_PI;
+        assert_eq!(
+            m.traits,
+            Traits { reflects: true, emits: false, phong_diffuse: Some(want), diffuse_only: true }
+        );
+        m.specular = Vec3::new(0.0, 0.1, 0.0);
+        m.emission = Vec3::X;
+        m.refresh();
+        assert_eq!(
+            m.traits,
+            Traits { reflects: true, emits: true, phong_diffuse: None, diffuse_only: false }
+        );
+        m.diffuse = Vec3::ZERO;
+        m.specular = Vec3::ZERO;
+        m.refresh();
+        assert!(!m.traits.reflects && m.traits.phong_diffuse.is_some() && !m.traits.diffuse_only);
+        assert_eq!(Material::default().traits, Traits::default());
+    }
+}

@@ -302,6 +302,29 @@ mod tests {
     use super::*;
     use crate::light::test_rng::Rng;
 
+    /// The blocked count with its `+∞` padding picks the triangle a binary
+    /// search of the sums picks, at the ends of the sums and between them.
+    #[test]
+    fn counted_pick_matches_the_binary_search() {
+        let corners = (0..10).map(|k| {
+            let x = k as f32;
+            [Vec3::new(x, 0.0, 0.0), Vec3::new(x + 1.0, 0.0, 0.0), Vec3::new(x, 1.0 + 0.1 * x, 0.0)]
+        });
+        let mesh = LightMesh::new(corners, &Transform::IDENTITY, Vec3::ONE).expect("area");
+        assert_eq!((mesh.scan.len(), &mesh.scan[2][2..]), (3, &[f32::INFINITY; 2][..]));
+        let total = mesh.area();
+        let mut us: Vec<f32> = mesh.cdf.iter().map(|c| c / total).collect();
+        us.extend((0..64).map(|k| k as f32 / 64.0));
+        for u1 in us.into_iter().filter(|u| *u < 1.0) {
+            let i = mesh.cdf.partition_point(|&c| c <= u1 * total).min(9);
+            let (p, _) = mesh.point((u1, 0.5));
+            let [a, e1, e2, _] = mesh.tris[i];
+            let q = p - a;
+            let (b1, b2) = (q.x / e1.x, q.y / e2.y);
+            assert!(b1 > -1e-4 && b2 > -1e-4 && b1 + b2 < 1.0 + 1e-4, "u1 {u1}: triangle {i}");
+        }
+    }
+
     #[test]
     fn mesh_points_are_uniform_by_area_and_pdf_matches_the_area_form() {
         // Two triangles: the right half of a unit square has area 0.5, a
