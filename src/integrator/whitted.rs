@@ -250,7 +250,16 @@ fn light_term(
     color: Vec3,
 ) -> Vec3 {
     match light_reaching_inline(scene, light, origin, p, n, st) {
-        Some((ls, cos, tr)) => color + reflectance(m, n, ls.wi, d, cos) * (tr * ls.e),
+        Some((ls, cos, tr)) => {
+            // Blinn-Phong here, not through `reflectance`: its call (with the
+            // BRDFs' `eval`s) stayed out of line, and the lobe is all the
+            // course's materials need.
+            let r = match &m.brdf {
+                None => blinn_phong(m, n, ls.wi, d, cos),
+                Some(_) => reflectance(m, n, ls.wi, d, cos),
+            };
+            color + r * (tr * ls.e)
+        }
         None => color,
     }
 }

@@ -33,10 +33,20 @@ pub(crate) fn noise3_octaves(x: f32, y: f32, z: f32, freqs: &[f32; LANES]) -> [f
     freqs.map(|f| noise3(x * f, y * f, z * f))
 }
 
+/// `noise3(x, y, z)` with its eight corners in the lanes of one vector.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+pub(crate) unsafe fn noise3_one(x: f32, y: f32, z: f32) -> f32 {
+    avx2::noise3_one(x, y, z)
+}
+
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
     use super::LANES;
-    use crate::noise::perlin::{GRAD3, P};
+    use crate::noise::perlin::{self, GRAD3, P};
     use std::arch::x86_64::*;
 
     /// The permutation widened to `i32` with its next entry in the upper
@@ -191,11 +201,49 @@ mod avx2 {
         _mm256_storeu_ps(out.as_mut_ptr(), s);
         out
     }
+
+    /// `perlin::noise3` at one point: lane `a + 2b + 4c` is corner
+    /// `(a, b, c)`, then the scalar code's blend.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn noise3_one(x: f32, y: f32, z: f32) -> f32 {
+        // `lattice` on the three coordinates at once (lane 3 unused).
+        let v = _mm_setr_ps(x, y, z, 0.0);
+        let fl = _mm_floor_ps(v);
+        let big = _mm_castps_si128(_mm_cmpge_ps(fl, _mm_set1_ps(2_147_483_648.0)));
+        let i = _mm_and_si128(_mm_or_si128(_mm_cvttps_epi32(fl), big), _mm_set1_epi32(255));
+        let f = _mm_sub_ps(v, fl);
+        let (xi, yi, zi) = (_mm_cvtsi128_si32(i), _mm_extract_epi32::<1>(i), _mm_extract_epi32::<2>(i));
+        let mut fs = [0.0f32; 4];
+        _mm_storeu_ps(fs.as_mut_ptr(), f);
+        let [fx, fy, fz, _] = fs;
+        // The hashes through `PAIR` (see there): each entry also serves the
+        // neighbour one cell further along the axis. Every index is at most
+        // 255 + 255, inside the table.
+        let pair = |i: i32| PAIR[i as usize & 511];
+        let (lo, hi) = (|w: i32| w & 0xffff, |w: i32| w >> 16);
+        let wx = pair(xi);
+        let (wy0, wy1) = (pair(lo(wx) + yi), pair(hi(wx) + yi));
+        let w =
+            _mm_setr_epi32(pair(lo(wy0) + zi), pair(lo(wy1) + zi), pair(hi(wy0) + zi), pair(hi(wy1) + zi));
+        let h = _mm256_set_m128i(_mm_srli_epi32::<16>(w), _mm_and_si128(w, _mm_set1_epi32(0xffff)));
+        // `fx - a as f32` per corner, 0.0 subtracted too (as the scalar code does).
+        let corner_of = |t: f32, c: __m256| sub(_mm256_set1_ps(t), c);
+        let dx = corner_of(fx, _mm256_setr_ps(0.0, 1.0, 0.0, 1.0, 0.0, 1.0, 0.0, 1.0));
+        let dy = corner_of(fy, _mm256_setr_ps(0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 1.0));
+        let dz = corner_of(fz, _mm256_setr_ps(0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0));
+        let mut n = [0.0f32; 8];
+        _mm256_storeu_ps(n.as_mut_ptr(), corner(h, dx, dy, dz));
+        perlin::blend3(perlin::ramp_coefficients(n), perlin::fade(fx), perlin::fade(fy), perlin::fade(fz))
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::noise::perlin::noise3_scalar;
     use crate::noise::testutil::Lcg;
 
     fn same(a: f32, b: f32) -> bool {
@@ -205,8 +253,12 @@ mod tests {
     fn check(x: f32, y: f32, z: f32, freqs: &[f32; LANES]) {
         let got = noise3_octaves(x, y, z, freqs);
         for (k, f) in freqs.iter().enumerate() {
-            let want = noise3(x * f, y * f, z * f);
+            let (fx, fy, fz) = (x * f, y * f, z * f);
+            let want = noise3_scalar(fx, fy, fz);
             assert!(same(got[k], want), "lane {k} at ({x}, {y}, {z})·{f}: {} vs {want}", got[k]);
+            // The one-point noise, corners in lanes.
+            let one = noise3(fx, fy, fz);
+            assert!(same(one, want), "one point ({fx}, {fy}, {fz}): {one} vs {want}");
         }
     }
 

@@ -138,8 +138,26 @@ pub fn noise2(x: f32, y: f32) -> f32 {
 }
 
 /// Improved Perlin noise in 3D, in about [-1.04, 1.04] (see the module table).
+///
+/// With AVX2 (detected at run time) the eight corners are computed in the
+/// lanes of one vector ([`super::octaves::noise3_one`]), bit for bit the
+/// values of [`noise3_scalar`]: the Lua `perlin3` of a bump's three points and
+/// the short tails of fractal sums call this one point at a time.
 #[inline]
 pub fn noise3(x: f32, y: f32, z: f32) -> f32 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: AVX2 (which implies AVX and SSE4.1) was detected on this CPU.
+            return unsafe { super::octaves::noise3_one(x, y, z) };
+        }
+    }
+    noise3_scalar(x, y, z)
+}
+
+/// [`noise3`] without SIMD lanes: the reference the lanes must match.
+#[inline]
+pub fn noise3_scalar(x: f32, y: f32, z: f32) -> f32 {
     let (xi, fx) = lattice(x);
     let (yi, fy) = lattice(y);
     let (zi, fz) = lattice(z);
@@ -176,7 +194,7 @@ fn hash3(xs: [usize; 2], ys: [usize; 2], zs: [usize; 2], a: usize, b: usize, c: 
 /// k0 + k1·u + k2·v + k3·w + k4·uv + k5·vw + k6·wu + k7·uvw, shared by
 /// [`noise3`] and [`noise3_grad`] so that both give the same bits.
 #[inline(always)]
-fn ramp_coefficients(n: [f32; 8]) -> [f32; 8] {
+pub(crate) fn ramp_coefficients(n: [f32; 8]) -> [f32; 8] {
     let [n000, n100, n010, n110, n001, n101, n011, n111] = n;
     [
         n000,
@@ -192,7 +210,7 @@ fn ramp_coefficients(n: [f32; 8]) -> [f32; 8] {
 
 /// The trilinear blend over the faded offsets, from [`ramp_coefficients`].
 #[inline(always)]
-fn blend3(k: [f32; 8], u: f32, v: f32, w: f32) -> f32 {
+pub(crate) fn blend3(k: [f32; 8], u: f32, v: f32, w: f32) -> f32 {
     let [k0, k1, k2, k3, k4, k5, k6, k7] = k;
     k0 + k1 * u + k2 * v + k3 * w + k4 * u * v + k5 * v * w + k6 * w * u + k7 * u * v * w
 }

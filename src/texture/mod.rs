@@ -375,34 +375,47 @@ impl Textures {
         n: &mut Vec3,
     ) -> Result<Applied, Box<ShaderError>> {
         for map in self.maps_of(list) {
-            if let Texture::Shader { id } = map.texture {
-                if let Some(c) = self.apply_shader(id, map, f, m, n)? {
-                    return Ok(Applied::Unlit(c));
-                }
-                continue;
-            }
-            let lod = self.lod(&map.texture, f);
-            match map.decal {
-                DecalMode::ReplaceKd => m.diffuse = self.value(&map.texture, f, lod),
-                DecalMode::BlendKd => m.diffuse = (m.diffuse + self.value(&map.texture, f, lod)) * 0.5,
-                DecalMode::ReplaceKs => m.specular = self.value(&map.texture, f, lod),
-                DecalMode::ReplaceKm => {
-                    m.mirror = self.value(&map.texture, f, lod);
-                    if m.kind == crate::material::Specular::None {
-                        m.kind = crate::material::Specular::Mirror;
-                    }
-                }
-                DecalMode::ReplaceAll => return Ok(Applied::Unlit(self.value(&map.texture, f, lod))),
-                DecalMode::ReplaceNormal => {
-                    let c = self.at(&map.texture, f, lod) / 255.0;
-                    *n = f.normal_to_world(bump::normal_map(f, c * 2.0 - Vec3::ONE));
-                }
-                DecalMode::BumpNormal => *n = bump::bump(self, map, f),
-                // Only shader maps are built with this mode (the reader refuses others).
-                DecalMode::ReplaceBackground | DecalMode::Material => {}
+            let unlit = match map.texture {
+                Texture::Shader { id } => self.apply_shader(id, map, f, m, n)?,
+                _ => self.apply_map(map, f, m, n),
+            };
+            if let Some(c) = unlit {
+                return Ok(Applied::Unlit(c));
             }
         }
         Ok(Applied::Lit)
+    }
+
+    /// [`Textures::apply`] for one map that is not a shader: `Some` colour
+    /// for `replace_all`.
+    ///
+    /// Out of line on purpose: inlined into the loop of `apply`, LLVM hoisted
+    /// this arm's set-up (the mipmap level's `|∂p/∂u × ∂p/∂v|` and its square
+    /// root, the frame's fields) in front of the loop, so a point with only
+    /// shader maps paid for it too, about 75 instructions a hit.
+    #[inline(never)]
+    fn apply_map(&self, map: &TextureMap, f: &TexFrame, m: &mut Material, n: &mut Vec3) -> Option<Vec3> {
+        let lod = self.lod(&map.texture, f);
+        match map.decal {
+            DecalMode::ReplaceKd => m.diffuse = self.value(&map.texture, f, lod),
+            DecalMode::BlendKd => m.diffuse = (m.diffuse + self.value(&map.texture, f, lod)) * 0.5,
+            DecalMode::ReplaceKs => m.specular = self.value(&map.texture, f, lod),
+            DecalMode::ReplaceKm => {
+                m.mirror = self.value(&map.texture, f, lod);
+                if m.kind == crate::material::Specular::None {
+                    m.kind = crate::material::Specular::Mirror;
+                }
+            }
+            DecalMode::ReplaceAll => return Some(self.value(&map.texture, f, lod)),
+            DecalMode::ReplaceNormal => {
+                let c = self.at(&map.texture, f, lod) / 255.0;
+                *n = f.normal_to_world(bump::normal_map(f, c * 2.0 - Vec3::ONE));
+            }
+            DecalMode::BumpNormal => *n = bump::bump(self, map, f),
+            // Only shader maps are built with this mode (the reader refuses others).
+            DecalMode::ReplaceBackground | DecalMode::Material => {}
+        }
+        None
     }
 
     /// The background at image position `uv` (0–1 across and down), if a map

@@ -286,19 +286,7 @@ impl Textures {
             }
             DecalMode::BumpNormal => {
                 if map.bump_factor != 0.0 {
-                    let world_n = *n;
-                    // The three points are built in place: `pts.map(input)` built
-                    // them elsewhere and copied 468 bytes (a `memmove` call) per hit.
-                    let local = bump::height_bump(f, map.bump_factor, bump::bump_step(f), |pts| {
-                        let [(p0, uv0), (pa, uva), (pb, uvb)] = pts;
-                        let base = input(f, p0, uv0, world_n);
-                        let three = [base, moved(f, &base, pa, uva), moved(f, &base, pb, uvb)];
-                        set.heights3(id, &three).map_err(Box::new)
-                    })?;
-                    // No slope: the normal stays exactly as the renderer had it.
-                    if let Some(local) = local {
-                        *n = f.normal_to_world(local);
-                    }
+                    *n = shader_bump(set, id, map.bump_factor, f, *n)?;
                 }
             }
             DecalMode::Material => apply_outputs(&set.material(id, &input(f, f.p_object, f.uv, *n))?, m),
@@ -306,6 +294,30 @@ impl Textures {
         }
         Ok(None)
     }
+}
+
+/// The world normal `n` bumped by shader `id`'s `height` with factor `k`.
+///
+/// Out of line on purpose: inlined into [`Textures::apply`], LLVM hoisted the
+/// bump's set-up (tangent lengths, step, the three points) out of the map
+/// loop, so every hit with any shader map paid for it, about 480
+/// instructions a call; on the POV-Ray scene's floor (a colour map only) that
+/// was wasted work.
+#[inline(never)]
+fn shader_bump(set: &ShaderSet, id: usize, k: f32, f: &TexFrame, n: Vec3) -> Result<Vec3, Box<ShaderError>> {
+    // The three points are built in place: `pts.map(input)` built them
+    // elsewhere and copied 468 bytes (a `memmove` call) per hit.
+    let local = bump::height_bump(f, k, bump::bump_step(f), |pts| {
+        let [(p0, uv0), (pa, uva), (pb, uvb)] = pts;
+        let base = input(f, p0, uv0, n);
+        let three = [base, moved(f, &base, pa, uva), moved(f, &base, pb, uvb)];
+        set.heights3(id, &three).map_err(Box::new)
+    })?;
+    // No slope: the normal stays exactly as the renderer had it.
+    Ok(match local {
+        Some(local) => f.normal_to_world(local),
+        None => n,
+    })
 }
 
 /// What a `DecalMode material` shader's outputs do to the point's material
