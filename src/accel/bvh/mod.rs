@@ -80,11 +80,13 @@ pub(crate) trait AnyLeaf {
 /// reciprocal direction and what the fused test derives from it). A ray
 /// that meets several trees in the same space (the top level, then a mesh
 /// that needs no transform) prepares them once for all of them: the same
-/// values, so the same boxes entered.
+/// values, so the same boxes entered. Kept small (four vectors and a few
+/// bits): each traversal broadcasts what its node test needs into its own
+/// registers, where a prepared copy of the broadcasts went through the
+/// stack at every query.
 #[derive(Clone, Copy)]
 pub(crate) struct Traversal {
     r: RayPre,
-    test: NodeTest,
 }
 
 impl Traversal {
@@ -92,9 +94,18 @@ impl Traversal {
     /// after checking [`fused_available`]) or not.
     #[inline(always)]
     pub(crate) fn new<const FUSED: bool>(ray: &Ray) -> Traversal {
-        let r = RayPre::new(ray);
-        let test = r.node_test::<FUSED>();
-        Traversal { r, test }
+        let mut r = RayPre::new(ray);
+        // From here on `fused_ok` also says that the traversal was compiled
+        // for the fused test (see `Traversal::test`).
+        r.fused_ok &= FUSED;
+        Traversal { r }
+    }
+
+    /// The node test of a traversal of this ray.
+    #[inline(always)]
+    fn test(&self) -> NodeTest {
+        // `fused_ok` holds only for a `FUSED` traversal (see `new`).
+        self.r.node_test::<true>()
     }
 }
 
@@ -382,7 +393,7 @@ impl Bvh {
         mut t_max: f32,
         mut leaf: L,
     ) -> bool {
-        let (r, test) = (&tr.r, &tr.test);
+        let (r, test) = (&tr.r, tr.test());
         let mut cur = self.root;
         // Empty tree, or one leaf: the loop below calls `leaf` in one place
         // only, so that LLVM inlines it.
@@ -494,7 +505,7 @@ impl Bvh {
     /// [`Bvh::any_with`] for a ray already prepared (see [`Traversal`]).
     #[inline(always)]
     pub(crate) fn any_prepared<L: AnyLeaf>(&self, tr: &Traversal, t_max: f32, mut leaf: L) -> bool {
-        let (r, test) = (&tr.r, &tr.test);
+        let (r, test) = (&tr.r, tr.test());
         let mut cur = self.root;
         if cur & LEAF != 0 && (cur == EMPTY || !r.hit_box(&self.bounds, t_max)) {
             return false;
