@@ -401,6 +401,31 @@ impl Bvh {
             return false;
         }
         let nodes = &self.nodes[..];
+        if let [root] = nodes {
+            // One node whose children are all leaves (the top level of a
+            // small scene): its hit leaves nearest first, the order the
+            // stack below would give (equal distances: the higher slot
+            // first), without the stack or the sort.
+            let (tn, mut mask) = test.hit(r, root, t_max);
+            let mut hit = false;
+            while mask != 0 {
+                let mut k = mask.trailing_zeros() as usize;
+                let mut m = mask & (mask - 1);
+                while m != 0 {
+                    let i = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    if tn[i] <= tn[k] {
+                        k = i;
+                    }
+                }
+                mask &= !(1 << k);
+                let c = root.child[k];
+                if tn[k] <= t_max && c != EMPTY {
+                    hit |= leaf.test(leaf_range(c), &mut t_max);
+                }
+            }
+            return hit;
+        }
         // Entries: child reference in the low half, entry distance's bits in
         // the high half. Only entries below `sp` are ever read.
         let mut stack = [MaybeUninit::<u64>::uninit(); STACK];
@@ -511,6 +536,19 @@ impl Bvh {
             return false;
         }
         let nodes = &self.nodes[..];
+        if let [root] = nodes {
+            // One node whose children are all leaves: no stack (see
+            // `closest_prepared`); any order serves.
+            let (_, mut mask) = test.hit(r, root, t_max);
+            while mask != 0 {
+                let c = root.child[mask.trailing_zeros() as usize];
+                mask &= mask - 1;
+                if c != EMPTY && leaf.test(leaf_range(c), t_max) {
+                    return true;
+                }
+            }
+            return false;
+        }
         // Only entries below `sp` are ever read.
         let mut stack = [MaybeUninit::<u32>::uninit(); STACK];
         let mut sp = 0;

@@ -285,10 +285,29 @@ pub(super) struct FusedRay {
     inv: [std::arch::x86_64::__m256; 3],
     c_near: [std::arch::x86_64::__m256; 3],
     c_far: [std::arch::x86_64::__m256; 3],
-    /// Offsets in `f32`s of each axis's near and far row from a node's start.
-    near: [usize; 3],
-    far: [usize; 3],
+    /// Offsets in `f32`s of each axis's near row, then of each far row,
+    /// from a node's start: an entry of [`ROWS`], chosen by a table lookup
+    /// rather than computed row by row.
+    rows: &'static [u8; 6],
 }
+
+/// [`FusedRay::rows`] for each [`RayPre::signs`].
+#[cfg(target_arch = "x86_64")]
+const ROWS: [[u8; 6]; 8] = {
+    let mut t = [[0u8; 6]; 8];
+    let mut s = 0;
+    while s < 8 {
+        let mut a = 0;
+        while a < 3 {
+            let near = 2 * a + (s >> a & 1);
+            t[s][a] = (near * WIDTH) as u8;
+            t[s][3 + a] = ((near ^ 1) * WIDTH) as u8;
+            a += 1;
+        }
+        s += 1;
+    }
+    t
+};
 
 #[cfg(target_arch = "x86_64")]
 impl FusedRay {
@@ -302,8 +321,7 @@ impl FusedRay {
             inv: [s(inv.x), s(inv.y), s(inv.z)],
             c_near: [s(cn.x), s(cn.y), s(cn.z)],
             c_far: [s(cf.x), s(cf.y), s(cf.z)],
-            near: [r.near(0) * WIDTH, r.near(1) * WIDTH, r.near(2) * WIDTH],
-            far: [r.far(0) * WIDTH, r.far(1) * WIDTH, r.far(2) * WIDTH],
+            rows: &ROWS[(r.signs & 7) as usize],
         }
     }
 
@@ -325,7 +343,9 @@ impl FusedRay {
         // 32-byte aligned (the node is 64-byte aligned, a row 32 bytes).
         let row = |off: usize| _mm256_load_ps(b.add(off));
         let (inv, cn, cf) = (&self.inv, &self.c_near, &self.c_far);
-        let (near, far) = (&self.near, &self.far);
+        let rows = self.rows;
+        let near = [rows[0] as usize, rows[1] as usize, rows[2] as usize];
+        let far = [rows[3] as usize, rows[4] as usize, rows[5] as usize];
         let plane = |off: usize, a: usize, c: __m256| _mm256_fmadd_ps(row(off), inv[a], c);
         let tn = _mm256_max_ps(
             _mm256_max_ps(plane(near[0], 0, cn[0]), plane(near[1], 1, cn[1])),
