@@ -60,12 +60,13 @@ impl WatertightRay {
     /// nothing (the shear factors are NaN and every comparison fails).
     #[inline]
     pub fn new(ray: &Ray) -> WatertightRay {
-        let kz = ray.d.abs().max_position();
-        // An array, not the vector, indexed by the axes: `Vec3`'s index is
-        // a `match`, whose branches mispredicted on about half the rays.
-        let d = ray.d.to_array();
-        let [a, b] = [[1, 2], [2, 0], [0, 1]][kz];
-        let (kx, ky) = if d[kz] < 0.0 { (b, a) } else { (a, b) };
+        let d = ray.d;
+        let kz = d.abs().max_position();
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
         // The three quotients as one 4-lane division: each lane is the
         // same correctly rounded quotient as a scalar division.
         let s = glam::Vec4::new(-d[kx], -d[ky], 1.0, 1.0) / glam::Vec4::splat(d[kz]);

@@ -46,8 +46,7 @@ impl Sphere {
     }
 
     /// The nearest `t` in `(t_min, t_max)` where the ray meets the sphere.
-    // Always inlined: the traversals compiled for AVX2 call it per object.
-    #[inline(always)]
+    #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
         if t_min >= 0.0 && self.surely_missed(ray) {
             return None;
