@@ -48,6 +48,9 @@ impl Sphere {
     /// The nearest `t` in `(t_min, t_max)` where the ray meets the sphere.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+        if t_min >= 0.0 && self.surely_missed(ray) {
+            return None;
+        }
         let (t0, t1) = self.roots(ray)?;
         if t0 > t_min && t0 < t_max {
             Some(t0)
@@ -56,6 +59,31 @@ impl Sphere {
         } else {
             None
         }
+    }
+
+    /// Whether the ray's line surely meets the sphere at `t ≤ 0` only, or
+    /// not at all, by tests far cheaper than the square roots and divisions
+    /// of [`Sphere::roots`] and agreeing with them, so that skipping those
+    /// changes no result for `t_min ≥ 0`.
+    #[inline(always)]
+    fn surely_missed(&self, ray: &Ray) -> bool {
+        let oc = ray.o - self.center;
+        let half_b = oc.dot(ray.d);
+        let oc2 = oc.length_squared();
+        // The very `c` of `roots`. Outside (`c > 0`) and moving away
+        // (`half_b > 0`): there `q = −(half_b + √disc) < 0`, so both `c / q`
+        // and `q / a` are negative as computed, not only exactly.
+        let c = oc2 - self.radius * self.radius;
+        if half_b > 0.0 && c > 0.0 {
+            return true;
+        }
+        // The line's squared distance from the centre, `oc² − half_b²/a`,
+        // exceeds r² by 10⁻⁵·oc²: its distance then exceeds r by at least
+        // 5·10⁻⁶·|oc|, ten times what rounding can take off the `f` of
+        // `roots` (a few ulps of |oc|), so `roots` finds no root either.
+        // Rounding here is ~10⁻⁷·oc²; overflow or NaN makes no rejection
+        // but one that holds of the exact values.
+        half_b * half_b < ray.d.length_squared() * (c - oc2 * 1e-5)
     }
 
     /// The outward normal at a point on the sphere.
@@ -103,6 +131,28 @@ mod tests {
         let r = Ray::new(Vec3::ZERO, -Vec3::Z * 2.0);
         assert!((s.intersect(&r, 0.0, f32::INFINITY).unwrap() - 2.0).abs() < 1e-5);
         assert!(s.intersect(&Ray::new(Vec3::ZERO, Vec3::Z), 0.0, f32::INFINITY).is_none());
+    }
+
+    #[test]
+    fn early_rejection_agrees_with_the_roots() {
+        // Rays from a grid of origins, in and around the sphere, in many
+        // directions (some grazing): `intersect` must find what the roots
+        // alone give.
+        let s = Sphere { center: Vec3::new(0.3, -0.2, 0.1), radius: 0.7 };
+        let mut n = 0;
+        for i in 0..2000 {
+            let f = i as f32;
+            let o = Vec3::new((f * 0.37).sin(), (f * 0.71).cos(), (f * 1.13).sin()) * 1.5;
+            let d = Vec3::new((f * 2.3).cos(), (f * 0.19).sin(), (f * 0.53).cos())
+                * (0.5 + (f * 0.07).sin().abs());
+            for ray in [Ray::new(o, d), Ray::new(o, s.center - o + d * 1e-4)] {
+                let roots = s.roots(&ray);
+                let want = roots.and_then(|(t0, t1)| [t0, t1].into_iter().find(|&t| t > 0.0 && t < 100.0));
+                assert_eq!(s.intersect(&ray, 0.0, 100.0), want, "ray {i}");
+                n += s.surely_missed(&ray) as usize;
+            }
+        }
+        assert!(n > 500, "{n}");
     }
 
     #[test]

@@ -80,11 +80,13 @@ pub(crate) trait AnyLeaf {
 /// reciprocal direction and what the fused test derives from it). A ray
 /// that meets several trees in the same space (the top level, then a mesh
 /// that needs no transform) prepares them once for all of them: the same
-/// values, so the same boxes entered.
+/// values, so the same boxes entered. Kept small (four vectors and a few
+/// bits): each traversal broadcasts what its node test needs into its own
+/// registers, where a prepared copy of the broadcasts went through the
+/// stack at every query.
 #[derive(Clone, Copy)]
 pub(crate) struct Traversal {
     r: RayPre,
-    test: NodeTest,
 }
 
 impl Traversal {
@@ -92,9 +94,18 @@ impl Traversal {
     /// after checking [`fused_available`]) or not.
     #[inline(always)]
     pub(crate) fn new<const FUSED: bool>(ray: &Ray) -> Traversal {
-        let r = RayPre::new(ray);
-        let test = r.node_test::<FUSED>();
-        Traversal { r, test }
+        let mut r = RayPre::new(ray);
+        // From here on `fused_ok` also says that the traversal was compiled
+        // for the fused test (see `Traversal::test`).
+        r.fused_ok &= FUSED;
+        Traversal { r }
+    }
+
+    /// The node test of a traversal of this ray.
+    #[inline(always)]
+    fn test(&self) -> NodeTest {
+        // `fused_ok` holds only for a `FUSED` traversal (see `new`).
+        self.r.node_test::<true>()
     }
 }
 
@@ -382,7 +393,7 @@ impl Bvh {
         mut t_max: f32,
         mut leaf: L,
     ) -> bool {
-        let (r, test) = (&tr.r, &tr.test);
+        let (r, test) = (&tr.r, tr.test());
         let mut cur = self.root;
         // Empty tree, or one leaf: the loop below calls `leaf` in one place
         // only, so that LLVM inlines it.
@@ -390,6 +401,31 @@ impl Bvh {
             return false;
         }
         let nodes = &self.nodes[..];
+        if let [root] = nodes {
+            // One node whose children are all leaves (the top level of a
+            // small scene): its hit leaves nearest first, the order the
+            // stack below would give (equal distances: the higher slot
+            // first), without the stack or the sort.
+            let (tn, mut mask) = test.hit(r, root, t_max);
+            let mut hit = false;
+            while mask != 0 {
+                let mut k = mask.trailing_zeros() as usize;
+                let mut m = mask & (mask - 1);
+                while m != 0 {
+                    let i = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    if tn[i] <= tn[k] {
+                        k = i;
+                    }
+                }
+                mask &= !(1 << k);
+                let c = root.child[k];
+                if tn[k] <= t_max && c != EMPTY {
+                    hit |= leaf.test(leaf_range(c), &mut t_max);
+                }
+            }
+            return hit;
+        }
         // Entries: child reference in the low half, entry distance's bits in
         // the high half. Only entries below `sp` are ever read.
         let mut stack = [MaybeUninit::<u64>::uninit(); STACK];
@@ -494,12 +530,25 @@ impl Bvh {
     /// [`Bvh::any_with`] for a ray already prepared (see [`Traversal`]).
     #[inline(always)]
     pub(crate) fn any_prepared<L: AnyLeaf>(&self, tr: &Traversal, t_max: f32, mut leaf: L) -> bool {
-        let (r, test) = (&tr.r, &tr.test);
+        let (r, test) = (&tr.r, tr.test());
         let mut cur = self.root;
         if cur & LEAF != 0 && (cur == EMPTY || !r.hit_box(&self.bounds, t_max)) {
             return false;
         }
         let nodes = &self.nodes[..];
+        if let [root] = nodes {
+            // One node whose children are all leaves: no stack (see
+            // `closest_prepared`); any order serves.
+            let (_, mut mask) = test.hit(r, root, t_max);
+            while mask != 0 {
+                let c = root.child[mask.trailing_zeros() as usize];
+                mask &= mask - 1;
+                if c != EMPTY && leaf.test(leaf_range(c), t_max) {
+                    return true;
+                }
+            }
+            return false;
+        }
         // Only entries below `sp` are ever read.
         let mut stack = [MaybeUninit::<u32>::uninit(); STACK];
         let mut sp = 0;
