@@ -180,6 +180,66 @@ impl MeshAccel {
         best
     }
 
+    /// [`MeshAccel::intersect_with`] for a scene's top-level traversal: a
+    /// one-leaf mesh (a wall, a light) is tested inline, a mesh with a tree
+    /// of its own out of line, so that the top level's code stays small (see
+    /// `bvh::walk`). The same tests, so the same hits.
+    #[inline(always)]
+    pub(crate) fn intersect_split<const AVX: bool>(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+        pre: Option<&Traversal>,
+        t_min: f32,
+        t_max: f32,
+        cull: f32,
+    ) -> Option<TriHit> {
+        if let Some(range) = self.bvh.single_leaf() {
+            let (mut best, mut t) = (None, t_max);
+            leaf_closest::<AVX>(&self.blocks[range], ray, wr, t_min, &mut t, cull, &mut best);
+            return best;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if AVX {
+            // SAFETY: `AVX` callers run only where the CPU has AVX2 and FMA.
+            return unsafe { self.tree_closest_avx2(ray, wr, pre, t_min, t_max, cull) };
+        }
+        self.tree_closest_plain(ray, wr, pre, t_min, t_max, cull)
+    }
+
+    /// [`MeshAccel::intersect_with`] out of line, compiled for AVX2 and FMA.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline(never)]
+    unsafe fn tree_closest_avx2(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+        pre: Option<&Traversal>,
+        t_min: f32,
+        t_max: f32,
+        cull: f32,
+    ) -> Option<TriHit> {
+        self.intersect_with::<true>(ray, wr, pre, t_min, t_max, cull)
+    }
+
+    /// [`MeshAccel::intersect_with`] out of line, without AVX2.
+    #[inline(never)]
+    fn tree_closest_plain(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+        pre: Option<&Traversal>,
+        t_min: f32,
+        t_max: f32,
+        cull: f32,
+    ) -> Option<TriHit> {
+        self.intersect_with::<false>(ray, wr, pre, t_min, t_max, cull)
+    }
+
     /// True if some triangle is hit with `t_min < t < t_max` (shadow rays).
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
@@ -227,6 +287,59 @@ impl MeshAccel {
             (None, Some(tr)) => self.bvh.any_prepared(tr, t_max, leaf),
             (None, None) => self.bvh.any_with::<AVX, _>(ray, t_max, leaf),
         }
+    }
+
+    /// [`MeshAccel::occluded_with`] as [`MeshAccel::intersect_split`] is
+    /// to [`MeshAccel::intersect_with`].
+    #[inline(always)]
+    pub(crate) fn occluded_split<const AVX: bool>(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+        pre: Option<&Traversal>,
+        t_min: f32,
+        t_max: f32,
+    ) -> bool {
+        if let Some(range) = self.bvh.single_leaf() {
+            return leaf_any::<AVX>(&self.blocks[range], wr, t_min, t_max);
+        }
+        #[cfg(target_arch = "x86_64")]
+        if AVX {
+            // SAFETY: `AVX` callers run only where the CPU has AVX2 and FMA.
+            return unsafe { self.tree_occluded_avx2(ray, wr, pre, t_min, t_max) };
+        }
+        self.tree_occluded_plain(ray, wr, pre, t_min, t_max)
+    }
+
+    /// [`MeshAccel::occluded_with`] out of line, compiled for AVX2 and FMA.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline(never)]
+    unsafe fn tree_occluded_avx2(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+        pre: Option<&Traversal>,
+        t_min: f32,
+        t_max: f32,
+    ) -> bool {
+        self.occluded_with::<true>(ray, wr, pre, t_min, t_max)
+    }
+
+    /// [`MeshAccel::occluded_with`] out of line, without AVX2.
+    #[inline(never)]
+    fn tree_occluded_plain(
+        &self,
+        ray: &Ray,
+        wr: &WatertightRay,
+        pre: Option<&Traversal>,
+        t_min: f32,
+        t_max: f32,
+    ) -> bool {
+        self.occluded_with::<false>(ray, wr, pre, t_min, t_max)
     }
 
     /// The box around the mesh's (valid) triangles.

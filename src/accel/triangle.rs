@@ -44,6 +44,10 @@ pub struct WatertightRay {
     pub(super) sz: f32,
 }
 
+/// [`WatertightRay`]'s `kx` and `ky` for each `kz` (by pairs: `d[kz]`
+/// positive, then negative).
+const AXES: [[u8; 2]; 6] = [[1, 2], [2, 1], [2, 0], [0, 2], [0, 1], [1, 0]];
+
 /// A hit: distance and barycentrics (`u` of vertex 1, `v` of vertex 2).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
@@ -62,14 +66,17 @@ impl WatertightRay {
     pub fn new(ray: &Ray) -> WatertightRay {
         let d = ray.d;
         let kz = d.abs().max_position();
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        if d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
+        // `kx` and `ky` follow `kz` cyclically, swapped where `d[kz] < 0`,
+        // looked up rather than worked out: the arithmetic and the indexing
+        // of `d` by each compiled to some 60 instructions of compares and
+        // conditional moves per ray.
+        let c = [d.x, d.y, d.z, 0.0];
+        let dz = c[kz & 3];
+        let [kx, ky] = AXES[2 * kz + (dz < 0.0) as usize];
+        let (kx, ky) = (kx as usize, ky as usize);
         // The three quotients as one 4-lane division: each lane is the
         // same correctly rounded quotient as a scalar division.
-        let s = glam::Vec4::new(-d[kx], -d[ky], 1.0, 1.0) / glam::Vec4::splat(d[kz]);
+        let s = glam::Vec4::new(-c[kx & 3], -c[ky & 3], 1.0, 1.0) / glam::Vec4::splat(dz);
         WatertightRay { o: ray.o.to_array(), kx, ky, kz, sx: s.x, sy: s.y, sz: s.z }
     }
 

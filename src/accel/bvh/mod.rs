@@ -33,7 +33,6 @@
 //! - **Limits**: leaves hold at most [`MAX_LEAF`] primitives and a tree at
 //!   most 2^28 primitives (a leaf reference packs both in 32 bits).
 
-use std::mem::MaybeUninit;
 use std::ops::Range;
 
 use super::bvh_build::{build_binary, BinaryNodes, INTERSECT_COST, SAH_MAX_DEPTH};
@@ -41,6 +40,7 @@ pub use super::bvh_build::{BINS, MAX_LEAF};
 use crate::math::{Aabb, Ray};
 
 mod node;
+mod walk;
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) use node::fused_available;
@@ -385,125 +385,6 @@ impl Bvh {
         self.any_prepared(&Traversal::new::<FUSED>(ray), t_max, leaf)
     }
 
-    /// [`Bvh::closest_with`] for a ray already prepared (see [`Traversal`]).
-    #[inline(always)]
-    pub(crate) fn closest_prepared<L: ClosestLeaf>(
-        &self,
-        tr: &Traversal,
-        mut t_max: f32,
-        mut leaf: L,
-    ) -> bool {
-        let (r, test) = (&tr.r, tr.test());
-        let mut cur = self.root;
-        // Empty tree, or one leaf: the loop below calls `leaf` in one place
-        // only, so that LLVM inlines it.
-        if cur & LEAF != 0 && (cur == EMPTY || !r.hit_box(&self.bounds, t_max)) {
-            return false;
-        }
-        let nodes = &self.nodes[..];
-        if let [root] = nodes {
-            // One node whose children are all leaves (the top level of a
-            // small scene): its hit leaves nearest first, the order the
-            // stack below would give (equal distances: the higher slot
-            // first), without the stack or the sort.
-            let (tn, mut mask) = test.hit(r, root, t_max);
-            let mut hit = false;
-            while mask != 0 {
-                let mut k = mask.trailing_zeros() as usize;
-                let mut m = mask & (mask - 1);
-                while m != 0 {
-                    let i = m.trailing_zeros() as usize;
-                    m &= m - 1;
-                    if tn[i] <= tn[k] {
-                        k = i;
-                    }
-                }
-                mask &= !(1 << k);
-                let c = root.child[k];
-                if tn[k] <= t_max && c != EMPTY {
-                    hit |= leaf.test(leaf_range(c), &mut t_max);
-                }
-            }
-            return hit;
-        }
-        // Entries: child reference in the low half, entry distance's bits in
-        // the high half. Only entries below `sp` are ever read.
-        let mut stack = [MaybeUninit::<u64>::uninit(); STACK];
-        let mut sp = 0;
-        macro_rules! push {
-            ($t:expr, $c:expr) => {{
-                stack[sp] = MaybeUninit::new(($t.to_bits() as u64) << 32 | $c as u64);
-                sp += 1;
-            }};
-        }
-        let mut hit = false;
-        loop {
-            if cur & LEAF != 0 {
-                // An unused slot is never a leaf, even if the box test let it
-                // through (a NaN ray passes every comparison as a hit).
-                if cur != EMPTY {
-                    hit |= leaf.test(leaf_range(cur), &mut t_max);
-                }
-            } else {
-                let n = &nodes[cur as usize];
-                let (tn, mut mask) = test.hit(r, n, t_max);
-                if mask != 0 {
-                    let a = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    if mask == 0 {
-                        cur = n.child[a];
-                        continue;
-                    }
-                    let b = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    if mask == 0 {
-                        // The common case past the top levels: defer the
-                        // farther of two.
-                        let (near, far) = if tn[b] <= tn[a] { (b, a) } else { (a, b) };
-                        push!(tn[far], n.child[far]);
-                        cur = n.child[near];
-                        continue;
-                    }
-                    // Three or more: sort by entry distance, push all but the
-                    // nearest (farthest first), descend into the nearest.
-                    let mut k = [(0.0f32, 0u32); WIDTH];
-                    k[0] = (tn[a], n.child[a]);
-                    let mut len = 1;
-                    let mut m = mask | 1 << b;
-                    while m != 0 {
-                        let i = m.trailing_zeros() as usize;
-                        m &= m - 1;
-                        let mut j = len;
-                        while j > 0 && k[j - 1].0 < tn[i] {
-                            k[j] = k[j - 1];
-                            j -= 1;
-                        }
-                        k[j] = (tn[i], n.child[i]);
-                        len += 1;
-                    }
-                    for &(t, c) in &k[..len - 1] {
-                        push!(t, c);
-                    }
-                    cur = k[len - 1].1;
-                    continue;
-                }
-            }
-            // Pop the next deferred child that can still hold a closer hit.
-            loop {
-                if sp == 0 {
-                    return hit;
-                }
-                sp -= 1;
-                // SAFETY: entries below `sp` were all written by `push`.
-                let e = unsafe { stack[sp].assume_init() };
-                if f32::from_bits((e >> 32) as u32) <= t_max {
-                    cur = e as u32;
-                    break;
-                }
-            }
-        }
-    }
-
     /// Any-hit traversal for shadow rays: `leaf(range, t_max)` returns true if
     /// some primitive at `range` blocks the ray before `t_max`; the traversal
     /// stops at the first such leaf.
@@ -525,60 +406,6 @@ impl Bvh {
     #[target_feature(enable = "avx2,fma")]
     unsafe fn any_fused<L: AnyLeaf>(&self, ray: &Ray, t_max: f32, leaf: L) -> bool {
         self.any_plain::<true, L>(ray, t_max, leaf)
-    }
-
-    /// [`Bvh::any_with`] for a ray already prepared (see [`Traversal`]).
-    #[inline(always)]
-    pub(crate) fn any_prepared<L: AnyLeaf>(&self, tr: &Traversal, t_max: f32, mut leaf: L) -> bool {
-        let (r, test) = (&tr.r, tr.test());
-        let mut cur = self.root;
-        if cur & LEAF != 0 && (cur == EMPTY || !r.hit_box(&self.bounds, t_max)) {
-            return false;
-        }
-        let nodes = &self.nodes[..];
-        if let [root] = nodes {
-            // One node whose children are all leaves: no stack (see
-            // `closest_prepared`); any order serves.
-            let (_, mut mask) = test.hit(r, root, t_max);
-            while mask != 0 {
-                let c = root.child[mask.trailing_zeros() as usize];
-                mask &= mask - 1;
-                if c != EMPTY && leaf.test(leaf_range(c), t_max) {
-                    return true;
-                }
-            }
-            return false;
-        }
-        // Only entries below `sp` are ever read.
-        let mut stack = [MaybeUninit::<u32>::uninit(); STACK];
-        let mut sp = 0;
-        loop {
-            if cur & LEAF != 0 {
-                if cur != EMPTY && leaf.test(leaf_range(cur), t_max) {
-                    return true;
-                }
-            } else {
-                let n = &nodes[cur as usize];
-                let (_, mut mask) = test.hit(r, n, t_max);
-                if mask != 0 {
-                    // Order does not matter for "any": take the first, defer the rest.
-                    cur = n.child[mask.trailing_zeros() as usize];
-                    mask &= mask - 1;
-                    while mask != 0 {
-                        stack[sp] = MaybeUninit::new(n.child[mask.trailing_zeros() as usize]);
-                        sp += 1;
-                        mask &= mask - 1;
-                    }
-                    continue;
-                }
-            }
-            if sp == 0 {
-                return false;
-            }
-            sp -= 1;
-            // SAFETY: entries below `sp` were all written above.
-            cur = unsafe { stack[sp].assume_init() };
-        }
     }
 }
 

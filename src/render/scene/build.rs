@@ -199,6 +199,7 @@ impl Scene {
             integrators: desc.cameras.iter().map(|c| Integrator::from_desc(&c.renderer)).collect(),
             warnings,
             emitting_bounds: None,
+            simd: simd_available(),
         };
         scene.add_shaded_lights();
         scene.emitting_bounds = scene.emitting_boxes(|p| prim_bounds(p, &scene.meshes, &scene.ellipsoids));
@@ -401,4 +402,13 @@ fn build_mesh(desc: &Description, i: usize) -> Result<(Mesh, Option<Warning>), S
         }
         _ => Err(SceneError::at(&desc.file, &o.loc, "internal error: not a mesh")),
     }
+}
+
+/// Whether this CPU runs the traversal's AVX2 and FMA code ([`Scene::simd`]).
+fn simd_available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    let simd = crate::accel::bvh::fused_available();
+    #[cfg(not(target_arch = "x86_64"))]
+    let simd = false;
+    simd
 }

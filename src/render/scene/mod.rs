@@ -10,8 +10,6 @@
 //! (`MotionBlur`) sit in the top level with boxes swept over the shutter
 //! interval, so one BVH serves every ray time.
 
-#[cfg(target_arch = "x86_64")]
-use crate::accel::bvh::fused_available;
 use crate::accel::triangle::WatertightRay;
 use crate::accel::{Bvh, TriHit};
 use crate::geometry::{Ellipsoid, Mesh, Plane, Sphere};
@@ -200,6 +198,10 @@ pub struct Scene {
     pub warnings: Vec<Warning>,
     /// Boxes around everything that can emit ([`Scene::emitting_boxes`]).
     emitting_bounds: Option<Vec<Aabb>>,
+    /// Whether the CPU has AVX2 and FMA, detected once at build: every
+    /// query asks, and the detection's cached answer took two loads and
+    /// two branches each time.
+    simd: bool,
 }
 
 impl Scene {
@@ -303,8 +305,8 @@ impl Scene {
     pub fn intersect(&self, ray: &Ray, time: f32, cull_back_faces: bool) -> Option<Hit> {
         let cull = if cull_back_faces { 1.0 } else { 0.0 };
         #[cfg(target_arch = "x86_64")]
-        if fused_available() {
-            // SAFETY: the CPU has AVX2 and FMA.
+        if self.simd {
+            // SAFETY: `simd` says the CPU has AVX2 and FMA.
             return unsafe { self.intersect_avx2(ray, time, cull) };
         }
         self.intersect_plain(ray, time, cull)

@@ -7,8 +7,6 @@
 //! would keep the target features of the function they are written in).
 //! Reads no scene parameters itself: the epsilons and objects are the scene's.
 
-#[cfg(target_arch = "x86_64")]
-use crate::accel::bvh::fused_available;
 use crate::accel::bvh::{AnyLeaf, ClosestLeaf, Traversal};
 use crate::accel::triangle::WatertightRay;
 use crate::math::Ray;
@@ -21,8 +19,8 @@ impl Scene {
     /// epsilon and `t_max`.
     pub fn occluded(&self, ray: &Ray, t_max: f32, time: f32) -> bool {
         #[cfg(target_arch = "x86_64")]
-        if fused_available() {
-            // SAFETY: the CPU has AVX2 and FMA.
+        if self.simd {
+            // SAFETY: `simd` says the CPU has AVX2 and FMA.
             return unsafe { self.occluded_avx2(ray, t_max, time) };
         }
         self.occluded_plain(ray, t_max, time)
@@ -61,7 +59,8 @@ impl Scene {
         // triangle test (made when first needed), shared by every mesh that
         // needs no transform.
         let tr = Traversal::new::<AVX>(ray);
-        let leaf = TopClosest::<AVX> {
+        let t_max = best_t;
+        let mut leaf = TopClosest::<AVX> {
             scene: self,
             ray,
             world: None,
@@ -72,9 +71,72 @@ impl Scene {
             best_t: &mut best_t,
             best: &mut best,
         };
-        let t_max = *leaf.best_t;
-        self.tlas.closest_prepared(&tr, t_max, leaf);
+        if self.tlas.closest_split(&tr, t_max, &mut leaf).is_none() {
+            // Nothing tested yet: the walk starts afresh from the root.
+            #[cfg(target_arch = "x86_64")]
+            if AVX {
+                // Called through an opaque pointer: LLVM inlined it despite
+                // `#[inline(never)]` when called directly.
+                let deep: unsafe fn(&Self, &Ray, &Traversal, f32, f32, &mut f32, &mut Option<Closest>) =
+                    std::hint::black_box(Self::closest_deep_avx2);
+                // SAFETY: `AVX` callers run only where the CPU has AVX2 and FMA.
+                unsafe { deep(self, ray, &tr, time, cull, &mut best_t, &mut best) };
+                return (best_t, best);
+            }
+            self.closest_deep_plain(ray, &tr, time, cull, &mut best_t, &mut best);
+        }
         (best_t, best)
+    }
+
+    /// The top level's stack walk after [`Scene::closest_with`]'s head
+    /// found a deeper tree, out of line (see `bvh::walk`), compiled for AVX2
+    /// and FMA. Not generic, which keeps it out of line.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline(never)]
+    unsafe fn closest_deep_avx2(
+        &self,
+        ray: &Ray,
+        tr: &Traversal,
+        time: f32,
+        cull: f32,
+        best_t: &mut f32,
+        best: &mut Option<Closest>,
+    ) {
+        self.closest_deep::<true>(ray, tr, time, cull, best_t, best);
+    }
+
+    /// [`Scene::closest_deep_avx2`] without AVX2.
+    #[inline(never)]
+    fn closest_deep_plain(
+        &self,
+        ray: &Ray,
+        tr: &Traversal,
+        time: f32,
+        cull: f32,
+        best_t: &mut f32,
+        best: &mut Option<Closest>,
+    ) {
+        self.closest_deep::<false>(ray, tr, time, cull, best_t, best);
+    }
+
+    #[inline(always)]
+    fn closest_deep<const AVX: bool>(
+        &self,
+        ray: &Ray,
+        tr: &Traversal,
+        time: f32,
+        cull: f32,
+        best_t: &mut f32,
+        best: &mut Option<Closest>,
+    ) {
+        let (t_min, t_max) = (self.intersection_epsilon, *best_t);
+        let mut leaf =
+            TopClosest::<AVX> { scene: self, ray, world: None, tr, time, t_min, cull, best_t, best };
+        self.tlas.closest_walk(tr, t_max, &mut leaf);
     }
 
     /// [`Scene::occluded`] compiled for AVX2 and FMA (see
@@ -95,8 +157,44 @@ impl Scene {
             return true;
         }
         let tr = Traversal::new::<AVX>(ray);
-        let leaf = TopAny::<AVX> { scene: self, ray, world: None, tr: &tr, time, t_min };
-        self.tlas.any_prepared(&tr, t_max, leaf)
+        let mut leaf = TopAny::<AVX> { scene: self, ray, world: None, tr: &tr, time, t_min };
+        if let Some(blocked) = self.tlas.any_split(&tr, t_max, &mut leaf) {
+            return blocked;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if AVX {
+            // Through an opaque pointer (see `closest_with`).
+            let deep: unsafe fn(&Self, &Ray, &Traversal, f32, f32) -> bool =
+                std::hint::black_box(Self::any_deep_avx2);
+            // SAFETY: `AVX` callers run only where the CPU has AVX2 and FMA.
+            return unsafe { deep(self, ray, &tr, t_max, time) };
+        }
+        self.any_deep_plain(ray, &tr, t_max, time)
+    }
+
+    /// The top level's any-hit stack walk, out of line (see
+    /// [`Scene::closest_deep_avx2`]).
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline(never)]
+    unsafe fn any_deep_avx2(&self, ray: &Ray, tr: &Traversal, t_max: f32, time: f32) -> bool {
+        self.any_deep::<true>(ray, tr, t_max, time)
+    }
+
+    /// [`Scene::any_deep_avx2`] without AVX2.
+    #[inline(never)]
+    fn any_deep_plain(&self, ray: &Ray, tr: &Traversal, t_max: f32, time: f32) -> bool {
+        self.any_deep::<false>(ray, tr, t_max, time)
+    }
+
+    #[inline(always)]
+    fn any_deep<const AVX: bool>(&self, ray: &Ray, tr: &Traversal, t_max: f32, time: f32) -> bool {
+        let t_min = self.intersection_epsilon;
+        let mut leaf = TopAny::<AVX> { scene: self, ray, world: None, tr, time, t_min };
+        self.tlas.any_walk(tr, t_max, &mut leaf)
     }
 }
 
@@ -138,7 +236,7 @@ impl<const AVX: bool> ClosestLeaf for TopClosest<'_, AVX> {
                     let wr = p.watertight(&mut self.world, self.ray, local, &mut own);
                     let pre = p.in_world().then_some(self.tr);
                     let accel = scene.meshes[m as usize].accel();
-                    if let Some(h) = accel.intersect_with::<AVX>(local, wr, pre, t_min, *t_max, self.cull) {
+                    if let Some(h) = accel.intersect_split::<AVX>(local, wr, pre, t_min, *t_max, self.cull) {
                         *t_max = h.t;
                         *self.best = Some(Closest::Triangle(pi, h));
                         hit = true;
@@ -199,7 +297,7 @@ impl<const AVX: bool> AnyLeaf for TopAny<'_, AVX> {
                     let mut own = None;
                     let wr = p.watertight(&mut self.world, self.ray, local, &mut own);
                     let pre = p.in_world().then_some(self.tr);
-                    scene.meshes[m as usize].accel().occluded_with::<AVX>(local, wr, pre, t_min, t_max)
+                    scene.meshes[m as usize].accel().occluded_split::<AVX>(local, wr, pre, t_min, t_max)
                 }
                 Geom::Sphere(s) => s.intersect(local, t_min, t_max).is_some(),
                 Geom::Ellipsoid(e) => scene.ellipsoids[e as usize].intersect(local, t_min, t_max).is_some(),
