@@ -44,7 +44,7 @@ pub struct WatertightRay {
     pub(super) sz: f32,
 }
 
-/// [`WatertightRay`]'s `kx` and `ky` for each `kz` (by pairs: `d[kz]`
+/// [`WatertightRay::new_lookup`]'s `kx` and `ky` for each `kz` (by pairs: `d[kz]`
 /// positive, then negative).
 const AXES: [[u8; 2]; 6] = [[1, 2], [2, 1], [2, 0], [0, 2], [0, 1], [1, 0]];
 
@@ -66,16 +66,32 @@ impl WatertightRay {
     pub fn new(ray: &Ray) -> WatertightRay {
         let d = ray.d;
         let kz = d.abs().max_position();
-        // `kx` and `ky` follow `kz` cyclically, swapped where `d[kz] < 0`,
-        // looked up rather than worked out: the arithmetic and the indexing
-        // of `d` by each compiled to some 60 instructions of compares and
-        // conditional moves per ray.
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        // The three quotients as one 4-lane division: each lane is the
+        // same correctly rounded quotient as a scalar division.
+        let s = glam::Vec4::new(-d[kx], -d[ky], 1.0, 1.0) / glam::Vec4::splat(d[kz]);
+        WatertightRay { o: ray.o.to_array(), kx, ky, kz, sx: s.x, sy: s.y, sz: s.z }
+    }
+
+    /// [`WatertightRay::new`] with `kx` and `ky` looked up rather than
+    /// worked out (the same values, so the same bits), for the scene's
+    /// queries: there the arithmetic and the indexing of `d` by each
+    /// compiled to some 60 instructions of compares and conditional moves
+    /// per ray. Not used by [`super::MeshAccel`]'s own queries, whose
+    /// benchmark (a 1.3M-triangle mesh) ran 5% slower with it (as in
+    /// session 16; see `docs/performance.md`).
+    #[inline]
+    pub(crate) fn new_lookup(ray: &Ray) -> WatertightRay {
+        let d = ray.d;
+        let kz = d.abs().max_position();
         let c = [d.x, d.y, d.z, 0.0];
         let dz = c[kz & 3];
         let [kx, ky] = AXES[2 * kz + (dz < 0.0) as usize];
         let (kx, ky) = (kx as usize, ky as usize);
-        // The three quotients as one 4-lane division: each lane is the
-        // same correctly rounded quotient as a scalar division.
         let s = glam::Vec4::new(-c[kx & 3], -c[ky & 3], 1.0, 1.0) / glam::Vec4::splat(dz);
         WatertightRay { o: ray.o.to_array(), kx, ky, kz, sx: s.x, sy: s.y, sz: s.z }
     }

@@ -80,9 +80,9 @@ impl Prim {
         own: &'a mut Option<WatertightRay>,
     ) -> &'a WatertightRay {
         if self.in_world() {
-            world.get_or_insert_with(|| WatertightRay::new(ray))
+            world.get_or_insert_with(|| WatertightRay::new_lookup(ray))
         } else {
-            own.insert(WatertightRay::new(local))
+            own.insert(WatertightRay::new_lookup(local))
         }
     }
 
