@@ -10,7 +10,7 @@ use super::ffi;
 use super::shade::{describe, fill_shade, object_random};
 use super::state::ThreadState;
 use super::threads::MISS;
-use super::{Entry, ShadeInput};
+use super::{Entry, ShadeInput, ShadePoint};
 
 impl ThreadState {
     /// Calls one entry point; the result's channels (a height in `[0]`).
@@ -28,12 +28,12 @@ impl ThreadState {
     /// the call did not run (no such entry), or [`RAN`] with the call's
     /// status. A bare code, so the hot path moves no error-sized value.
     #[inline]
-    pub(crate) fn call_fast(&self, id: usize, entry: Entry, input: &ShadeInput, rgb: &mut [f64; 3]) -> u32 {
+    pub(crate) fn call_fast<P: ShadePoint>(&self, id: usize, entry: Entry, p: &P, rgb: &mut [f64; 3]) -> u32 {
         let Some(f) = self.shaders.get(id).and_then(|s| s.entries[entry as usize]) else {
             return MISS;
         };
-        let random = self.random(input.instance_id);
-        self.io.begin(|s| fill_shade(self.avx, s, input, random));
+        let random = self.random(p.instance_id());
+        self.io.begin(|s| fill_shade(self.avx, s, p, random));
         let status = self.caller.call(f);
         if status == mlua::ffi::LUA_OK && !self.io.timed_out() && super::debug_pixel().is_none() {
             store_channels(rgb, self.io.channels());
