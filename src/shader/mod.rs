@@ -460,7 +460,7 @@ impl ShaderSet {
     #[inline]
     fn call(&self, id: usize, entry: Entry, input: &ShadeInput) -> Result<[f64; 3], ShaderError> {
         let mut rgb = [0.0; 3];
-        match self.call_point(id, entry, input, &mut rgb) {
+        match threads::with_state_fast(&self.shared, |state| state.call_fast(id, entry, input, &mut rgb)) {
             0 => Ok(rgb),
             code => self.call_slow(id, entry, input, code),
         }
@@ -480,7 +480,7 @@ impl ShaderSet {
         p: &P,
         rgb: &mut [f64; 3],
     ) -> u32 {
-        threads::with_state_fast(&self.shared, |state| state.call_fast(id, entry, p, rgb))
+        threads::with_state_fast(&self.shared, |state| state.call_fast_point(id, entry, p, rgb))
     }
 
     /// A call past its fast path: an error, a caught timeout, `--debug-pixel`
