@@ -26,7 +26,7 @@ use crate::integrator::{PathState, RayStats};
 use crate::math::{Vec2, Vec3};
 use crate::shader::ShaderError;
 use rayon::prelude::*;
-use sampler::PixelSampler;
+use sampler::{PixelSampler, MIN_BATCH_RUN};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
@@ -311,9 +311,24 @@ fn merged(w: u32, h: u32, tiles: &[(Tile, RayStats)]) -> Film {
 
 /// Samples per pixel of the pass after `taken` of `spp`: 1, 1, 2, 4, ...,
 /// at most an eighth of `spp` (or `floor`, where that is more), never past
-/// it.
+/// it. A plain render (`floor` above 1) leaves no last pass too short for
+/// the sampler to batch ([`MIN_BATCH_RUN`]) after its first: 4 samples
+/// were passes of 1, 1 and 2, none batched, so every camera sample of a
+/// 4-sample render (the shader benches) drew its pixel position and
+/// shutter time alone; they are now passes of 1 and 3.
 fn pass_size(taken: u32, spp: u32, floor: u32) -> u32 {
-    taken.max(1).min(spp.div_ceil(8).max(floor)).min(spp - taken)
+    let cap = spp.div_ceil(8).max(floor);
+    let n = taken.max(1).min(cap).min(spp - taken);
+    let rest = spp - taken - n;
+    if floor == 1 || taken == 0 || rest == 0 || rest >= MIN_BATCH_RUN {
+        return n;
+    }
+    let left = spp - taken;
+    if left <= cap {
+        left
+    } else {
+        left - MIN_BATCH_RUN
+    }
 }
 
 /// How long a pass may always grow when nobody watches the passes (only
@@ -382,12 +397,19 @@ mod tests {
         assert_eq!(passes(16, BATCH_PASS), [1, 1, 2, 4, 8]);
         assert_eq!(passes(100, BATCH_PASS), [1, 1, 2, 4, 8, 16, 16, 16, 16, 16, 4]);
         assert_eq!(passes(900, BATCH_PASS)[..8], [1, 1, 2, 4, 8, 16, 32, 64]);
+        assert_eq!(passes(4, BATCH_PASS), [1, 3]);
+        assert_eq!(passes(4, 1), [1, 1, 1, 1]);
+        assert_eq!(passes(50, BATCH_PASS), [1, 1, 2, 4, 8, 16, 15, 3]);
         for spp in 1..300 {
             for floor in [1, BATCH_PASS] {
                 let p = passes(spp, floor);
                 assert_eq!(p.iter().sum::<u32>(), spp);
                 assert!(p.iter().all(|&n| n >= 1 && n <= spp.div_ceil(8).max(floor)));
+                assert_eq!(p[0], 1);
             }
+            // A plain render's last pass batches, unless the first pass left too few.
+            let last = *passes(spp, BATCH_PASS).last().unwrap();
+            assert!(last >= MIN_BATCH_RUN.min(spp - 1).max(1), "{spp}: {:?}", passes(spp, BATCH_PASS));
         }
     }
 }

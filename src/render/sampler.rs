@@ -412,6 +412,9 @@ fn hash3(a: u32, b: u32, c: u32) -> u32 {
     hash2(hash2(a, b), c)
 }
 
+/// Shortest run of a pixel's samples that [`PixelSampler::batched`] batches.
+pub(crate) const MIN_BATCH_RUN: u32 = batch::MIN_RUN;
+
 #[path = "sampler_batch.rs"]
 mod batch;
 

@@ -7,10 +7,10 @@ use std::os::raw::c_int;
 
 use super::error::{ShaderError, ShaderErrorKind};
 use super::ffi;
-use super::shade::{describe, fill_shade, object_random};
+use super::shade::{describe, fill_point, fill_shade, object_random};
 use super::state::ThreadState;
 use super::threads::MISS;
-use super::{Entry, ShadeInput};
+use super::{Entry, ShadeInput, ShadePoint};
 
 impl ThreadState {
     /// Calls one entry point; the result's channels (a height in `[0]`).
@@ -34,6 +34,28 @@ impl ThreadState {
         };
         let random = self.random(input.instance_id);
         self.io.begin(|s| fill_shade(self.avx, s, input, random));
+        let status = self.caller.call(f);
+        if status == mlua::ffi::LUA_OK && !self.io.timed_out() && super::debug_pixel().is_none() {
+            store_channels(rgb, self.io.channels());
+            return 0;
+        }
+        ran(status)
+    }
+
+    /// [`ThreadState::call_fast`] of a renderer's point ([`fill_point`]).
+    #[inline]
+    pub(crate) fn call_fast_point<P: ShadePoint>(
+        &self,
+        id: usize,
+        entry: Entry,
+        p: &P,
+        rgb: &mut [f64; 3],
+    ) -> u32 {
+        let Some(f) = self.shaders.get(id).and_then(|s| s.entries[entry as usize]) else {
+            return MISS;
+        };
+        let random = self.random(p.instance_id());
+        self.io.begin(|s| fill_point(self.avx, s, p, random));
         let status = self.caller.call(f);
         if status == mlua::ffi::LUA_OK && !self.io.timed_out() && super::debug_pixel().is_none() {
             store_channels(rgb, self.io.channels());

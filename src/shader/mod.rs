@@ -188,6 +188,30 @@ pub struct ShadeInput {
     pub pixel: [u32; 2],
 }
 
+/// Something a [`ShadeInput`] can be made from where the shading point is
+/// written (`shade.rs`): the renderer passes its hit this way, and the
+/// point is computed straight into the record Lua reads.
+pub(crate) trait ShadePoint {
+    /// The point as a script sees it. Called where the record is written,
+    /// so implementations should be `#[inline(always)]`; the slow paths of
+    /// a call (errors, `--debug-pixel`) call it again.
+    fn input(&self) -> ShadeInput;
+    /// [`ShadeInput::instance_id`] alone (for `s.random`).
+    fn instance_id(&self) -> u32;
+}
+
+impl ShadePoint for ShadeInput {
+    #[inline(always)]
+    fn input(&self) -> ShadeInput {
+        *self
+    }
+
+    #[inline(always)]
+    fn instance_id(&self) -> u32 {
+        self.instance_id
+    }
+}
+
 /// The entry points a script may define: for surfaces (`emission` is a
 /// surface's emitted radiance under `DecalMode material`) and for volumes
 /// (`density`, and `emission` per unit length).
@@ -442,21 +466,39 @@ impl ShaderSet {
         }
     }
 
+    /// The fast path of a call of `entry` at `p`: 0 with the result's
+    /// channels in `rgb`, or a code for [`ShaderSet::call_slow`]. The
+    /// renderer's maps call this with their hit, so that neither the point
+    /// nor the result passes through memory on the way (an 80-byte
+    /// `Result` returned through the stack was read back in pieces that its
+    /// stores could not forward to).
+    #[inline]
+    pub(crate) fn call_point<P: ShadePoint>(
+        &self,
+        id: usize,
+        entry: Entry,
+        p: &P,
+        rgb: &mut [f64; 3],
+    ) -> u32 {
+        threads::with_state_fast(&self.shared, |state| state.call_fast_point(id, entry, p, rgb))
+    }
+
     /// A call past its fast path: an error, a caught timeout, `--debug-pixel`
     /// output, or a thread whose state is not built yet (`threads::MISS`:
     /// the call did not run, so it runs here).
     #[cold]
     #[inline(never)]
-    fn call_slow(
+    pub(crate) fn call_slow<P: ShadePoint>(
         &self,
         id: usize,
         entry: Entry,
-        input: &ShadeInput,
+        p: &P,
         code: u32,
     ) -> Result<[f64; 3], ShaderError> {
+        let input = p.input();
         threads::with_state(&self.shared, |state| match code {
-            threads::MISS => state.call(id, entry, input),
-            code => state.finish(id, entry, input, code),
+            threads::MISS => state.call(id, entry, &input),
+            code => state.finish(id, entry, &input, code),
         })
     }
 

@@ -2,7 +2,7 @@
 //! script), and the per-object `s.random`.
 
 use super::ffi::{self, Shade};
-use super::ShadeInput;
+use super::{ShadeInput, ShadePoint};
 
 /// Writes one shading point into the record the prelude reads, with AVX
 /// where the CPU has it (`avx`, from [`has_avx`]): the record's 43 doubles
@@ -22,6 +22,33 @@ pub(super) fn fill_shade(avx: bool, s: &mut Shade, i: &ShadeInput, random_value:
     write_shade(s, i, random_value);
 }
 
+/// [`fill_shade`] of a renderer's point: built inside the writer
+/// ([`ShadePoint::input`] inlines there), so it goes from the hit into the
+/// record without being stored as a [`ShadeInput`] first: the record's
+/// loads of that copy straddled its stores (no forwarding) and, with the
+/// copy, cost about 100 instructions a call. (A [`ShadeInput`] itself
+/// keeps [`fill_shade`]: through this path the empty call of
+/// `benches/shader.rs` measured 5 ns slower.)
+#[inline(always)]
+pub(super) fn fill_point<P: ShadePoint>(avx: bool, s: &mut Shade, p: &P, random_value: f64) {
+    #[cfg(target_arch = "x86_64")]
+    if avx {
+        // SAFETY: `avx` is true only where the CPU has AVX (`has_avx`).
+        unsafe { write_point_avx(s, p, random_value) };
+        return;
+    }
+    let _ = avx;
+    write_point_plain(s, p, random_value);
+}
+
+/// [`write_shade`] of `p`'s point without AVX: out of line, so that the
+/// callers' fast path does not carry a second copy of the point's
+/// arithmetic (and the registers it needs).
+#[inline(never)]
+fn write_point_plain<P: ShadePoint>(s: &mut Shade, p: &P, random_value: f64) {
+    write_shade(s, &p.input(), random_value);
+}
+
 /// Whether [`fill_shade`] may use AVX on this CPU.
 pub(super) fn has_avx() -> bool {
     #[cfg(target_arch = "x86_64")]
@@ -35,6 +62,14 @@ pub(super) fn has_avx() -> bool {
 #[target_feature(enable = "avx")]
 unsafe fn write_shade_avx(s: &mut Shade, i: &ShadeInput, random_value: f64) {
     write_shade(s, i, random_value);
+}
+
+/// [`write_shade`] of `p`'s point, compiled with AVX (the point's own
+/// arithmetic too: the same operations, so the same values).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn write_point_avx<P: ShadePoint>(s: &mut Shade, p: &P, random_value: f64) {
+    write_shade(s, &p.input(), random_value);
 }
 
 /// Writes one shading point into the record the prelude reads, in place.

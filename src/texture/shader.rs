@@ -25,8 +25,8 @@ use crate::material::Specular;
 use crate::math::{Vec2, Vec3};
 use crate::scene::description::{DecalMode, ImageDesc, TextureMapDesc, TextureSource};
 use crate::shader::{
-    ImageSampler, MaterialOutputs, SampleFilter, ShadeInput, ShaderError, ShaderImages, ShaderSet,
-    ShaderSource,
+    Entry, ImageSampler, MaterialOutputs, SampleFilter, ShadeInput, ShadePoint, ShaderError, ShaderImages,
+    ShaderSet, ShaderSource,
 };
 use std::sync::Arc;
 
@@ -226,9 +226,18 @@ fn moved(f: &TexFrame, base: &ShadeInput, p: Vec3, uv: Vec2) -> ShadeInput {
     }
 }
 
+/// [`input_at`], out of line: inlined into [`Textures::apply`], its
+/// arithmetic was hoisted in front of the map loop, where every hit paid
+/// for it whatever its maps' modes.
+#[inline(never)]
+fn input(f: &TexFrame, p: Vec3, uv: Vec2, n: Vec3) -> ShadeInput {
+    input_at(f, p, uv, n)
+}
+
 /// The shading point a script sees at object-space `p` with texture
 /// coordinates `uv`, in frame `f` whose world shading normal is now `n`.
-fn input(f: &TexFrame, p: Vec3, uv: Vec2, n: Vec3) -> ShadeInput {
+#[inline(always)]
+fn input_at(f: &TexFrame, p: Vec3, uv: Vec2, n: Vec3) -> ShadeInput {
     let pw = world_point(f, p);
     let c = &f.ctx;
     let to_object = |v: Vec3| match &f.to_world {
@@ -257,6 +266,45 @@ fn input(f: &TexFrame, p: Vec3, uv: Vec2, n: Vec3) -> ShadeInput {
     }
 }
 
+/// The shading point of frame `f` with world shading normal `n`, as the
+/// shader runtime takes it: [`input`] runs where the record Lua reads is
+/// written.
+struct Hit<'a> {
+    f: &'a TexFrame,
+    n: Vec3,
+}
+
+impl ShadePoint for Hit<'_> {
+    #[inline(always)]
+    fn input(&self) -> ShadeInput {
+        input_at(self.f, self.f.p_object, self.f.uv, self.n)
+    }
+
+    #[inline(always)]
+    fn instance_id(&self) -> u32 {
+        self.f.ctx.instance
+    }
+}
+
+/// Writes the colour `entry` of shader `id` gives at `hit` into `out`
+/// (in place: a returned colour came back through the stack).
+#[inline(never)]
+fn rgb(
+    set: &ShaderSet,
+    id: usize,
+    entry: Entry,
+    hit: &Hit<'_>,
+    out: &mut Vec3,
+) -> Result<(), Box<ShaderError>> {
+    let mut c = [0.0; 3];
+    let code = set.call_point(id, entry, hit, &mut c);
+    if code != 0 {
+        c = set.call_slow(id, entry, hit, code)?;
+    }
+    *out = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
+    Ok(())
+}
+
 impl Textures {
     /// Applies shader map `map` (shader `id`) at `f`: like the other maps, it
     /// may change `m` and the world normal `n`, or make the point unlit.
@@ -270,16 +318,22 @@ impl Textures {
     ) -> Result<Option<Vec3>, Box<ShaderError>> {
         let Some(set) = &self.shaders else { return Ok(None) };
         let id = id as usize;
-        let color = |n: Vec3| -> Result<Vec3, Box<ShaderError>> {
-            Ok(Vec3::from_array(set.color(id, &input(f, f.p_object, f.uv, n))?))
-        };
+        let hit = Hit { f, n: *n };
         match map.decal {
-            DecalMode::ReplaceKd => m.diffuse = color(*n)?,
-            DecalMode::BlendKd => m.diffuse = (m.diffuse + color(*n)?) * 0.5,
-            DecalMode::ReplaceKs => m.specular = color(*n)?,
-            DecalMode::ReplaceAll => return Ok(Some(color(*n)?)),
+            DecalMode::ReplaceKd => rgb(set, id, Entry::Color, &hit, &mut m.diffuse)?,
+            DecalMode::BlendKd => {
+                let mut c = Vec3::ZERO;
+                rgb(set, id, Entry::Color, &hit, &mut c)?;
+                m.diffuse = (m.diffuse + c) * 0.5;
+            }
+            DecalMode::ReplaceKs => rgb(set, id, Entry::Color, &hit, &mut m.specular)?,
+            DecalMode::ReplaceAll => {
+                let mut c = Vec3::ZERO;
+                rgb(set, id, Entry::Color, &hit, &mut c)?;
+                return Ok(Some(c));
+            }
             DecalMode::ReplaceKm => {
-                m.mirror = Vec3::from_array(set.reflect(id, &input(f, f.p_object, f.uv, *n))?);
+                rgb(set, id, Entry::Reflect, &hit, &mut m.mirror)?;
                 if m.kind == Specular::None {
                     m.kind = Specular::Mirror;
                 }
