@@ -29,17 +29,7 @@ impl ThreadState {
     /// status. A bare code, so the hot path moves no error-sized value.
     #[inline]
     pub(crate) fn call_fast(&self, id: usize, entry: Entry, input: &ShadeInput, rgb: &mut [f64; 3]) -> u32 {
-        let Some(f) = self.shaders.get(id).and_then(|s| s.entries[entry as usize]) else {
-            return MISS;
-        };
-        let random = self.random(input.instance_id);
-        self.io.begin(|s| fill_shade(self.avx, s, input, random));
-        let status = self.caller.call(f);
-        if status == mlua::ffi::LUA_OK && !self.io.timed_out() && super::debug_pixel().is_none() {
-            store_channels(rgb, self.io.channels());
-            return 0;
-        }
-        ran(status)
+        self.call_with(id, entry, input.instance_id, |s, random| fill_shade(self.avx, s, input, random), rgb)
     }
 
     /// [`ThreadState::call_fast`] of a renderer's point ([`fill_point`]).
@@ -51,11 +41,25 @@ impl ThreadState {
         p: &P,
         rgb: &mut [f64; 3],
     ) -> u32 {
+        self.call_with(id, entry, p.instance_id(), |s, random| fill_point(self.avx, s, p, random), rgb)
+    }
+
+    /// The body of both fast paths; `fill` writes the shading point (each
+    /// caller has its own writer: see [`fill_point`]).
+    #[inline(always)]
+    fn call_with(
+        &self,
+        id: usize,
+        entry: Entry,
+        instance_id: u32,
+        fill: impl FnOnce(&mut ffi::Shade, f64),
+        rgb: &mut [f64; 3],
+    ) -> u32 {
         let Some(f) = self.shaders.get(id).and_then(|s| s.entries[entry as usize]) else {
             return MISS;
         };
-        let random = self.random(p.instance_id());
-        self.io.begin(|s| fill_point(self.avx, s, p, random));
+        let random = self.random(instance_id);
+        self.io.begin(|s| fill(s, random));
         let status = self.caller.call(f);
         if status == mlua::ffi::LUA_OK && !self.io.timed_out() && super::debug_pixel().is_none() {
             store_channels(rgb, self.io.channels());

@@ -53,8 +53,10 @@
 
 mod call;
 mod compile;
+mod entry;
 mod error;
 mod ffi;
+mod input;
 mod instrument;
 mod invoke;
 mod modules;
@@ -78,7 +80,11 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
+pub(crate) use entry::{Entry, ENTRIES};
+pub use entry::MaterialOutputs;
 pub use error::{ShaderError, ShaderErrorKind};
+pub(crate) use input::ShadePoint;
+pub use input::ShadeInput;
 pub use modules::{search_path, set_library_dirs, MAX_MODULE_BYTES};
 
 /// The pixel `--debug-pixel` names, packed (`u64::MAX`: none).
@@ -143,135 +149,6 @@ pub enum ParamValue {
     Vec3([f64; 3]),
     /// Text: a Lua string.
     Text(String),
-}
-
-/// The shading point a script receives as `s` (`docs/shaders.md` lists the
-/// fields as scripts see them). Points and vectors are `[x, y, z]`.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct ShadeInput {
-    /// Object-space position (`s.P`).
-    pub p: [f32; 3],
-    /// World-space position (`s.Pw`).
-    pub pw: [f32; 3],
-    /// Camera-space position (`s.Pc`): x right, y up, z towards the viewer.
-    pub pc: [f32; 3],
-    /// Shading normal, world space, unit length (`s.N`).
-    pub n: [f32; 3],
-    /// Geometric normal, world space, unit length (`s.Ng`).
-    pub ng: [f32; 3],
-    /// The incident ray's unit direction, world space (`s.I`; `s.V` is `-I`).
-    pub i: [f32; 3],
-    /// Object-space ∂P/∂u and ∂P/∂v (`s.dPdu`, `s.dPdv`).
-    pub dpdu: [f32; 3],
-    /// See `dpdu`.
-    pub dpdv: [f32; 3],
-    /// Object-space change of `P` to the next pixel right and down (`s.dPdx`,
-    /// `s.dPdy`): the ray's footprint on the surface.
-    pub dpdx: [f32; 3],
-    /// See `dpdx`.
-    pub dpdy: [f32; 3],
-    /// Texture coordinates (`s.uv.u`, `s.uv.v`).
-    pub uv: [f32; 2],
-    /// The ray's time within the shutter, 0 to 1 (`s.time`).
-    pub time: f32,
-    /// The footprint's width in object space (`s.filterwidth`): the larger
-    /// of `|dPdx|` and `|dPdy|`.
-    pub filterwidth: f32,
-    /// The geometry's object index (`s.object_id`): a mesh's instances share it.
-    pub object_id: u32,
-    /// The shaded object's own index (`s.instance_id`); `s.random` is a
-    /// repeatable number in [0, 1) derived from it.
-    pub instance_id: u32,
-    /// Ray depth: 0 for camera rays (`s.depth`).
-    pub depth: u32,
-    /// The pixel being shaded (`s.pixel_x`, `s.pixel_y`).
-    pub pixel: [u32; 2],
-}
-
-/// Something a [`ShadeInput`] can be made from where the shading point is
-/// written (`shade.rs`): the renderer passes its hit this way, and the
-/// point is computed straight into the record Lua reads.
-pub(crate) trait ShadePoint {
-    /// The point as a script sees it. Called where the record is written,
-    /// so implementations should be `#[inline(always)]`; the slow paths of
-    /// a call (errors, `--debug-pixel`) call it again.
-    fn input(&self) -> ShadeInput;
-    /// [`ShadeInput::instance_id`] alone (for `s.random`).
-    fn instance_id(&self) -> u32;
-}
-
-impl ShadePoint for ShadeInput {
-    #[inline(always)]
-    fn input(&self) -> ShadeInput {
-        *self
-    }
-
-    #[inline(always)]
-    fn instance_id(&self) -> u32 {
-        self.instance_id
-    }
-}
-
-/// The entry points a script may define: for surfaces (`emission` is a
-/// surface's emitted radiance under `DecalMode material`) and for volumes
-/// (`density`, and `emission` per unit length).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Entry {
-    Color = 0,
-    Height = 1,
-    Reflect = 2,
-    Density = 3,
-    Emission = 4,
-    Specular = 5,
-    Roughness = 6,
-    Metalness = 7,
-}
-
-/// How many entry points there are.
-pub(crate) const ENTRIES: usize = 8;
-
-impl Entry {
-    pub(crate) const ALL: [Entry; ENTRIES] = [
-        Entry::Color,
-        Entry::Height,
-        Entry::Reflect,
-        Entry::Density,
-        Entry::Emission,
-        Entry::Specular,
-        Entry::Roughness,
-        Entry::Metalness,
-    ];
-
-    pub(crate) fn name(self) -> &'static str {
-        match self {
-            Entry::Color => "color",
-            Entry::Height => "height",
-            Entry::Reflect => "reflect",
-            Entry::Density => "density",
-            Entry::Emission => "emission",
-            Entry::Specular => "specular",
-            Entry::Roughness => "roughness",
-            Entry::Metalness => "metalness",
-        }
-    }
-}
-
-/// What a `DecalMode material` shader says about a surface point: one value
-/// per output the script defines (`None` for the others).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct MaterialOutputs {
-    /// `color(s)`: the base colour, 0–1.
-    pub color: Option<[f32; 3]>,
-    /// `specular(s)`: the specular colour (`F0` of the microfacet model), 0–1.
-    pub specular: Option<[f32; 3]>,
-    /// `roughness(s)`, 0–1.
-    pub roughness: Option<f32>,
-    /// `metalness(s)`, 0–1.
-    pub metalness: Option<f32>,
-    /// `emission(s)`: emitted radiance in output units, not negative.
-    pub emission: Option<[f32; 3]>,
-    /// `reflect(s)`: the mirror reflectance, 0–1.
-    pub reflect: Option<[f32; 3]>,
 }
 
 /// How `texture(name, u, v, filter)` filters an image.
