@@ -133,7 +133,9 @@ echo "== 5b. Lua turbulence against the built-in perlin map (benches/scenes, 600
 # to trust on a shared machine.
 cpu() { /usr/bin/time -f '%U %S' -o "$WORK/cpu_t" "$@" >/dev/null 2>&1; awk '{ printf "%.3f\n", $1 + $2 }' "$WORK/cpu_t"; }
 for f in tb to tl; do : >"$WORK/$f"; done
-for _ in $(seq "$REPS"); do
+# Each run takes about a second, so more of them than REPS: a single slow
+# run of three moved the median by a tenth.
+for _ in $(seq $((REPS * 2 + 1))); do
     for p in "tb turbulence_builtin" "to turbulence_lua_octaves" "tl turbulence_lua"; do
         set -- $p
         (cd benches/scenes && cpu "$LUSTER" render "$2.xml" -o "$WORK" -q --threads 1 --spp 4) >>"$WORK/$1"
