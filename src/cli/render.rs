@@ -93,6 +93,12 @@ fn render_scene(
         let img = img.map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
         done.push((img, t.elapsed().as_secs_f64()));
     }
+    let triangles = scene.triangle_count();
+    // Freed by a free worker while the images are encoded, not after them
+    // on the thread that ends the process (textures, meshes, trees).
+    if rayon::current_num_threads() > 1 {
+        rayon::spawn(move || drop((scene, desc)));
+    }
     for ((img, secs), plan) in done.iter().zip(&plans) {
         let written = write_outputs(&img.film, outdir, plan)
             .with_context(|| format!("rendering {}", path.display()))?;
@@ -107,7 +113,7 @@ fn render_scene(
                 secs,
                 setup,
                 img.stats.total() as f64 / secs.max(1e-9) / 1e6,
-                scene.triangle_count()
+                triangles
             );
         }
     }

@@ -375,12 +375,17 @@ unsafe fn map_batch_avx2(
 /// [0, 255] and truncated. The hw2 text says "rounded", but the references
 /// truncate: against them truncation scores 2–15 dB higher PSNR and a tenth
 /// of the FLIP error on every hw1/hw2 scene, and our mean level is no longer
-/// half a step too bright.
+/// half a step too bright. On rayon's pool: after the render, one thread
+/// took ~3 ms of an 800×800 film while the other waited.
 pub fn course_rgb8(pixels: &[Vec3]) -> Vec<u8> {
-    pixels
-        .iter()
-        .flat_map(|p| p.to_array().map(|c| if c.is_nan() { 0 } else { c.clamp(0.0, 255.0) as u8 }))
-        .collect()
+    let mut out = vec![0u8; 3 * pixels.len()];
+    out.par_chunks_mut(3 * MAP_CHUNK).zip(pixels.par_chunks(MAP_CHUNK)).for_each(|(out, px)| {
+        for (o, p) in out.chunks_exact_mut(3).zip(px) {
+            // `as` clamps to [0, 255], truncates, and makes NaN 0.
+            o.copy_from_slice(&p.to_array().map(|c| c as u8));
+        }
+    });
+    out
 }
 
 #[cfg(test)]

@@ -11,6 +11,17 @@ fn course_clamp_truncates_and_zeroes_nan() {
 }
 
 #[test]
+fn course_codes_of_a_large_film_keep_their_pixels_order() {
+    let px: Vec<Vec3> =
+        (0..10_001).map(|i| Vec3::new(i as f32 * 0.37 - 20.0, (i % 300) as f32, 1e9)).collect();
+    let want: Vec<u8> = px
+        .iter()
+        .flat_map(|p| p.to_array().map(|c| if c.is_nan() { 0 } else { c.clamp(0.0, 255.0) as u8 }))
+        .collect();
+    assert_eq!(course_rgb8(&px), want);
+}
+
+#[test]
 fn photographic_maps_the_log_average_to_key_over_one_plus_key() {
     // A uniform image: every pixel is the log-average (up to δ).
     let px = vec![grey(37.0); 16];

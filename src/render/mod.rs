@@ -206,15 +206,11 @@ fn render_tiles(
             .map(|(_, t)| t)
             .collect();
     }
-    // Built in parallel: allocating and zeroing thousands of tiles (and
-    // faulting their pages in) was a visible serial prefix of a small render.
-    let mut tiles: Vec<(Tile, RayStats)> = origins
-        .into_par_iter()
-        .map(|(x0, y0)| {
-            let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
-            (Tile::new(x0, y0, x1, y1, opts.filter), RayStats::default())
-        })
-        .collect();
+    let rects: Vec<(u32, u32, u32, u32)> =
+        origins.into_iter().map(|(x0, y0)| (x0, y0, (x0 + TILE).min(w), (y0 + TILE).min(h))).collect();
+    let mut store = Vec::new();
+    let mut tiles: Vec<(Tile, RayStats)> =
+        Tile::all_in(&mut store, &rects, opts.filter).into_iter().map(|t| (t, RayStats::default())).collect();
     let pass_floor = if progress.is_some() { 1 } else { BATCH_PASS };
     let mut taken = 0;
     while taken < spp && !stop() {
@@ -233,6 +229,10 @@ fn render_tiles(
         // the frame) the other worker idles through that job's tail: 77% of
         // the samples on one of two threads for hw4 sphere_perlin_bump.
         tiles.par_iter_mut().with_max_len(1).for_each(|(tile, stats)| {
+            if taken == 0 {
+                // Written first: see `Tile::clear`.
+                tile.clear();
+            }
             let (x0, y0, x1, y1) = tile.bounds();
             // One state for the tile, readied per sample: the view, spread
             // and counts carry over.
@@ -285,7 +285,16 @@ fn render_tiles(
     for (_, s) in &tiles {
         stats.add(s);
     }
-    RenderedImage { film: merged(w, h, &tiles), stats, spp: taken }
+    let film = merged(w, h, &tiles);
+    drop(tiles);
+    // Unmapping the accumulators' ~10 MB (an 800×800 film) took ~1 ms on the
+    // thread that goes on to encode the image: a free worker does it. On
+    // one thread it would wait for the end of the command, every camera's
+    // store held till then.
+    if rayon::current_num_threads() > 1 {
+        rayon::spawn(move || drop(store));
+    }
+    RenderedImage { film, stats, spp: taken }
 }
 
 /// The `w`×`h` film of `tiles`, which are in the row-major order of
@@ -350,12 +359,16 @@ mod tests {
         let (w, h) = (37, 45);
         let value = |x: u32, y: u32| Vec3::new(x as f32, y as f32, (x * 7 + y) as f32 * 0.25);
         let sel = TileSelection { first: 1, step: 2, end: 100 };
+        let rects: Vec<_> = tile_origins(w, h)
+            .into_iter()
+            .enumerate()
+            .filter(|&(i, _)| sel.contains(i as u32))
+            .map(|(_, (x0, y0))| (x0, y0, (x0 + TILE).min(w), (y0 + TILE).min(h)))
+            .collect();
+        let mut store = Vec::new();
         let mut tiles = Vec::new();
-        for (i, (x0, y0)) in tile_origins(w, h).into_iter().enumerate() {
-            if !sel.contains(i as u32) {
-                continue;
-            }
-            let mut t = Tile::new(x0, y0, (x0 + TILE).min(w), (y0 + TILE).min(h), Filter::Box);
+        for mut t in Tile::all_in(&mut store, &rects, Filter::Box) {
+            let (x0, y0, _, _) = t.bounds();
             for y in y0..(y0 + TILE).min(h) {
                 for x in x0..(x0 + TILE).min(w) {
                     if (x + y) % 5 != 0 {

@@ -107,6 +107,21 @@ impl Level {
     }
 }
 
+/// Packed RGB bytes as texels, in the same memory where the sizes allow
+/// (always, for a decoder's exact-size buffer): copying a 1024² texture took
+/// ~2 ms on one thread (14 M instructions), the longest image's decode being
+/// what a small render waits for.
+fn rgb_texels(raw: Vec<u8>) -> Vec<[u8; 3]> {
+    if raw.len() % 3 != 0 || raw.capacity() % 3 != 0 {
+        return raw.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    }
+    let mut raw = std::mem::ManuallyDrop::new(raw);
+    // SAFETY: `[u8; 3]` has `u8`'s alignment and three times its size, so
+    // the allocation of `capacity` bytes is one of `capacity / 3` texels,
+    // of which the first `len / 3` are initialized; `raw` is not dropped.
+    unsafe { Vec::from_raw_parts(raw.as_mut_ptr().cast::<[u8; 3]>(), raw.len() / 3, raw.capacity() / 3) }
+}
+
 /// A decoded image with its mipmap levels (level 0 only until
 /// [`Image::build_mipmaps`]).
 pub struct Image {
@@ -155,9 +170,8 @@ impl Image {
             }
             _ => {
                 // `into_`, not `to_`: an 8-bit RGB file (most JPEGs) keeps its
-                // decoded buffer instead of copying it first (a serial ~2 ms
-                // for a 1024² texture, before a small render can start).
-                let t = img.into_rgb8().pixels().map(|p| p.0).collect();
+                // decoded buffer, which becomes the texels as it is.
+                let t = rgb_texels(img.into_rgb8().into_raw());
                 Image::from_level(Level { width: w, height: h, texels: Texels::Ldr(t) }, false)
             }
         })
@@ -258,5 +272,33 @@ impl Image {
         }
         let b = self.levels[(l0 as usize + 1).min(self.levels.len() - 1)].bilinear(uv);
         a * (1.0 - f) + b * f
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn packed_bytes_become_texels_in_place_or_by_copy() {
+        let raw: Vec<u8> = (0..12).collect();
+        let at = raw.as_ptr();
+        let t = rgb_texels(raw);
+        assert_eq!(t, [[0, 1, 2], [3, 4, 5], [6, 7, 8], [9, 10, 11]]);
+        assert_eq!(t.as_ptr().cast::<u8>(), at, "an exact-size buffer is kept");
+        let mut odd = Vec::with_capacity(10);
+        odd.extend_from_slice(&[1, 2, 3, 4, 5, 6]);
+        assert_eq!(rgb_texels(odd), [[1, 2, 3], [4, 5, 6]]);
+    }
+
+    #[test]
+    fn a_decoded_png_keeps_its_texels() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("t.png");
+        let px: Vec<u8> = (0..2 * 3 * 3).map(|i| (i * 13) as u8).collect();
+        image::save_buffer(&p, &px, 3, 2, image::ExtendedColorType::Rgb8).unwrap();
+        let img = Image::load(&p).unwrap();
+        assert_eq!(img.size(), (3, 2));
+        assert_eq!(img.nearest(Vec2::new(0.5, 0.75)), Vec3::new(156.0, 169.0, 182.0));
     }
 }
