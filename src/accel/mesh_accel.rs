@@ -171,10 +171,18 @@ impl MeshAccel {
             }
             None => {
                 let leaf = Closest::<AVX> { blocks, ray, wr, t_min, cull, best: &mut best };
-                match pre {
-                    Some(tr) => self.bvh.closest_prepared(tr, t_max, leaf),
-                    None => self.bvh.closest_with::<AVX, _>(ray, t_max, leaf),
+                // One walk for both: two inlined copies doubled the frame
+                // (two traversal stacks) and the code of the out-of-line
+                // callers (`tree_closest_*`).
+                let own;
+                let tr = match pre {
+                    Some(tr) => tr,
+                    None => {
+                        own = Traversal::new::<AVX>(ray);
+                        &own
+                    }
                 };
+                self.bvh.closest_prepared(tr, t_max, leaf);
             }
         }
         best
@@ -281,12 +289,19 @@ impl MeshAccel {
         t_max: f32,
     ) -> bool {
         let blocks = &self.blocks[..];
-        let leaf = Any::<AVX> { blocks, wr, t_min };
-        match (self.bvh.single_leaf(), pre) {
-            (Some(range), _) => leaf_any::<AVX>(&blocks[range], wr, t_min, t_max),
-            (None, Some(tr)) => self.bvh.any_prepared(tr, t_max, leaf),
-            (None, None) => self.bvh.any_with::<AVX, _>(ray, t_max, leaf),
+        if let Some(range) = self.bvh.single_leaf() {
+            return leaf_any::<AVX>(&blocks[range], wr, t_min, t_max);
         }
+        // One walk for both (see [`MeshAccel::intersect_with`]).
+        let own;
+        let tr = match pre {
+            Some(tr) => tr,
+            None => {
+                own = Traversal::new::<AVX>(ray);
+                &own
+            }
+        };
+        self.bvh.any_prepared(tr, t_max, Any::<AVX> { blocks, wr, t_min })
     }
 
     /// [`MeshAccel::occluded_with`] as [`MeshAccel::intersect_split`] is

@@ -27,6 +27,8 @@
 //! likewise sampled only. The ambient term is left out: paths bring the
 //! light that ambient light stood in for.
 
+use std::mem::MaybeUninit;
+
 use super::whitted::{glossy, reflect, reflectance};
 use super::{is_black, light_reaching_inline, surface_at, PathState, Surface};
 use crate::bsdf::fresnel;
@@ -122,6 +124,14 @@ pub fn radiance(scene: &Scene, ray: &Ray, p: &PathParams, st: &mut PathState) ->
 
 /// Radiance along `ray`, which is bounce `depth` of a path of throughput
 /// `beta` so far.
+///
+/// A vertex whose bounce is the last thing it adds (no specular part, no
+/// media: most vertices) continues the loop with the bounce's ray instead of
+/// recursing: its colour, weight and `q` wait in `pending`, and once the path
+/// ends they are folded back deepest first as `c + w · L / q`, the
+/// recursion's operations in its order, so the same bits. A recursive call
+/// cost each vertex a prologue, an epilogue and its arguments through the
+/// stack. Other vertices, and a path longer than `pending`, recurse.
 fn li(
     scene: &Scene,
     ray: &Ray,
@@ -131,32 +141,91 @@ fn li(
     p: &PathParams,
     st: &mut PathState,
 ) -> Vec3 {
-    let hit = volumes::trace(scene, ray, depth == 0, st);
-    // Borrowed in place: moving the hit out of the slot `trace` filled
-    // copied it in wide loads that waited on its narrow stores.
-    let (t, color) = match &hit {
-        Some(hit) => {
-            let before = st.travelled;
-            st.travelled += hit.t;
-            let c = shade(scene, ray, hit, depth, beta, came, p, st);
-            st.travelled = before;
-            (hit.t, c)
+    let media = !scene.volumes.media.is_empty();
+    let entry = st.travelled;
+    let mut pending = [MaybeUninit::<Pending>::uninit(); DEFERRED];
+    let mut n = 0;
+    let (mut ray, mut depth, mut beta, mut came) = (*ray, depth, beta, came);
+    let mut color = loop {
+        let hit = volumes::trace(scene, &ray, depth == 0, st);
+        // Borrowed in place: moving the hit out of the slot `trace` filled
+        // copied it in wide loads that waited on its narrow stores.
+        let (t, color) = match &hit {
+            Some(hit) => {
+                let before = st.travelled;
+                st.travelled += hit.t;
+                let defer = !media && n < DEFERRED;
+                match shade(scene, &ray, hit, depth, beta, came, p, defer, st) {
+                    Shaded::Done(c) => {
+                        st.travelled = before;
+                        (hit.t, c)
+                    }
+                    Shaded::Bounce(c, b) => {
+                        // The next vertex sees this one's distance added,
+                        // as the recursive call did.
+                        pending[n].write(Pending { color: c, weight: b.weight, q: b.q });
+                        n += 1;
+                        (ray, depth, beta, came) = (b.ray, depth + 1, b.next, b.came);
+                        continue;
+                    }
+                }
+            }
+            None => (f32::INFINITY, escaped(scene, &ray, came, p, st)),
+        };
+        // Nothing on the way dims the light or adds to it.
+        if !media {
+            break color;
         }
-        None => (f32::INFINITY, escaped(scene, ray, came, p, st)),
+        if past_limit(scene, depth, p) {
+            // The light found past the depth limit arrives dimmed by the media
+            // on the way; scattering there would be one bounce too many.
+            if is_black(color) {
+                break color;
+            }
+            break color * volumes::media_transmittance(scene, &ray, t, st);
+        }
+        break volumes::through_media(scene, &ray, t, color, st);
     };
-    // Nothing on the way dims the light or adds to it.
-    if scene.volumes.media.is_empty() {
-        return color;
+    while n > 0 {
+        n -= 1;
+        // SAFETY: entries below `n` were all written in the loop.
+        let v = unsafe { pending[n].assume_init() };
+        color = v.color + v.weight * color / v.q;
     }
-    if past_limit(scene, depth, p) {
-        // The light found past the depth limit arrives dimmed by the media
-        // on the way; scattering there would be one bounce too many.
-        if is_black(color) {
-            return color;
-        }
-        return color * volumes::media_transmittance(scene, ray, t, st);
-    }
-    volumes::through_media(scene, ray, t, color, st)
+    st.travelled = entry;
+    color
+}
+
+/// Vertices of a path that [`li`] keeps waiting for their bounce's light;
+/// past them it recurses. The course's path-traced scenes stop at depth 3
+/// or 6 (without Russian roulette).
+const DEFERRED: usize = 8;
+
+/// A vertex waiting for the light its bounce brings: it adds
+/// `color + weight · L / q`.
+#[derive(Clone, Copy)]
+struct Pending {
+    color: Vec3,
+    weight: Vec3,
+    q: f32,
+}
+
+/// A random bounce to trace: its ray, its weight `f cos / p`, the Russian
+/// roulette chance `q` it survived, the path's throughput past it and how
+/// the ray left the surface.
+struct Bounce {
+    ray: Ray,
+    weight: Vec3,
+    q: f32,
+    next: Vec3,
+    came: Came,
+}
+
+/// What [`shade`] found: the whole light of the vertex, or the light of the
+/// vertex but its bounce's, with the bounce for [`li`] to follow.
+enum Shaded {
+    Done(Vec3),
+    Bounce(Vec3, Bounce),
 }
 
 /// Whether a vertex at `depth` lies past the path's depth limit. Only MIS
@@ -195,7 +264,10 @@ fn escaped(scene: &Scene, ray: &Ray, came: Came, p: &PathParams, st: &PathState)
     env.eval(d) * w
 }
 
+/// The light a vertex adds. Inlined into [`li`]'s loop: out of line, its
+/// answer (a [`Shaded`], ray and all) went through memory.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 fn shade(
     scene: &Scene,
     ray: &Ray,
@@ -204,15 +276,16 @@ fn shade(
     beta: Vec3,
     came: Came,
     p: &PathParams,
+    defer: bool,
     st: &mut PathState,
-) -> Vec3 {
+) -> Shaded {
     // Matched in place, not moved out: a move copies the whole `Cow`, room
     // for an owned material, even when it borrows.
     let surface = surface_at(scene, ray, hit, depth, st);
     let (m, ns): (&Material, Vec3) = match &surface {
         Surface::Lit(m, ns) => (m, *ns),
-        Surface::Unlit(c) => return *c,
-        Surface::Failed => return Vec3::ZERO,
+        Surface::Unlit(c) => return Shaded::Done(*c),
+        Surface::Failed => return Shaded::Done(Vec3::ZERO),
     };
     let entering = ray.d.dot(hit.ng) < 0.0;
     let (n, ng) = if entering { (ns, hit.ng) } else { (-ns, -hit.ng) };
@@ -242,7 +315,7 @@ fn shade(
     }
 
     if past_limit(scene, depth, p) {
-        return color;
+        return Shaded::Done(color);
     }
     let inside_dielectric = !entering && matches!(m.kind, Specular::Dielectric { .. });
     let origin = hit.p + ng * eps;
@@ -255,7 +328,12 @@ fn shade(
         // Under MIS the last vertex's bounce is traced too, for emission
         // only (see [`past_limit`]).
         if more || p.mis {
-            color += bounce(scene, m, &at, origin, depth, beta, p, st);
+            match bounce(scene, m, &at, origin, depth, beta, p, st) {
+                // Nothing follows the bounce at this vertex (see [`li`]).
+                Some(b) if defer && matches!(m.kind, Specular::None) => return Shaded::Bounce(color, b),
+                Some(b) => color += b.weight * li(scene, &b.ray, depth + 1, b.next, b.came, p, st) / b.q,
+                None => color += Vec3::ZERO,
+            }
         }
     }
     // A material without a specular part (most) skips the depth tests and
@@ -269,7 +347,7 @@ fn shade(
             color *= (-*absorption * hit.t).exp();
         }
     }
-    color
+    Shaded::Done(color)
 }
 
 /// One sample of every light, shadowed; with MIS each weighed against the
@@ -494,9 +572,12 @@ fn brdf_cos(b: &Brdf, m: &Material, at: &At, wi: Vec3, cos: f32) -> Vec3 {
     }
 }
 
-/// The random bounce: a direction drawn as the variant says, the light it
-/// brings times `f cos / p`, and Russian roulette when asked for.
+/// The random bounce: a direction drawn as the variant says, its weight
+/// `f cos / p`, and Russian roulette when asked for; `None` where it brings
+/// no light (its light would count as zero). Inlined into [`shade`] (see
+/// there).
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 fn bounce(
     scene: &Scene,
     m: &Material,
@@ -506,7 +587,7 @@ fn bounce(
     beta: Vec3,
     p: &PathParams,
     st: &mut PathState,
-) -> Vec3 {
+) -> Option<Bounce> {
     let (n, frame) = (at.n, &at.frame);
     // Only an MIS bounce off a BRDF chooses a lobe; the others skip the
     // draw (a stratified one at the first hit), keeping the later ones.
@@ -530,12 +611,12 @@ fn bounce(
                 Some(d) => d.sample(m.diffuse, m.specular, at.wo_full(), choice, u),
                 None => b.sample(m.diffuse, m.specular, at.wo_full(), choice, u),
             };
-            let Some(s) = s else { return Vec3::ZERO };
+            let s = s?;
             // The BRDF's sample carries its value: no second evaluation.
             let wi = frame.to_world(s.wi);
             let cos = n.dot(wi);
             if cos <= 0.0 || s.pdf <= 0.0 {
-                return Vec3::ZERO;
+                return None;
             }
             (wi, s.pdf, s.f * cos)
         }
@@ -551,7 +632,7 @@ fn bounce(
             let wi = frame.to_world(local);
             let cos = n.dot(wi);
             if cos <= 0.0 || pdf <= 0.0 {
-                return Vec3::ZERO;
+                return None;
             }
             let f_cos = match b {
                 // The frame and view direction [`reflectance`] would build again.
@@ -567,19 +648,18 @@ fn bounce(
     if p.russian_roulette {
         q = next.max_element().min(1.0);
         if st.sampler.next_1d() >= q {
-            return Vec3::ZERO;
+            return None;
         }
     }
     let ray = Ray::new(origin, wi);
     // Past the depth limit the bounce looks for emitters alone.
     if past_limit(scene, depth + 1, p) && !scene.may_find_emission(&ray) {
-        return Vec3::ZERO;
+        return None;
     }
     if !st.spawn(next.max_element()) {
-        return Vec3::ZERO;
+        return None;
     }
-    let came = Came::Bounce { pdf, n };
-    weight * li(scene, &ray, depth + 1, next, came, p, st) / q
+    Some(Bounce { ray, weight, q, next, came: Came::Bounce { pdf, n } })
 }
 
 /// Mirror, conductor and dielectric rays, as the recursive ray tracer sends

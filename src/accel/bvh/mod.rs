@@ -355,26 +355,6 @@ impl Bvh {
         self.closest_plain::<true, L>(ray, t_max, leaf)
     }
 
-    /// [`Bvh::closest`] for a caller that has itself been compiled for AVX2
-    /// and FMA (`FUSED`, after checking [`fused_available`]) or not, so that
-    /// the traversal, and the caller's leaf test with it, inline into the
-    /// caller's own AVX2 code (see [`super::MeshAccel`]).
-    #[inline(always)]
-    pub(crate) fn closest_with<const FUSED: bool, L: ClosestLeaf>(
-        &self,
-        ray: &Ray,
-        t_max: f32,
-        leaf: L,
-    ) -> bool {
-        self.closest_plain::<FUSED, L>(ray, t_max, leaf)
-    }
-
-    /// [`Bvh::any`] as [`Bvh::closest_with`] is to [`Bvh::closest`].
-    #[inline(always)]
-    pub(crate) fn any_with<const FUSED: bool, L: AnyLeaf>(&self, ray: &Ray, t_max: f32, leaf: L) -> bool {
-        self.any_plain::<FUSED, L>(ray, t_max, leaf)
-    }
-
     #[inline(always)]
     fn closest_plain<const FUSED: bool, L: ClosestLeaf>(&self, ray: &Ray, t_max: f32, leaf: L) -> bool {
         self.closest_prepared(&Traversal::new::<FUSED>(ray), t_max, leaf)

@@ -17,7 +17,7 @@ use super::node::{leaf_range, NodeTest, RayPre, EMPTY, LEAF};
 use super::{AnyLeaf, Bvh, ClosestLeaf, Traversal, STACK, WIDTH};
 
 impl Bvh {
-    /// [`Bvh::closest_with`] for a ray already prepared (see [`Traversal`]).
+    /// [`Bvh::closest`] for a ray already prepared (see [`Traversal`]).
     #[inline(always)]
     pub(crate) fn closest_prepared<L: ClosestLeaf>(&self, tr: &Traversal, t_max: f32, mut leaf: L) -> bool {
         let test = tr.test();
@@ -177,7 +177,7 @@ impl Bvh {
         }
     }
 
-    /// [`Bvh::any_with`] for a ray already prepared (see [`Traversal`]).
+    /// [`Bvh::any`] for a ray already prepared (see [`Traversal`]).
     #[inline(always)]
     pub(crate) fn any_prepared<L: AnyLeaf>(&self, tr: &Traversal, t_max: f32, mut leaf: L) -> bool {
         let test = tr.test();

@@ -200,7 +200,9 @@ impl Scene {
             warnings,
             emitting_bounds: None,
             simd: simd_available(),
+            axes_by_table: false,
         };
+        scene.axes_by_table = scene.meshes.iter().all(|m| m.accel().bvh().node_count() <= 1);
         scene.add_shaded_lights();
         scene.emitting_bounds = scene.emitting_boxes(|p| prim_bounds(p, &scene.meshes, &scene.ellipsoids));
         let bounds = scene.tlas.bounds();

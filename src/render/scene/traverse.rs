@@ -233,7 +233,7 @@ impl<const AVX: bool> ClosestLeaf for TopClosest<'_, AVX> {
             match p.geom {
                 Geom::Mesh(m) => {
                     let mut own = None;
-                    let wr = p.watertight(&mut self.world, self.ray, local, &mut own);
+                    let wr = p.watertight(&mut self.world, self.ray, local, &mut own, scene.axes_by_table);
                     let pre = p.in_world().then_some(self.tr);
                     let accel = scene.meshes[m as usize].accel();
                     if let Some(h) = accel.intersect_split::<AVX>(local, wr, pre, t_min, *t_max, self.cull) {
@@ -295,7 +295,7 @@ impl<const AVX: bool> AnyLeaf for TopAny<'_, AVX> {
             let blocked = match p.geom {
                 Geom::Mesh(m) => {
                     let mut own = None;
-                    let wr = p.watertight(&mut self.world, self.ray, local, &mut own);
+                    let wr = p.watertight(&mut self.world, self.ray, local, &mut own, scene.axes_by_table);
                     let pre = p.in_world().then_some(self.tr);
                     scene.meshes[m as usize].accel().occluded_split::<AVX>(local, wr, pre, t_min, t_max)
                 }
