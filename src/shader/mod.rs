@@ -80,11 +80,11 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
-pub(crate) use entry::{Entry, ENTRIES};
 pub use entry::MaterialOutputs;
+pub(crate) use entry::{Entry, ENTRIES};
 pub use error::{ShaderError, ShaderErrorKind};
-pub(crate) use input::ShadePoint;
 pub use input::ShadeInput;
+pub(crate) use input::ShadePoint;
 pub use modules::{search_path, set_library_dirs, MAX_MODULE_BYTES};
 
 /// The pixel `--debug-pixel` names, packed (`u64::MAX`: none).
