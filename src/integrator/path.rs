@@ -332,6 +332,8 @@ fn shade(
                 // Nothing follows the bounce at this vertex (see [`li`]).
                 Some(b) if defer && matches!(m.kind, Specular::None) => return Shaded::Bounce(color, b),
                 Some(b) => color += b.weight * li(scene, &b.ray, depth + 1, b.next, b.came, p, st) / b.q,
+                // Adding zero as the recursion did: it turns a -0.0 channel
+                // into +0.0, so the output keeps its bits.
                 None => color += Vec3::ZERO,
             }
         }
