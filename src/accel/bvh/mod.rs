@@ -44,7 +44,7 @@ mod walk;
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) use node::fused_available;
-use node::{decode, leaf_range, NodeTest, RayPre, EMPTY, LEAF};
+use node::{decode, leaf_range, NodeTest, RayPre, SignedRoot, EMPTY, LEAF};
 pub use node::{node_test_isa, Child, Node8, WIDTH};
 
 /// SAH cost of testing one top-level object, against one node visit (see
@@ -138,6 +138,8 @@ pub struct Bvh {
     depth: usize,
     /// Levels of the binary tree it came from.
     binary_depth: usize,
+    /// The root reordered by sign ([`SignedRoot`]) when it is the only node.
+    signed_root: Option<Box<SignedRoot>>,
 }
 
 /// Collapses the binary subtree at `i` into wide nodes appended to `out`;
@@ -228,6 +230,7 @@ impl Bvh {
                 prim_order: Vec::new(),
                 depth: 0,
                 binary_depth: 0,
+                signed_root: None,
             };
         };
         let bounds = b2.get(0).bounds();
@@ -237,7 +240,11 @@ impl Bvh {
         let (root, depth) = collapse(&b2, 0, &mut nodes);
         drop(b2);
         nodes.shrink_to_fit();
-        Bvh { nodes, root, bounds, prim_order, depth: depth + 1, binary_depth }
+        let signed_root = match &nodes[..] {
+            [n] => Some(SignedRoot::new(n)),
+            _ => None,
+        };
+        Bvh { nodes, root, bounds, prim_order, depth: depth + 1, binary_depth, signed_root }
     }
 
     /// Replaces every leaf's range, in depth-first order, by `f(prims)`,
@@ -265,6 +272,9 @@ impl Bvh {
                 for c in &mut n.child {
                     *c = enc(*c);
                 }
+            }
+            if let Some(r) = &mut self.signed_root {
+                r.child = self.nodes[0].child;
             }
         }
     }
@@ -324,7 +334,9 @@ impl Bvh {
 
     /// Heap memory used by the tree.
     pub fn memory_bytes(&self) -> usize {
-        self.nodes.capacity() * size_of::<Node8>() + self.prim_order.capacity() * size_of::<u32>()
+        self.nodes.capacity() * size_of::<Node8>()
+            + self.prim_order.capacity() * size_of::<u32>()
+            + self.signed_root.as_ref().map_or(0, |_| size_of::<SignedRoot>())
     }
 
     /// Closest-hit traversal. `leaf(range, &mut t_max)` must test the

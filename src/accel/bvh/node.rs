@@ -83,6 +83,32 @@ impl Node8 {
     }
 }
 
+/// A one-node tree's root with its bound rows reordered for each of the
+/// eight direction-sign masks ([`RayPre::signs`]): the near planes of x, y
+/// and z, then the far planes. The fused test then reads the rows at fixed
+/// offsets instead of looking up six offsets per query (every query of a
+/// small scene's top level tests this node and no other). The same rows, so
+/// the same operations on the same values.
+#[derive(Clone, Debug, PartialEq)]
+#[repr(C, align(64))]
+pub(super) struct SignedRoot {
+    rows: [[[f32; WIDTH]; 6]; 8],
+    /// The root's children ([`Node8::child`]).
+    pub(super) child: [u32; WIDTH],
+}
+
+impl SignedRoot {
+    pub(super) fn new(n: &Node8) -> Box<SignedRoot> {
+        let rows = std::array::from_fn(|s| {
+            std::array::from_fn(|i| {
+                let near = 2 * (i % 3) + (s >> (i % 3) & 1);
+                n.bounds[if i < 3 { near } else { near ^ 1 }]
+            })
+        });
+        Box::new(SignedRoot { rows, child: n.child })
+    }
+}
+
 /// A child slot of a [`Node8`].
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Child {
@@ -272,6 +298,24 @@ impl NodeTest {
             NodeTest::Fused(f) => unsafe { f.hit(n, t_max) },
         }
     }
+
+    /// [`NodeTest::hit`] of the root of a one-node tree (`nodes`), whose
+    /// rows `root` holds reordered by sign.
+    #[inline(always)]
+    pub(super) fn hit_root(
+        &self,
+        r: &RayPre,
+        nodes: &[Node8],
+        root: &SignedRoot,
+        t_max: f32,
+    ) -> ([f32; WIDTH], u32) {
+        match self {
+            NodeTest::Plain => r.hit(&nodes[0], t_max),
+            // SAFETY: a `FusedRay` exists only where the CPU has AVX2 and FMA.
+            #[cfg(target_arch = "x86_64")]
+            NodeTest::Fused(f) => unsafe { f.hit_rows(&root.rows[f.signs & 7], t_max) },
+        }
+    }
 }
 
 /// The fused test's per-ray constants, broadcast to eight lanes once per
@@ -289,6 +333,8 @@ pub(super) struct FusedRay {
     /// from a node's start: an entry of [`ROWS`], chosen by a table lookup
     /// rather than computed row by row.
     rows: &'static [u8; 6],
+    /// [`RayPre::signs`], to pick a [`SignedRoot`]'s rows.
+    signs: usize,
 }
 
 /// [`FusedRay::rows`] for each [`RayPre::signs`].
@@ -322,6 +368,7 @@ impl FusedRay {
             c_near: [s(cn.x), s(cn.y), s(cn.z)],
             c_far: [s(cf.x), s(cf.y), s(cf.z)],
             rows: &ROWS[(r.signs & 7) as usize],
+            signs: r.signs as usize,
         }
     }
 
@@ -355,6 +402,35 @@ impl FusedRay {
             _mm256_min_ps(plane(far[0], 0, cf[0]), plane(far[1], 1, cf[1])),
             plane(far[2], 2, cf[2]),
         );
+        let tf = _mm256_min_ps(_mm256_mul_ps(tf, _mm256_set1_ps(SLAB_EXPAND)), _mm256_set1_ps(t_max));
+        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
+        let mut out = [0.0f32; WIDTH];
+        _mm256_storeu_ps(out.as_mut_ptr(), tn);
+        (out, mask)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl FusedRay {
+    /// [`FusedRay::hit`] on rows already in near-then-far order (a
+    /// [`SignedRoot`]'s for this ray's signs): the same planes, fused with
+    /// the same constants, in the same order.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 and FMA.
+    #[inline(always)]
+    unsafe fn hit_rows(&self, rows: &[[f32; WIDTH]; 6], t_max: f32) -> ([f32; WIDTH], u32) {
+        use std::arch::x86_64::*;
+        // SAFETY: each row is 32-byte aligned (a `SignedRoot` is 64-byte
+        // aligned, a row 32 bytes).
+        let row = |i: usize| _mm256_load_ps(rows[i].as_ptr());
+        let (inv, cn, cf) = (&self.inv, &self.c_near, &self.c_far);
+        let plane = |i: usize, a: usize, c: __m256| _mm256_fmadd_ps(row(i), inv[a], c);
+        let tn = _mm256_max_ps(
+            _mm256_max_ps(plane(0, 0, cn[0]), plane(1, 1, cn[1])),
+            _mm256_max_ps(plane(2, 2, cn[2]), _mm256_setzero_ps()),
+        );
+        let tf = _mm256_min_ps(_mm256_min_ps(plane(3, 0, cf[0]), plane(4, 1, cf[1])), plane(5, 2, cf[2]));
         let tf = _mm256_min_ps(_mm256_mul_ps(tf, _mm256_set1_ps(SLAB_EXPAND)), _mm256_set1_ps(t_max));
         let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
         let mut out = [0.0f32; WIDTH];

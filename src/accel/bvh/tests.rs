@@ -337,6 +337,11 @@ fn fused_node_test_is_conservative_and_traversals_agree() {
             let (pre_tn, pre) = r.node_test::<true>().hit(&r, n, t_max);
             assert_eq!(pre, fused, "ray {k}: the traversal's fused test disagrees");
             assert_eq!(pre_tn.map(f32::to_bits), fused_tn.map(f32::to_bits), "ray {k}");
+            // The one-node root's form (rows reordered by sign) too.
+            let root = super::node::SignedRoot::new(n);
+            let (root_tn, by_root) =
+                r.node_test::<true>().hit_root(&r, std::slice::from_ref(n), &root, t_max);
+            assert_eq!((by_root, root_tn.map(f32::to_bits)), (fused, fused_tn.map(f32::to_bits)), "ray {k}");
             assert_eq!(fused & plain, plain, "ray {k}: the fused test culled a box the plain one enters");
             plain_hits += plain.count_ones() as usize;
             extra += (fused & !plain).count_ones() as usize;

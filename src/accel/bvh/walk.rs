@@ -61,12 +61,12 @@ impl Bvh {
         if cur & LEAF != 0 && (cur == EMPTY || !r.hit_box(&self.bounds, t_max)) {
             return Some(false);
         }
-        let [root] = &self.nodes[..] else { return None };
+        let root = self.signed_root.as_deref()?;
         // One node whose children are all leaves (the top level of a small
         // scene): its hit leaves nearest first, the order the stack walk
         // would give (equal distances: the higher slot first), without the
         // stack or the sort.
-        let (tn, mut mask) = test.hit(r, root, t_max);
+        let (tn, mut mask) = test.hit_root(r, &self.nodes, root, t_max);
         let mut hit = false;
         while mask != 0 {
             let mut k = mask.trailing_zeros() as usize;
@@ -207,9 +207,9 @@ impl Bvh {
         if cur & LEAF != 0 && (cur == EMPTY || !r.hit_box(&self.bounds, t_max)) {
             return Some(false);
         }
-        let [root] = &self.nodes[..] else { return None };
+        let root = self.signed_root.as_deref()?;
         // One node whose children are all leaves: no stack; any order serves.
-        let (_, mut mask) = test.hit(r, root, t_max);
+        let (_, mut mask) = test.hit_root(r, &self.nodes, root, t_max);
         while mask != 0 {
             let c = root.child[mask.trailing_zeros() as usize];
             mask &= mask - 1;
