@@ -353,9 +353,33 @@ fn shade(
 }
 
 /// One sample of every light, shadowed; with MIS each weighed against the
-/// chance that the BSDF would have drawn its direction.
+/// chance that the BSDF would have drawn its direction. Only picks the
+/// version: both take its arguments as they are, so each is a jump (the
+/// choice made in `li` instead cost pd5, which samples no light, ~17
+/// instructions a path in `li`'s code).
 #[allow(clippy::too_many_arguments)]
+#[inline(never)]
 fn next_event(
+    scene: &Scene,
+    m: &Material,
+    hit: &Hit,
+    at: &At,
+    origin: Vec3,
+    depth: u32,
+    p: &PathParams,
+    st: &mut PathState,
+) -> Vec3 {
+    if !p.mis && at.f.is_some() {
+        next_event_diffuse(scene, m, hit, at, origin, depth, p, st)
+    } else {
+        next_event_any(scene, m, hit, at, origin, depth, p, st)
+    }
+}
+
+/// [`next_event`] at any vertex.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn next_event_any(
     scene: &Scene,
     m: &Material,
     hit: &Hit,
@@ -390,6 +414,41 @@ fn next_event(
         let w =
             if p.mis && hittable(light) { power_heuristic(ls.pdf / scale, bsdf_pdf) * scale } else { scale };
         color += f * (tr * ls.e) * w;
+    }
+    color
+}
+
+/// [`next_event`] for the course's variant at a vertex whose BRDF value is
+/// the same for every light direction above it (`at.f`): each light's term
+/// is `f cos · (tr · E)`, the weight exactly 1. Apart, because LLVM hoisted
+/// the set-up of every case of [`light_terms`] (the frame's rows, the whole
+/// view direction) out of [`next_event_any`]'s light loop, ~160
+/// instructions a call that this vertex never uses.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn next_event_diffuse(
+    scene: &Scene,
+    m: &Material,
+    hit: &Hit,
+    at: &At,
+    origin: Vec3,
+    depth: u32,
+    p: &PathParams,
+    st: &mut PathState,
+) -> Vec3 {
+    let f = at.f.unwrap_or_default();
+    let mut color = Vec3::ZERO;
+    for light in &scene.lights {
+        if let Light::Shaded(l) = light {
+            color += shaded_sample(scene, l, m, hit, at, origin, depth, 1.0, p, st);
+            continue;
+        }
+        let Some((ls, cos, tr)) = light_reaching_inline(scene, light, origin, hit.p, at.n, st) else {
+            continue;
+        };
+        // [`brdf_cos`]'s `f cos`; [`next_event`]'s weight, 1, leaves the
+        // product's bits as they are.
+        color += f * cos * (tr * ls.e);
     }
     color
 }
