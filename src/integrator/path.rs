@@ -30,7 +30,7 @@
 use std::mem::MaybeUninit;
 
 use super::whitted::{glossy, reflect, reflectance};
-use super::{is_black, light_reaching_inline, surface_at, PathState, Surface};
+use super::{is_black, light_reaching_inline, shadow_reach, surface_at, PathState, Surface};
 use crate::bsdf::fresnel;
 use crate::bsdf::sampling::{power_cosine, power_cosine_pdf};
 use crate::bsdf::{diffuse_pdf, Brdf, Frame};
@@ -369,7 +369,8 @@ fn next_event(
     p: &PathParams,
     st: &mut PathState,
 ) -> Vec3 {
-    if !p.mis && at.f.is_some() {
+    let vols = &scene.volumes;
+    if !p.mis && at.f.is_some() && vols.surfaces.is_empty() && vols.media.is_empty() {
         next_event_diffuse(scene, m, hit, at, origin, depth, p, st)
     } else {
         next_event_any(scene, m, hit, at, origin, depth, p, st)
@@ -419,11 +420,12 @@ fn next_event_any(
 }
 
 /// [`next_event`] for the course's variant at a vertex whose BRDF value is
-/// the same for every light direction above it (`at.f`): each light's term
-/// is `f cos · (tr · E)`, the weight exactly 1. Apart, because LLVM hoisted
-/// the set-up of every case of [`light_terms`] (the frame's rows, the whole
-/// view direction) out of [`next_event_any`]'s light loop, ~160
-/// instructions a call that this vertex never uses.
+/// the same for every light direction above it (`at.f`), in a scene without
+/// volumes: each light's term is `f cos · E`, the weight and the shadow
+/// ray's transmittance exactly 1 (multiplying by them kept the bits).
+/// Apart, because LLVM hoisted the set-up of every case of [`light_terms`]
+/// (the frame's rows, the whole view direction) out of [`next_event_any`]'s
+/// light loop, ~160 instructions a call that this vertex never uses.
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
 fn next_event_diffuse(
@@ -443,12 +445,21 @@ fn next_event_diffuse(
             color += shaded_sample(scene, l, m, hit, at, origin, depth, 1.0, p, st);
             continue;
         }
-        let Some((ls, cos, tr)) = light_reaching_inline(scene, light, origin, hit.p, at.n, st) else {
+        // [`light_reaching_inline`] without media: the shadow ray passes or not.
+        let Some(ls) = light.sample(origin, hit.p, Some(at.n), st.time, &mut st.sampler) else {
             continue;
         };
-        // [`brdf_cos`]'s `f cos`; [`next_event`]'s weight, 1, leaves the
-        // product's bits as they are.
-        color += f * cos * (tr * ls.e);
+        let cos = at.n.dot(ls.wi);
+        if cos <= 0.0 || is_black(ls.e) {
+            continue;
+        }
+        let t_max = shadow_reach(scene, &ls);
+        st.stats.shadow += 1;
+        if scene.occluded(&Ray::new(origin, ls.wi), t_max, st.time) {
+            continue;
+        }
+        // [`brdf_cos`]'s `f cos`.
+        color += f * cos * ls.e;
     }
     color
 }
