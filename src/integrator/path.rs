@@ -446,7 +446,7 @@ fn next_event_diffuse(
             continue;
         }
         // [`light_reaching_inline`] without media: the shadow ray passes or not.
-        let Some(ls) = light.sample(origin, hit.p, Some(at.n), st.time, &mut st.sampler) else {
+        let Some(ls) = light.sample_at(origin, hit.p, at.n, st.time, &mut st.sampler) else {
             continue;
         };
         let cos = at.n.dot(ls.wi);
