@@ -355,7 +355,7 @@ fn shade(
 /// One sample of every light, shadowed; with MIS each weighed against the
 /// chance that the BSDF would have drawn its direction. Only picks the
 /// version: both take its arguments as they are, so each is a jump (the
-/// choice made in `li` instead cost pd5, which samples no light, ~17
+/// choice made in `li` instead cost pd5, which samples no light, ~19
 /// instructions a path in `li`'s code).
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
