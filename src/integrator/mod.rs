@@ -149,16 +149,25 @@ pub(crate) fn light_reaching_inline(
     if cos <= 0.0 || is_black(ls.e) {
         return None;
     }
-    // A point source's shadow ray reaches a little past it, so a light lying
-    // exactly on a surface (hw2 mirror_room puts one in the ceiling plane) is
-    // blocked by it consistently, as in the references, not by per-pixel
-    // rounding. An area light's stops short of its own plane: it is an
-    // imaginary square, not geometry, and a surface it lies on must not
-    // shadow it.
-    let eps = scene.shadow_epsilon;
-    let t_max = if ls.point_source { ls.dist + eps } else { ls.dist - eps };
+    let t_max = shadow_reach(scene, &ls);
     let tr = crate::render::volumes::shadow(scene, &Ray::new(origin, ls.wi), t_max, st);
     (!is_black(tr)).then_some((ls, cos, tr))
+}
+
+/// How far the shadow ray of the light sample `ls` reaches. A point
+/// source's reaches a little past it, so a light lying exactly on a surface
+/// (hw2 mirror_room puts one in the ceiling plane) is blocked by it
+/// consistently, as in the references, not by per-pixel rounding. An area
+/// light's stops short of its own plane: it is an imaginary square, not
+/// geometry, and a surface it lies on must not shadow it.
+#[inline(always)]
+pub(crate) fn shadow_reach(scene: &Scene, ls: &LightSample) -> f32 {
+    let eps = scene.shadow_epsilon;
+    if ls.point_source {
+        ls.dist + eps
+    } else {
+        ls.dist - eps
+    }
 }
 
 /// `v == Vec3::ZERO` without the branches of glam's derived `PartialEq`,

@@ -30,7 +30,7 @@
 use std::mem::MaybeUninit;
 
 use super::whitted::{glossy, reflect, reflectance};
-use super::{is_black, light_reaching_inline, surface_at, PathState, Surface};
+use super::{is_black, light_reaching_inline, shadow_reach, surface_at, PathState, Surface};
 use crate::bsdf::fresnel;
 use crate::bsdf::sampling::{power_cosine, power_cosine_pdf};
 use crate::bsdf::{diffuse_pdf, Brdf, Frame};
@@ -353,9 +353,34 @@ fn shade(
 }
 
 /// One sample of every light, shadowed; with MIS each weighed against the
-/// chance that the BSDF would have drawn its direction.
+/// chance that the BSDF would have drawn its direction. Only picks the
+/// version: both take its arguments as they are, so each is a jump (the
+/// choice made in `li` instead cost pd5, which samples no light, ~19
+/// instructions a path in `li`'s code).
 #[allow(clippy::too_many_arguments)]
+#[inline(never)]
 fn next_event(
+    scene: &Scene,
+    m: &Material,
+    hit: &Hit,
+    at: &At,
+    origin: Vec3,
+    depth: u32,
+    p: &PathParams,
+    st: &mut PathState,
+) -> Vec3 {
+    let vols = &scene.volumes;
+    if !p.mis && at.f.is_some() && vols.surfaces.is_empty() && vols.media.is_empty() {
+        next_event_diffuse(scene, m, hit, at, origin, depth, p, st)
+    } else {
+        next_event_any(scene, m, hit, at, origin, depth, p, st)
+    }
+}
+
+/// [`next_event`] at any vertex.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn next_event_any(
     scene: &Scene,
     m: &Material,
     hit: &Hit,
@@ -390,6 +415,51 @@ fn next_event(
         let w =
             if p.mis && hittable(light) { power_heuristic(ls.pdf / scale, bsdf_pdf) * scale } else { scale };
         color += f * (tr * ls.e) * w;
+    }
+    color
+}
+
+/// [`next_event`] for the course's variant at a vertex whose BRDF value is
+/// the same for every light direction above it (`at.f`), in a scene without
+/// volumes: each light's term is `f cos · E`, the weight and the shadow
+/// ray's transmittance exactly 1 (multiplying by them kept the bits).
+/// Apart, because LLVM hoisted the set-up of every case of [`light_terms`]
+/// (the frame's rows, the whole view direction) out of [`next_event_any`]'s
+/// light loop, ~160 instructions a call that this vertex never uses.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn next_event_diffuse(
+    scene: &Scene,
+    m: &Material,
+    hit: &Hit,
+    at: &At,
+    origin: Vec3,
+    depth: u32,
+    p: &PathParams,
+    st: &mut PathState,
+) -> Vec3 {
+    let f = at.f.unwrap_or_default();
+    let mut color = Vec3::ZERO;
+    for light in &scene.lights {
+        if let Light::Shaded(l) = light {
+            color += shaded_sample(scene, l, m, hit, at, origin, depth, 1.0, p, st);
+            continue;
+        }
+        // [`light_reaching_inline`] without media: the shadow ray passes or not.
+        let Some(ls) = light.sample_at(origin, hit.p, at.n, st.time, &mut st.sampler) else {
+            continue;
+        };
+        let cos = at.n.dot(ls.wi);
+        if cos <= 0.0 || is_black(ls.e) {
+            continue;
+        }
+        let t_max = shadow_reach(scene, &ls);
+        st.stats.shadow += 1;
+        if scene.occluded(&Ray::new(origin, ls.wi), t_max, st.time) {
+            continue;
+        }
+        // [`brdf_cos`]'s `f cos`.
+        color += f * cos * ls.e;
     }
     color
 }

@@ -40,6 +40,12 @@ pub struct LightMesh {
     tris: Vec<[Vec3; 4]>,
     /// Running sums of the triangles' areas, ending at the total.
     cdf: Vec<f32>,
+    /// Each triangle's running sums before and after it, `cdf[i - 1]` (0
+    /// for the first) and `cdf[i]`: read with its corners, without the
+    /// bounds tests and the first triangle's branch of `cdf`.
+    spans: Vec<(f32, f32)>,
+    /// The total area, `cdf`'s last sum (never empty).
+    total: f32,
     /// For a light of at most [`SCAN_TRIANGLES`], `cdf` in blocks of four,
     /// the last padded with `+∞`: counted a block at a time in vector lanes
     /// (one element at a time, ten triangles cost ~60 instructions a light
@@ -80,13 +86,14 @@ impl LightMesh {
         } else {
             Vec::new()
         };
-        (total > 0.0).then_some(LightMesh { tris, cdf, scan, radiance, motion: Vec3::ZERO })
+        let spans = cdf.iter().scan(0.0, |lo, &hi| Some((std::mem::replace(lo, hi), hi))).collect();
+        (total > 0.0).then_some(LightMesh { tris, cdf, spans, scan, total, radiance, motion: Vec3::ZERO })
     }
 
     /// Total area.
     #[inline]
     pub fn area(&self) -> f32 {
-        self.cdf.last().copied().unwrap_or(0.0)
+        self.total
     }
 
     /// A point drawn uniformly by area from `(u1, u2)`, and its unit normal.
@@ -109,9 +116,9 @@ impl LightMesh {
             self.cdf.partition_point(|&c| c <= target)
         };
         let i = i.min(self.tris.len() - 1);
-        let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
+        let (lo, hi) = self.spans[i];
         // The part of u1 left over inside the chosen triangle is uniform again.
-        let u1 = ((target - lo) / (self.cdf[i] - lo)).clamp(0.0, 1.0);
+        let u1 = ((target - lo) / (hi - lo)).clamp(0.0, 1.0);
         let [a, e1, e2, n] = self.tris[i];
         let s = u1.sqrt();
         let (b1, b2) = (1.0 - s, u2 * s);

@@ -60,6 +60,9 @@ pub struct PixelSampler {
     /// `memo` (not null where `batch_end` is not 0).
     batch_end: u32,
     memo: batch::Handle,
+    /// [`batch::owner`] of this pixel: a memo entry's hash and count
+    /// compared as one word.
+    owner: u64,
 }
 
 impl PixelSampler {
@@ -83,6 +86,7 @@ impl PixelSampler {
             stratified: u32::MAX,
             batch_end: 0,
             memo: std::ptr::null(),
+            owner: batch::owner(pixel_hash, count),
         }
     }
 

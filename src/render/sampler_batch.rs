@@ -39,8 +39,8 @@ const MAX_COUNT: u32 = 1 << 20;
 /// `first..first + len` of a pixel.
 #[derive(Clone, Copy)]
 struct Tag {
-    pixel: u32,
-    count: u32,
+    /// The pixel's hash and count ([`owner`]), compared at once.
+    owner: u64,
     /// `2·dim + (1 if 2D)`.
     key: u32,
     first: u32,
@@ -57,7 +57,7 @@ pub(super) struct Memo {
     values: [[[f32; 2]; LANES]; SLOTS],
 }
 
-const NO_TAG: Tag = Tag { pixel: 0, count: 0, key: 0, first: 0, len: 0 };
+const NO_TAG: Tag = Tag { owner: 0, key: 0, first: 0, len: 0 };
 
 thread_local! {
     static MEMO: UnsafeCell<Memo> = const {
@@ -88,6 +88,13 @@ pub(super) fn memo(count: u32) -> Handle {
 /// A pointer to a thread's memo.
 pub(super) type Handle = *const UnsafeCell<Memo>;
 
+/// The pixel hash and sample count of a memo entry in one word: a pixel's
+/// samples share it ([`PixelSampler::owner`]).
+#[inline(always)]
+pub(super) fn owner(pixel_hash: u32, count: u32) -> u64 {
+    (u64::from(count) << 32) | u64::from(pixel_hash)
+}
+
 /// The memo key of a dimension: `2·dim + (1 if 2D)`.
 #[inline(always)]
 fn key(dim: u32, two_d: bool) -> u32 {
@@ -108,7 +115,7 @@ pub(super) fn hit(s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> {
     let memo = unsafe { &*(*s.memo).get() };
     let tag = &memo.tags[slot];
     let off = s.index.wrapping_sub(tag.first);
-    if tag.pixel == s.pixel_hash && tag.count == s.n.len && tag.key == key && off < tag.len {
+    if tag.owner == s.owner && tag.key == key && off < tag.len {
         return Some(memo.values[slot][off as usize % LANES]);
     }
     None
@@ -126,10 +133,10 @@ pub(super) fn miss(s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> 
     // writes the values it is given), so it is exclusive.
     let memo = unsafe { &mut *(*s.memo).get() };
     let tag = &mut memo.tags[slot];
-    let this_pixel = tag.pixel == s.pixel_hash && tag.count == s.n.len;
+    let this_pixel = tag.owner == s.owner;
     if tag.key != key || !(this_pixel || memo.hot[slot]) {
         memo.hot[slot] = false;
-        *tag = Tag { pixel: s.pixel_hash, count: s.n.len, key, first: s.index, len: 0 };
+        *tag = Tag { owner: s.owner, key, first: s.index, len: 0 };
         return None;
     }
     fill(memo, slot, key, s, dim, two_d)
@@ -141,7 +148,7 @@ pub(super) fn miss(s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> 
 #[inline]
 fn fill(memo: &mut Memo, slot: usize, key: u32, s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> {
     let len = (s.batch_end - s.index).min(LANES as u32);
-    memo.tags[slot] = Tag { pixel: s.pixel_hash, count: s.n.len, key, first: s.index, len: 0 };
+    memo.tags[slot] = Tag { owner: s.owner, key, first: s.index, len: 0 };
     if len < 2 || cfg!(not(target_arch = "x86_64")) {
         return None;
     }
