@@ -1,0 +1,354 @@
+//! Monte Carlo path tracing (hw7): every surface sends one more ray in a
+//! random direction, so light arrives after any number of bounces.
+//!
+//! At a hit the estimate is
+//!
+//! `L = Le + Σ_lights f · cos · L_l / p_l  +  f · cos · L(ω) / p(ω)`
+//!
+//! with one light sample per light (next-event estimation) and one bounce
+//! `ω`. The course's `<RendererParams>` words choose the variant:
+//!
+//! | word | effect |
+//! |---|---|
+//! | (none) | bounces uniform over the hemisphere, `p = 1/2π`; light only where a bounce hits an emitter |
+//! | `ImportanceSampling` | cosine-weighted bounces, `p = cos/π` |
+//! | `NextEventEstimation` | every light sampled at every hit; an emitter a bounce then hits adds nothing (it was counted already) |
+//! | `RussianRoulette` | no depth limit: a path goes on with probability `q = min(1, max(throughput))` and its estimate is divided by `q` |
+//! | `MIS` (luster) | bounces drawn from the BSDF; every light sampled per hit in a scene with at most four (`AllLights`: always), else one, chosen by power ([`crate::light::pick`]; `OneLight`: always), its estimate divided by the chance of choosing it; light and bounce samples both count, weighed by the power heuristic `p_a² / (p_a² + p_b²)` with the light's density times the chance of choosing it; the environment light is sampled and hit alike |
+//!
+//! Without `RussianRoulette` a path ends after `MaxRecursionDepth` bounces,
+//! as the course's reflections do. Mirrors, conductors and dielectrics are
+//! followed as in the recursive ray tracer (a dielectric splits into its
+//! reflected and refracted rays, Beer's law inside); light seen through such
+//! a perfectly specular bounce always counts in full, since no light sample
+//! can reach through it. Point, spot and directional lights can only be
+//! sampled (nothing hits them), so only next-event estimation or MIS sees
+//! them, as in the course's images; the course's square area lights are
+//! likewise sampled only. The ambient term is left out: paths bring the
+//! light that ambient light stood in for.
+
+use std::mem::MaybeUninit;
+
+use super::{is_black, surface_at, PathState, Surface};
+use crate::light::Light;
+use crate::material::{Material, Specular};
+use crate::math::{Ray, Vec3};
+use crate::render::scene::{Hit, Scene};
+use crate::render::volumes;
+use crate::scene::description::LightSamples;
+
+mod next_event;
+mod vertex;
+use next_event::{hit_weight, next_event, power_heuristic};
+use vertex::{bounce, specular, At};
+
+/// Bounces after which even Russian roulette stops a path (the throughput of
+/// a path that long is far below anything visible).
+pub const MAX_BOUNCES: u32 = 64;
+
+/// The path tracer's switches (the course's `<RendererParams>` words).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PathParams {
+    /// Sample every light at every hit.
+    pub next_event: bool,
+    /// Cosine-weighted bounces instead of uniform ones.
+    pub importance: bool,
+    /// End paths by their throughput instead of the depth.
+    pub russian_roulette: bool,
+    /// Multiple importance sampling of light and BSDF samples.
+    pub mis: bool,
+    /// Under MIS, how many lights a hit samples.
+    pub lights: LightSamples,
+}
+
+/// Under MIS, a scene with at most this many lights has every one sampled
+/// at every hit ([`LightSamples::Auto`]); with more, one is chosen by power.
+/// One light sample per hit leaves the noise of the choice: on the Cornell
+/// box of `tools/mitsuba_cornell_check.py` (a point light and a light box)
+/// sampling both removes 57% of the variance for 20% more time (docs/path-tracing.md,
+/// "Lights per hit"). Each light adds a shadow ray to every hit, so the
+/// count is kept small.
+const EVERY_LIGHT_UP_TO: usize = 4;
+
+/// Whether MIS samples every light at a hit rather than one chosen by power.
+#[inline]
+fn every_light(scene: &Scene, p: &PathParams) -> bool {
+    match p.lights {
+        LightSamples::All => true,
+        LightSamples::One => scene.lights.len() <= 1,
+        LightSamples::Auto => scene.lights.len() <= EVERY_LIGHT_UP_TO,
+    }
+}
+
+/// The chance that MIS's light sampling takes a light at a hit, whose
+/// chance of being chosen by power is `by_power`: 1 where every light is
+/// sampled.
+#[inline]
+fn pick_chance(scene: &Scene, p: &PathParams, by_power: f32) -> f32 {
+    if every_light(scene, p) {
+        1.0
+    } else {
+        by_power
+    }
+}
+
+/// How the ray being traced left its last surface, which decides how much an
+/// emitter it hits counts.
+#[derive(Clone, Copy, Debug)]
+enum Came {
+    /// From the camera or a perfectly specular bounce: in full.
+    Direct,
+    /// From a random bounce whose density was `pdf` (solid angle), off a
+    /// surface whose facing shading normal was `n` (the normal the light
+    /// samples there were drawn for).
+    Bounce { pdf: f32, n: Vec3 },
+}
+
+/// Sampler calls of the first hit drawn from stratified patterns, after
+/// the camera's (the light choice, the light sample, the bounce's lobe
+/// choice and direction; see [`crate::render::sampler`]); deeper bounces
+/// draw independent uniforms.
+const STRATIFIED_FIRST_HIT: u32 = 4;
+
+/// Radiance arriving along the camera ray `ray`.
+pub fn radiance(scene: &Scene, ray: &Ray, p: &PathParams, st: &mut PathState) -> Vec3 {
+    // Sampling every light, the first hit draws once per light that draws,
+    // then the lobe and the direction.
+    let first_hit = if p.mis && scene.lights.len() > 1 && every_light(scene, p) {
+        2 + scene.lights.iter().filter(|l| l.draws()).count() as u32
+    } else {
+        STRATIFIED_FIRST_HIT
+    };
+    st.sampler.stratify_first(st.sampler.calls() + first_hit);
+    li(scene, ray, 0, Vec3::ONE, Came::Direct, p, st)
+}
+
+/// Radiance along `ray`, which is bounce `depth` of a path of throughput
+/// `beta` so far.
+///
+/// A vertex whose bounce is the last thing it adds (no specular part, no
+/// media: most vertices) continues the loop with the bounce's ray instead of
+/// recursing: its colour, weight and `q` wait in `pending`, and once the path
+/// ends they are folded back deepest first as `c + w · L / q`, the
+/// recursion's operations in its order, so the same bits. A recursive call
+/// cost each vertex a prologue, an epilogue and its arguments through the
+/// stack. Other vertices, and a path longer than `pending`, recurse.
+fn li(
+    scene: &Scene,
+    ray: &Ray,
+    depth: u32,
+    beta: Vec3,
+    came: Came,
+    p: &PathParams,
+    st: &mut PathState,
+) -> Vec3 {
+    let media = !scene.volumes.media.is_empty();
+    let entry = st.travelled;
+    let mut pending = [MaybeUninit::<Pending>::uninit(); DEFERRED];
+    let mut n = 0;
+    let (mut ray, mut depth, mut beta, mut came) = (*ray, depth, beta, came);
+    let mut color = loop {
+        let hit = volumes::trace(scene, &ray, depth == 0, st);
+        // Borrowed in place: moving the hit out of the slot `trace` filled
+        // copied it in wide loads that waited on its narrow stores.
+        let (t, color) = match &hit {
+            Some(hit) => {
+                let before = st.travelled;
+                st.travelled += hit.t;
+                let defer = !media && n < DEFERRED;
+                match shade(scene, &ray, hit, depth, beta, came, p, defer, st) {
+                    Shaded::Done(c) => {
+                        st.travelled = before;
+                        (hit.t, c)
+                    }
+                    Shaded::Bounce(c, b) => {
+                        // The next vertex sees this one's distance added,
+                        // as the recursive call did.
+                        pending[n].write(Pending { color: c, weight: b.weight, q: b.q });
+                        n += 1;
+                        (ray, depth, beta, came) = (b.ray, depth + 1, b.next, b.came);
+                        continue;
+                    }
+                }
+            }
+            None => (f32::INFINITY, escaped(scene, &ray, came, p, st)),
+        };
+        // Nothing on the way dims the light or adds to it.
+        if !media {
+            break color;
+        }
+        if past_limit(scene, depth, p) {
+            // The light found past the depth limit arrives dimmed by the media
+            // on the way; scattering there would be one bounce too many.
+            if is_black(color) {
+                break color;
+            }
+            break color * volumes::media_transmittance(scene, &ray, t, st);
+        }
+        break volumes::through_media(scene, &ray, t, color, st);
+    };
+    while n > 0 {
+        n -= 1;
+        // SAFETY: entries below `n` were all written in the loop.
+        let v = unsafe { pending[n].assume_init() };
+        color = v.color + v.weight * color / v.q;
+    }
+    st.travelled = entry;
+    color
+}
+
+/// Vertices of a path that [`li`] keeps waiting for their bounce's light;
+/// past them it recurses. The course's path-traced scenes stop at depth 3
+/// or 6 (without Russian roulette).
+const DEFERRED: usize = 8;
+
+/// A vertex waiting for the light its bounce brings: it adds
+/// `color + weight · L / q`.
+#[derive(Clone, Copy)]
+struct Pending {
+    color: Vec3,
+    weight: Vec3,
+    q: f32,
+}
+
+/// A random bounce to trace: its ray, its weight `f cos / p`, the Russian
+/// roulette chance `q` it survived, the path's throughput past it and how
+/// the ray left the surface.
+struct Bounce {
+    ray: Ray,
+    weight: Vec3,
+    q: f32,
+    next: Vec3,
+    came: Came,
+}
+
+/// What [`shade`] found: the whole light of the vertex, or the light of the
+/// vertex but its bounce's, with the bounce for [`li`] to follow.
+enum Shaded {
+    Done(Vec3),
+    Bounce(Vec3, Bounce),
+}
+
+/// Whether a vertex at `depth` lies past the path's depth limit. Only MIS
+/// traces a ray there: the last vertex's bounce, which finds the light its
+/// direction hits so that the light samples drawn at that vertex can be
+/// weighed against it (as Mitsuba's path tracer does). Counting those light
+/// samples in full instead has the same mean but not the same noise: near
+/// an area light, light samples alone have a variance that grows as 1/d².
+#[inline]
+fn past_limit(scene: &Scene, depth: u32, p: &PathParams) -> bool {
+    if p.russian_roulette {
+        depth > MAX_BOUNCES
+    } else {
+        depth > scene.max_depth
+    }
+}
+
+/// What a ray that leaves the scene brings: the environment (weighed against
+/// its light samples) or the background.
+fn escaped(scene: &Scene, ray: &Ray, came: Came, p: &PathParams, st: &PathState) -> Vec3 {
+    let Some(env) = &scene.environment else {
+        return scene.textures.background(st.screen).unwrap_or(scene.background);
+    };
+    let d = ray.d.normalize();
+    let w = match came {
+        Came::Direct => 1.0,
+        // The density of the environment's own sampler (importance, uniform
+        // or cosine about the normal), as its light samples were drawn.
+        Came::Bounce { pdf, n } if p.mis => {
+            let pick = pick_chance(scene, p, scene.light_pick.environment_pmf());
+            power_heuristic(pdf, env.sampling_pdf(Some(n), d) * pick)
+        }
+        Came::Bounce { .. } if p.next_event => 0.0,
+        Came::Bounce { .. } => 1.0,
+    };
+    env.eval(d) * w
+}
+
+/// The light a vertex adds. Inlined into [`li`]'s loop: out of line, its
+/// answer (a [`Shaded`], ray and all) went through memory.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn shade(
+    scene: &Scene,
+    ray: &Ray,
+    hit: &Hit,
+    depth: u32,
+    beta: Vec3,
+    came: Came,
+    p: &PathParams,
+    defer: bool,
+    st: &mut PathState,
+) -> Shaded {
+    // Matched in place, not moved out: a move copies the whole `Cow`, room
+    // for an owned material, even when it borrows.
+    let surface = surface_at(scene, ray, hit, depth, st);
+    let (m, ns): (&Material, Vec3) = match &surface {
+        Surface::Lit(m, ns) => (m, *ns),
+        Surface::Unlit(c) => return Shaded::Done(*c),
+        Surface::Failed => return Shaded::Done(Vec3::ZERO),
+    };
+    let entering = ray.d.dot(hit.ng) < 0.0;
+    let (n, ng) = if entering { (ns, hit.ng) } else { (-ns, -hit.ng) };
+    let eps = scene.shadow_epsilon;
+    let mut color = Vec3::ZERO;
+
+    // Under the course's next-event estimation an object light that a
+    // random bounce hits counts nothing (its samples counted it): skip the
+    // lookup of which light it is.
+    let counted = p.mis || !p.next_event || matches!(came, Came::Direct);
+    let emitter = if counted { scene.emitted(hit, ray.d) } else { None };
+    if let Some((li_index, le)) = emitter {
+        color += le * hit_weight(scene, li_index, came, ray, hit, p, st.time);
+    }
+    // A shader's emission is weighed like an object light's where the object
+    // is a light ([`Light::Shaded`]); where it is not (the probes found no
+    // emission, or the shape cannot be sampled) only bounces find it, so it
+    // counts in full.
+    if m.traits.emits {
+        let w = match scene.light_of(hit) {
+            Some(li) if matches!(scene.lights[li], Light::Shaded(_)) => {
+                hit_weight(scene, li, came, ray, hit, p, st.time)
+            }
+            _ => 1.0,
+        };
+        color += m.emission * w;
+    }
+
+    if past_limit(scene, depth, p) {
+        return Shaded::Done(color);
+    }
+    let inside_dielectric = !entering && matches!(m.kind, Specular::Dielectric { .. });
+    let origin = hit.p + ng * eps;
+    if m.traits.reflects && !inside_dielectric {
+        let more = depth < MAX_BOUNCES && (p.russian_roulette || depth < scene.max_depth);
+        let at = At::new(m, n, ray.d);
+        if p.next_event || p.mis {
+            color += next_event(scene, m, hit, &at, origin, depth, p, st);
+        }
+        // Under MIS the last vertex's bounce is traced too, for emission
+        // only (see [`past_limit`]).
+        if more || p.mis {
+            match bounce(scene, m, &at, origin, depth, beta, p, st) {
+                // Nothing follows the bounce at this vertex (see [`li`]).
+                Some(b) if defer && matches!(m.kind, Specular::None) => return Shaded::Bounce(color, b),
+                Some(b) => color += b.weight * li(scene, &b.ray, depth + 1, b.next, b.came, p, st) / b.q,
+                // Adding zero as the recursion did: it turns a -0.0 channel
+                // into +0.0, so the output keeps its bits.
+                None => color += Vec3::ZERO,
+            }
+        }
+    }
+    // A material without a specular part (most) skips the depth tests and
+    // the set-up of the specular rays.
+    let specular_part = !matches!(m.kind, Specular::None);
+    if specular_part && (depth < scene.max_depth || (p.russian_roulette && depth < MAX_BOUNCES)) {
+        color += specular(scene, m, hit, n, ng, ray, entering, depth, beta, p, st);
+    }
+    if inside_dielectric {
+        if let Specular::Dielectric { absorption, .. } = &m.kind {
+            color *= (-*absorption * hit.t).exp();
+        }
+    }
+    Shaded::Done(color)
+}

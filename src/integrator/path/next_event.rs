@@ -1,0 +1,231 @@
+//! Next-event estimation of the path tracer: at each hit, one sample of
+//! every light (or, under MIS in a scene with many lights, of one chosen by
+//! power), shadowed and weighed, and the weight that an emitter a bounce hits
+//! gets against those samples. Reads the scene's lights and the camera's
+//! `<RendererParams>` (through [`PathParams`]); the BRDF terms come from the
+//! vertex's [`At`].
+
+use super::vertex::{light_terms, At};
+use super::{every_light, pick_chance, Came, PathParams};
+use crate::integrator::{is_black, light_reaching_inline, shadow_reach, surface_at, PathState, Surface};
+use crate::light::{Light, ShadedLight};
+use crate::material::Material;
+use crate::math::{Ray, Vec3};
+use crate::render::scene::{Hit, Scene};
+use crate::render::volumes;
+/// One sample of every light, shadowed; with MIS each weighed against the
+/// chance that the BSDF would have drawn its direction. Only picks the
+/// version: both take its arguments as they are, so each is a jump (the
+/// choice made in `li` instead cost pd5, which samples no light, ~19
+/// instructions a path in `li`'s code).
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+pub(super) fn next_event(
+    scene: &Scene,
+    m: &Material,
+    hit: &Hit,
+    at: &At,
+    origin: Vec3,
+    depth: u32,
+    p: &PathParams,
+    st: &mut PathState,
+) -> Vec3 {
+    let vols = &scene.volumes;
+    if !p.mis && at.f.is_some() && vols.surfaces.is_empty() && vols.media.is_empty() {
+        next_event_diffuse(scene, m, hit, at, origin, depth, p, st)
+    } else {
+        next_event_any(scene, m, hit, at, origin, depth, p, st)
+    }
+}
+
+/// [`next_event`] at any vertex.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn next_event_any(
+    scene: &Scene,
+    m: &Material,
+    hit: &Hit,
+    at: &At,
+    origin: Vec3,
+    depth: u32,
+    p: &PathParams,
+    st: &mut PathState,
+) -> Vec3 {
+    let mut color = Vec3::ZERO;
+    // MIS takes every light of a scene with few ([`every_light`]), else one
+    // per hit, chosen by power: a shadow ray per hit whatever the number of
+    // lights. The course's variant samples them all.
+    let (lights, scale) = if p.mis && !every_light(scene, p) {
+        let (i, pick) = scene.light_pick.choose(st.sampler.next_1d());
+        if pick <= 0.0 {
+            return color;
+        }
+        (&scene.lights[i..=i], 1.0 / pick)
+    } else {
+        (&scene.lights[..], 1.0)
+    };
+    for light in lights {
+        if let Light::Shaded(l) = light {
+            color += shaded_sample(scene, l, m, hit, at, origin, depth, scale, p, st);
+            continue;
+        }
+        let Some((ls, cos, tr)) = light_reaching_inline(scene, light, origin, hit.p, at.n, st) else {
+            continue;
+        };
+        let (f, bsdf_pdf) = light_terms(m, at, ls.wi, cos, p);
+        let w =
+            if p.mis && hittable(light) { power_heuristic(ls.pdf / scale, bsdf_pdf) * scale } else { scale };
+        color += f * (tr * ls.e) * w;
+    }
+    color
+}
+
+/// [`next_event`] for the course's variant at a vertex whose BRDF value is
+/// the same for every light direction above it (`at.f`), in a scene without
+/// volumes: each light's term is `f cos · E`, the weight and the shadow
+/// ray's transmittance exactly 1 (multiplying by them kept the bits).
+/// Apart, because LLVM hoisted the set-up of every case of [`light_terms`]
+/// (the frame's rows, the whole view direction) out of [`next_event_any`]'s
+/// light loop, ~160 instructions a call that this vertex never uses.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn next_event_diffuse(
+    scene: &Scene,
+    m: &Material,
+    hit: &Hit,
+    at: &At,
+    origin: Vec3,
+    depth: u32,
+    p: &PathParams,
+    st: &mut PathState,
+) -> Vec3 {
+    let f = at.f.unwrap_or_default();
+    let mut color = Vec3::ZERO;
+    for light in &scene.lights {
+        if let Light::Shaded(l) = light {
+            color += shaded_sample(scene, l, m, hit, at, origin, depth, 1.0, p, st);
+            continue;
+        }
+        // [`light_reaching_inline`] without media: the shadow ray passes or not.
+        let Some(ls) = light.sample_at(origin, hit.p, at.n, st.time, &mut st.sampler) else {
+            continue;
+        };
+        let cos = at.n.dot(ls.wi);
+        if cos <= 0.0 || is_black(ls.e) {
+            continue;
+        }
+        let t_max = shadow_reach(scene, &ls);
+        st.stats.shadow += 1;
+        if scene.occluded(&Ray::new(origin, ls.wi), t_max, st.time) {
+            continue;
+        }
+        // [`brdf_cos`]'s `f cos`.
+        color += f * cos * ls.e;
+    }
+    color
+}
+
+/// One sample of an object whose shader emits: a ray towards a point drawn
+/// on it, which counts only where its first hit is that point (for a sphere,
+/// any point of the object), with the shader's emission found there.
+#[allow(clippy::too_many_arguments)]
+fn shaded_sample(
+    scene: &Scene,
+    l: &ShadedLight,
+    m: &Material,
+    hit: &Hit,
+    at: &At,
+    origin: Vec3,
+    depth: u32,
+    scale: f32,
+    p: &PathParams,
+    st: &mut PathState,
+) -> Vec3 {
+    let u = st.sampler.next_2d();
+    let Some((wi, dist, pdf)) = l.sample(origin, hit.p, st.time, u) else { return Vec3::ZERO };
+    let cos = at.n.dot(wi);
+    if cos <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let r = Ray::new(origin, wi);
+    st.stats.shadow += 1;
+    let Some(h) = scene.intersect(&r, st.time, false) else { return Vec3::ZERO };
+    let eps = scene.shadow_epsilon;
+    // Another part of the same mesh in front of the sampled point blocks it
+    // (that part is a sample of its own).
+    if scene.prim_of(&h) != Some(l.prim) || (dist.is_finite() && h.t < dist * (1.0 - 1e-3) - eps) {
+        return Vec3::ZERO;
+    }
+    let vols = &scene.volumes;
+    let tr = if vols.surfaces.is_empty() && vols.media.is_empty() {
+        Vec3::ONE
+    } else {
+        volumes::shadow(scene, &r, h.t - eps, st)
+    };
+    if is_black(tr) {
+        return Vec3::ZERO;
+    }
+    let before = st.travelled;
+    st.travelled += h.t;
+    let s = surface_at(scene, &r, &h, depth + 1, st);
+    st.travelled = before;
+    let Surface::Lit(e, _) = s else { return Vec3::ZERO };
+    if !e.traits.emits {
+        return Vec3::ZERO;
+    }
+    let (f, bsdf_pdf) = light_terms(m, at, wi, cos, p);
+    let w = if p.mis { power_heuristic(pdf / scale, bsdf_pdf) * scale } else { scale };
+    f * (tr * e.emission) * (w / pdf)
+}
+
+/// How much an emitter (light `li`) that a ray hit counts, by how the ray
+/// left its last surface: in full after the camera or a specular bounce;
+/// after a random bounce by the power heuristic under MIS, not at all under
+/// the course's next-event estimation (the light samples counted it).
+pub(super) fn hit_weight(
+    scene: &Scene,
+    li: usize,
+    came: Came,
+    ray: &Ray,
+    hit: &Hit,
+    p: &PathParams,
+    time: f32,
+) -> f32 {
+    match came {
+        Came::Direct => 1.0,
+        Came::Bounce { pdf, .. } if p.mis => {
+            let pick = pick_chance(scene, p, scene.light_pick.pmf(li));
+            power_heuristic(pdf, pick * light_pdf(&scene.lights[li], ray.o, hit, ray.d, time))
+        }
+        Came::Bounce { .. } if p.next_event => 0.0,
+        Came::Bounce { .. } => 1.0,
+    }
+}
+
+/// Whether a bounce can hit the light (then MIS weighs its two samples).
+#[inline]
+fn hittable(light: &Light) -> bool {
+    matches!(light, Light::Mesh(_) | Light::Sphere(_) | Light::Environment(_) | Light::Shaded(_))
+}
+
+/// The light's density for the direction `d` of a ray from `from` at
+/// shutter `time` that hit it at `hit`.
+fn light_pdf(light: &Light, from: Vec3, hit: &Hit, d: Vec3, time: f32) -> f32 {
+    match light {
+        Light::Mesh(l) => l.pdf(from, hit.p, hit.ng),
+        Light::Sphere(l) => l.pdf(from - l.motion * time, d.normalize()),
+        Light::Shaded(l) => l.pdf(from, hit.p, hit.ng, d, time),
+        _ => 0.0,
+    }
+}
+
+/// The power heuristic with exponent 2 for a sample of density `a` against
+/// the other technique's `b`.
+#[inline]
+pub(super) fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 <= 0.0 || !a2.is_finite() {
+        return 1.0;
+    }
+    a2 / (a2 + b2)
+}
