@@ -13,6 +13,7 @@ use crate::material::Material;
 use crate::math::{Ray, Vec3};
 use crate::render::scene::{Hit, Scene};
 use crate::render::volumes;
+
 /// One sample of every light, shadowed; with MIS each weighed against the
 /// chance that the BSDF would have drawn its direction. Only picks the
 /// version: both take its arguments as they are, so each is a jump (the
