@@ -38,15 +38,13 @@ const SCAN_TRIANGLES: usize = 32;
 pub struct LightMesh {
     /// Each triangle as a corner, two edges and its unit normal.
     tris: Vec<[Vec3; 4]>,
-    /// Running sums of the triangles' areas, ending at the total.
-    cdf: Vec<f32>,
-    /// Each triangle's running sums before and after it, `cdf[i - 1]` (0
-    /// for the first) and `cdf[i]`: read with its corners, without the
-    /// bounds tests and the first triangle's branch of `cdf`.
+    /// Each triangle's span of the running sums of the areas: the sum
+    /// before it (0 for the first) and the sum up to it, read as a pair
+    /// without bounds tests or a branch for the first triangle.
     spans: Vec<(f32, f32)>,
-    /// The total area, `cdf`'s last sum (never empty).
+    /// The total area, the last span's end (never empty).
     total: f32,
-    /// For a light of at most [`SCAN_TRIANGLES`], `cdf` in blocks of four,
+    /// For a light of at most [`SCAN_TRIANGLES`], the spans' ends in blocks of four,
     /// the last padded with `+∞`: counted a block at a time in vector lanes
     /// (one element at a time, ten triangles cost ~60 instructions a light
     /// sample). A pad counts only for an infinite `target`, where the count
@@ -87,7 +85,7 @@ impl LightMesh {
             Vec::new()
         };
         let spans = cdf.iter().scan(0.0, |lo, &hi| Some((std::mem::replace(lo, hi), hi))).collect();
-        (total > 0.0).then_some(LightMesh { tris, cdf, spans, scan, total, radiance, motion: Vec3::ZERO })
+        (total > 0.0).then_some(LightMesh { tris, spans, scan, total, radiance, motion: Vec3::ZERO })
     }
 
     /// Total area.
@@ -104,7 +102,7 @@ impl LightMesh {
         // A light of a few triangles (the course's boxes have ten) is
         // searched by counting, without the binary search's unpredictable
         // branches; both find the first sum above `target`.
-        let i = if self.cdf.len() <= SCAN_TRIANGLES {
+        let i = if self.spans.len() <= SCAN_TRIANGLES {
             let mut lanes = [0u32; 4];
             for b in &self.scan {
                 for (n, &c) in lanes.iter_mut().zip(b) {
@@ -113,7 +111,7 @@ impl LightMesh {
             }
             lanes.iter().sum::<u32>() as usize
         } else {
-            self.cdf.partition_point(|&c| c <= target)
+            self.spans.partition_point(|&(_, hi)| hi <= target)
         };
         let i = i.min(self.tris.len() - 1);
         let (lo, hi) = self.spans[i];
@@ -320,10 +318,10 @@ mod tests {
         let mesh = LightMesh::new(corners, &Transform::IDENTITY, Vec3::ONE).expect("area");
         assert_eq!((mesh.scan.len(), &mesh.scan[2][2..]), (3, &[f32::INFINITY; 2][..]));
         let total = mesh.area();
-        let mut us: Vec<f32> = mesh.cdf.iter().map(|c| c / total).collect();
+        let mut us: Vec<f32> = mesh.spans.iter().map(|&(_, hi)| hi / total).collect();
         us.extend((0..64).map(|k| k as f32 / 64.0));
         for u1 in us.into_iter().filter(|u| *u < 1.0) {
-            let i = mesh.cdf.partition_point(|&c| c <= u1 * total).min(9);
+            let i = mesh.spans.partition_point(|&(_, hi)| hi <= u1 * total).min(9);
             let (p, _) = mesh.point((u1, 0.5));
             let [a, e1, e2, _] = mesh.tris[i];
             let q = p - a;
