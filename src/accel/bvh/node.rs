@@ -364,12 +364,19 @@ impl FusedRay {
     /// The CPU must have AVX2 and FMA, and `r.fused_ok` must hold.
     #[inline(always)]
     unsafe fn new(r: &RayPre) -> FusedRay {
-        use std::arch::x86_64::_mm256_set1_ps as s;
+        use std::arch::x86_64::_mm256_set1_ps;
+        // One lane at a time: left free, LLVM loaded `c_far`'s y and z as
+        // one 8-byte word from the middle of the 16 bytes `RayPre::new` had
+        // just stored, which the store buffer cannot forward. The load then
+        // waited for the store to retire: 10–13% of the time of every scene
+        // query on the hw7 box (perf, at the broadcast after that load).
+        // SAFETY: a read of a field of `r`.
+        let s = |x: &f32| _mm256_set1_ps(unsafe { std::ptr::read_volatile(x) });
         let (inv, cn, cf) = (&r.inv, &r.c_near, &r.c_far);
         FusedRay {
-            inv: [s(inv.x), s(inv.y), s(inv.z)],
-            c_near: [s(cn.x), s(cn.y), s(cn.z)],
-            c_far: [s(cf.x), s(cf.y), s(cf.z)],
+            inv: [s(&inv.x), s(&inv.y), s(&inv.z)],
+            c_near: [s(&cn.x), s(&cn.y), s(&cn.z)],
+            c_far: [s(&cf.x), s(&cf.y), s(&cf.z)],
             rows: &ROWS[(r.signs & 7) as usize],
             signs: r.signs as usize,
         }
