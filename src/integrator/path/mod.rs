@@ -324,7 +324,7 @@ fn shade(
         let more = depth < MAX_BOUNCES && (p.russian_roulette || depth < scene.max_depth);
         let at = At::new(m, n, ray.d);
         if p.next_event || p.mis {
-            color += next_event(scene, m, hit, &at, origin, depth, p, st);
+            color += Vec3::from(next_event(scene, m, hit, &at, origin, depth, p, st));
         }
         // Under MIS the last vertex's bounce is traced too, for emission
         // only (see [`past_limit`]).

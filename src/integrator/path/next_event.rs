@@ -10,7 +10,7 @@ use super::{every_light, pick_chance, Came, PathParams};
 use crate::integrator::{is_black, light_reaching_inline, shadow_reach, surface_at, PathState, Surface};
 use crate::light::{Light, ShadedLight};
 use crate::material::Material;
-use crate::math::{Ray, Vec3};
+use crate::math::{Ray, Vec3, Vec3A};
 use crate::render::scene::{Hit, Scene};
 use crate::render::volumes;
 
@@ -19,6 +19,11 @@ use crate::render::volumes;
 /// version: both take its arguments as they are, so each is a jump (the
 /// choice made in `li` instead cost pd5, which samples no light, ~19
 /// instructions a path in `li`'s code).
+///
+/// The sum comes back as a `Vec3A`: returned through memory either way, a
+/// `Vec3` was written as `x` alone and `y, z` together, and `li` read `x, y`
+/// together at once, a load the store buffer cannot forward (8.9% of `li`'s
+/// time on the hw7 box stalled there).
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
 pub(super) fn next_event(
@@ -30,7 +35,7 @@ pub(super) fn next_event(
     depth: u32,
     p: &PathParams,
     st: &mut PathState,
-) -> Vec3 {
+) -> Vec3A {
     let vols = &scene.volumes;
     if !p.mis && at.f.is_some() && vols.surfaces.is_empty() && vols.media.is_empty() {
         next_event_diffuse(scene, m, hit, at, origin, depth, p, st)
@@ -51,7 +56,7 @@ fn next_event_any(
     depth: u32,
     p: &PathParams,
     st: &mut PathState,
-) -> Vec3 {
+) -> Vec3A {
     let mut color = Vec3::ZERO;
     // MIS takes every light of a scene with few ([`every_light`]), else one
     // per hit, chosen by power: a shadow ray per hit whatever the number of
@@ -59,7 +64,7 @@ fn next_event_any(
     let (lights, scale) = if p.mis && !every_light(scene, p) {
         let (i, pick) = scene.light_pick.choose(st.sampler.next_1d());
         if pick <= 0.0 {
-            return color;
+            return Vec3A::ZERO;
         }
         (&scene.lights[i..=i], 1.0 / pick)
     } else {
@@ -78,7 +83,7 @@ fn next_event_any(
             if p.mis && hittable(light) { power_heuristic(ls.pdf / scale, bsdf_pdf) * scale } else { scale };
         color += f * (tr * ls.e) * w;
     }
-    color
+    color.into()
 }
 
 /// [`next_event`] for the course's variant at a vertex whose BRDF value is
@@ -99,8 +104,8 @@ fn next_event_diffuse(
     depth: u32,
     p: &PathParams,
     st: &mut PathState,
-) -> Vec3 {
-    let f = at.f.unwrap_or_default();
+) -> Vec3A {
+    let f = Vec3::from(at.f.unwrap_or_default());
     let mut color = Vec3::ZERO;
     for light in &scene.lights {
         if let Light::Shaded(l) = light {
@@ -123,7 +128,7 @@ fn next_event_diffuse(
         // [`brdf_cos`]'s `f cos`.
         color += f * cos * ls.e;
     }
-    color
+    color.into()
 }
 
 /// One sample of an object whose shader emits: a ray towards a point drawn

@@ -12,7 +12,7 @@ use crate::bsdf::{diffuse_pdf, Brdf, Frame};
 use crate::integrator::whitted::{glossy, reflect, reflectance};
 use crate::integrator::PathState;
 use crate::material::{Material, Specular};
-use crate::math::{Ray, Vec3};
+use crate::math::{Ray, Vec3, Vec3A};
 use crate::render::scene::{Hit, Scene};
 
 /// The shading point's frame, shared by its light samples and its bounce:
@@ -28,7 +28,10 @@ pub(super) struct At {
     pub(super) frame: Frame,
     pub(super) wo: Vec3,
     pub(super) d: Vec3,
-    pub(super) f: Option<Vec3>,
+    /// As `Vec3A`: read in a call right after it is written, and a `Vec3`
+    /// went to memory as `x` alone and `y, z` together, which a wider read
+    /// cannot be forwarded from (see [`super::next_event::next_event`]).
+    pub(super) f: Option<Vec3A>,
 }
 
 impl At {
@@ -40,7 +43,7 @@ impl At {
         let (wo, f) = match m.traits.phong_diffuse {
             Some(f) => {
                 let z = (-d).dot(n);
-                (Vec3::new(0.0, 0.0, z), Some(if z <= 0.0 { Vec3::ZERO } else { f }))
+                (Vec3::new(0.0, 0.0, z), Some(Vec3A::from(if z <= 0.0 { Vec3::ZERO } else { f })))
             }
             None => (frame.to_local(-d), None),
         };
@@ -69,7 +72,7 @@ pub(super) fn light_terms(m: &Material, at: &At, wi: Vec3, cos: f32, p: &PathPar
             // Without a lobe only the cosines count: the local `z` of `wi` is
             // `n·wi`, the bits of `cos`.
             if let (true, Some(f)) = (m.traits.diffuse_only, at.f) {
-                return (f * cos, diffuse_pdf(at.wo.z, cos));
+                return (Vec3::from(f) * cos, diffuse_pdf(at.wo.z, cos));
             }
             let local = at.frame.to_local(wi);
             let wo = at.wo_full();
@@ -93,7 +96,7 @@ pub(super) fn light_terms(m: &Material, at: &At, wi: Vec3, cos: f32, p: &PathPar
 #[inline(always)]
 fn brdf_cos(b: &Brdf, m: &Material, at: &At, wi: Vec3, cos: f32) -> Vec3 {
     match at.f {
-        Some(f) => f * cos,
+        Some(f) => Vec3::from(f) * cos,
         None => b.eval(m.diffuse, m.specular, at.frame.to_local(wi), at.wo) * cos,
     }
 }
