@@ -25,16 +25,23 @@ use super::triangle::{Triangle, WatertightRay};
 use crate::math::{Aabb, Ray};
 
 /// A ray–triangle hit.
+///
+/// `u` and `v` first, side by side: a hit is written field by field during
+/// traversal and copied soon after, `t` from a register and the rest from
+/// memory, and a copy's 8-byte load of `prim` with `u` spanned two 4-byte
+/// stores, which it cannot be forwarded from (it waited for them to
+/// retire). Now that load is `u, v`, stored as one word ([`PairHit::uv`](super::tri_block::PairHit::uv)).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub struct TriHit {
-    /// Ray parameter, in units of the ray's direction.
-    pub t: f32,
-    /// Index into the `triangles` given to [`MeshAccel::build`].
-    pub prim: u32,
     /// Barycentric coordinate of the triangle's vertex 1.
     pub u: f32,
     /// Barycentric coordinate of the triangle's vertex 2.
     pub v: f32,
+    /// Ray parameter, in units of the ray's direction.
+    pub t: f32,
+    /// Index into the `triangles` given to [`MeshAccel::build`].
+    pub prim: u32,
 }
 
 /// A triangle mesh ready for ray queries. Immutable, `Send + Sync`.
@@ -448,13 +455,14 @@ fn leaf_closest<const AVX: bool>(
     // hit that is no longer closer is dropped here, as it would have been
     // there.)
     macro_rules! take {
-        ($b:expr, $i:expr, $t:expr, $u:expr, $v:expr) => {{
+        ($b:expr, $i:expr, $t:expr, $uv:expr) => {{
             let (b, i, t): (&TriBlock, usize, f32) = ($b, $i, $t);
             // A lane's t passed `t > t_min`, so it is not NaN.
             let skip = t >= *t_max || (cull != 0.0 && cull * b.triangle(i).normal().dot(ray.d) > 0.0);
             if !skip {
                 *t_max = t;
-                *best = Some(TriHit { t, prim: b.prim(i), u: $u, v: $v });
+                let [u, v] = $uv;
+                *best = Some(TriHit { u, v, t, prim: b.prim(i) });
                 found = true;
             }
         }};
@@ -470,7 +478,7 @@ fn leaf_closest<const AVX: bool>(
             while m != 0 {
                 let i = m.trailing_zeros() as usize;
                 m &= m - 1;
-                take!(&p[i / 4], i % 4, h.t[i], h.u[i], h.v[i]);
+                take!(&p[i / 4], i % 4, h.t[i], h.uv[i]);
             }
         }
         rest = pairs.remainder();
@@ -481,7 +489,7 @@ fn leaf_closest<const AVX: bool>(
         while m != 0 {
             let i = m.trailing_zeros() as usize;
             m &= m - 1;
-            take!(b, i, h.t[i], h.u[i], h.v[i]);
+            take!(b, i, h.t[i], h.uv[i]);
         }
     }
     found

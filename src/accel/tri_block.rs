@@ -30,10 +30,9 @@ pub struct BlockHit {
     pub mask: u32,
     /// Ray parameter per lane.
     pub t: [f32; 4],
-    /// Barycentric of vertex 1 per lane.
-    pub u: [f32; 4],
-    /// Barycentric of vertex 2 per lane.
-    pub v: [f32; 4],
+    /// Barycentrics of vertices 1 and 2 per lane, side by side (see
+    /// [`PairHit::uv`]).
+    pub uv: [[f32; 2]; 4],
 }
 
 impl TriBlock {
@@ -94,7 +93,7 @@ impl TriBlock {
         if inside.bitmask() == 0 {
             // Most blocks a ray reaches miss on the edge test: skip the
             // division. Lanes that pass are computed as before.
-            return BlockHit { mask: 0, t: [0.0; 4], u: [0.0; 4], v: [0.0; 4] };
+            return BlockHit { mask: 0, t: [0.0; 4], uv: [[0.0; 2]; 4] };
         }
         let det = e0 + e1 + e2;
         let t_scaled = e0 * (sz * a2) + e1 * (sz * b2) + e2 * (sz * c2);
@@ -109,9 +108,10 @@ impl TriBlock {
             & t.cmplt(Vec4::splat(t_max));
         let mask = ok.bitmask();
         if mask == 0 {
-            return BlockHit { mask, t: [0.0; 4], u: [0.0; 4], v: [0.0; 4] };
+            return BlockHit { mask, t: [0.0; 4], uv: [[0.0; 2]; 4] };
         }
-        BlockHit { mask, t: t.to_array(), u: (e1 * inv).to_array(), v: (e2 * inv).to_array() }
+        let (u, v) = ((e1 * inv).to_array(), (e2 * inv).to_array());
+        BlockHit { mask, t: t.to_array(), uv: std::array::from_fn(|i| [u[i], v[i]]) }
     }
 }
 
@@ -123,10 +123,12 @@ pub struct PairHit {
     pub mask: u32,
     /// Ray parameter per lane.
     pub t: [f32; 8],
-    /// Barycentric of vertex 1 per lane.
-    pub u: [f32; 8],
-    /// Barycentric of vertex 2 per lane.
-    pub v: [f32; 8],
+    /// Barycentrics of vertices 1 and 2 per lane, side by side: a hit's
+    /// pair is copied as one 8-byte word into [`TriHit`](super::mesh_accel::TriHit),
+    /// whose readers load it whole. From two arrays it was written as two
+    /// 4-byte stores, which an 8-byte load cannot be forwarded from: it
+    /// waited for them to retire, at every closest hit.
+    pub uv: [[f32; 2]; 8],
 }
 
 impl TriBlock {
@@ -215,7 +217,7 @@ impl TriBlock {
         // the 4-lane test, and fail on the determinant below.
         let outside = _mm256_and_ps(neg, pos);
         if _mm256_movemask_ps(outside) == 0xff {
-            return PairHit { mask: 0, t: [0.0; 8], u: [0.0; 8], v: [0.0; 8] };
+            return PairHit { mask: 0, t: [0.0; 8], uv: [[0.0; 2]; 8] };
         }
         let det = add!(add!(e0, e1), e2);
         let t_scaled = add!(add!(mul!(e0, mul!(sz, a2)), mul!(e1, mul!(sz, b2))), mul!(e2, mul!(sz, c2)));
@@ -233,9 +235,16 @@ impl TriBlock {
         );
         let mask = _mm256_movemask_ps(ok) as u32;
         if mask == 0 {
-            return PairHit { mask, t: [0.0; 8], u: [0.0; 8], v: [0.0; 8] };
+            return PairHit { mask, t: [0.0; 8], uv: [[0.0; 2]; 8] };
         }
-        PairHit { mask, t: to_array8(t), u: to_array8(mul!(e1, inv)), v: to_array8(mul!(e2, inv)) }
+        let (u, v) = (mul!(e1, inv), mul!(e2, inv));
+        // Lanes 0 1 4 5 and 2 3 6 7 interleaved, then halves regrouped.
+        let (lo, hi) = (_mm256_unpacklo_ps(u, v), _mm256_unpackhi_ps(u, v));
+        let uv = [_mm256_permute2f128_ps::<0x20>(lo, hi), _mm256_permute2f128_ps::<0x31>(lo, hi)];
+        // SAFETY: two vectors of eight floats are 32 bytes of plain floats
+        // each, as are eight pairs.
+        let uv: [[f32; 2]; 8] = std::mem::transmute(uv);
+        PairHit { mask, t: to_array8(t), uv }
     }
 }
 
@@ -334,7 +343,7 @@ mod tests {
                 if let Some(h) = want {
                     hits += 1;
                     assert_eq!(
-                        (got.t[lane].to_bits(), got.u[lane].to_bits(), got.v[lane].to_bits()),
+                        (got.t[lane].to_bits(), got.uv[lane][0].to_bits(), got.uv[lane][1].to_bits()),
                         (h.t.to_bits(), h.u.to_bits(), h.v.to_bits())
                     );
                 }
@@ -388,8 +397,8 @@ mod tests {
                         hits += 1;
                         let i = 4 * half + lane;
                         assert_eq!(
-                            (got.t[i].to_bits(), got.u[i].to_bits(), got.v[i].to_bits()),
-                            (want.t[lane].to_bits(), want.u[lane].to_bits(), want.v[lane].to_bits()),
+                            (got.t[i].to_bits(), got.uv[i][0].to_bits(), got.uv[i][1].to_bits()),
+                            (want.t[lane].to_bits(), want.uv[lane][0].to_bits(), want.uv[lane][1].to_bits()),
                             "case {k} lane {i}"
                         );
                     }
