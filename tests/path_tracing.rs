@@ -391,3 +391,64 @@ fn a_moving_light_mesh_is_sampled_where_rays_find_it() {
         }
     }
 }
+
+/// A clear glass sphere (no absorption) under a constant sky `L`: every
+/// path through it leaves it again, reflected or refracted, with the
+/// Fresnel weights summing to 1 at each interface, so every pixel sees `L`
+/// (paths past the depth limit, after a dozen interfaces, are negligible).
+/// Past one sample per pixel the path tracer follows one of a dielectric's
+/// two rays, chosen by Fresnel probability, at weight 1: about two
+/// secondary rays per camera ray (in and out); at one sample it traces both,
+/// the course's deterministic split, a tree of them. Both find `L`.
+#[test]
+fn glass_paths_follow_one_branch_past_one_sample_and_keep_the_sky() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let l = 2.0f32;
+    constant_sky(dir.path(), l);
+    let text = r#"<Scene>
+  <MaxRecursionDepth>12</MaxRecursionDepth>
+  <Cameras><Camera id="1" type="lookAt"><Position>0 0 5</Position><GazePoint>0 0 0</GazePoint><Up>0 1 0</Up>
+    <FovY>20</FovY><NearDistance>1</NearDistance><ImageResolution>24 24</ImageResolution>
+    <ImageName>a.exr</ImageName><Renderer>PathTracing</Renderer><RendererParams>ImportanceSampling</RendererParams></Camera></Cameras>
+  <Textures><Images><Image id="1">sky.exr</Image></Images></Textures>
+  <Lights><SphericalDirectionalLight id="1"><ImageId>1</ImageId></SphericalDirectionalLight></Lights>
+  <Materials><Material id="1" type="dielectric"><DiffuseReflectance>0 0 0</DiffuseReflectance>
+    <SpecularReflectance>0 0 0</SpecularReflectance><AbsorptionCoefficient>0 0 0</AbsorptionCoefficient>
+    <RefractionIndex>1.5</RefractionIndex></Material></Materials>
+  <VertexData>0 0 0</VertexData>
+  <Objects><Sphere id="1"><Material>1</Material><Center>1</Center><Radius>1</Radius></Sphere></Objects>
+</Scene>"#;
+    let scene = Scene::build(&load(dir.path(), text)).expect("scene builds");
+    // Pixels whose rays all meet the sphere: half the image spans
+    // tan(10°)·5 = 0.88 at its centre.
+    let half = 10f32.to_radians().tan() * 5.0;
+    let inner: Vec<usize> = (0..24 * 24)
+        .filter(|&i| {
+            let x = ((i % 24) as f32 + 0.5) / 12.0 - 1.0;
+            let y = ((i / 24) as f32 + 0.5) / 12.0 - 1.0;
+            (x * x + y * y).sqrt() * half < 0.75
+        })
+        .collect();
+    assert!(inner.len() > 150, "{} inner pixels", inner.len());
+    for (spp, branching) in [(1, true), (16, false)] {
+        let img = render_with(&scene, 0, &RenderOptions { spp: Some(spp), ..Default::default() }, &|_| {});
+        let worst = inner
+            .iter()
+            .map(|&i| (f64::from(img.pixels[i].y) / f64::from(l) - 1.0).abs())
+            .fold(0.0, f64::max);
+        let per_camera_ray = img.stats.secondary as f64 / img.stats.primary as f64;
+        println!(
+            "{spp:>2} spp: worst pixel off by {:.2e}, {per_camera_ray:.2} secondary rays a camera ray",
+            worst
+        );
+        assert!(worst < 1e-3, "{spp} spp: a pixel through the glass is {worst:.2e} off the sky's radiance");
+        if branching {
+            assert!(
+                per_camera_ray > 3.0,
+                "1 spp: {per_camera_ray:.2} secondary rays, expected both rays traced"
+            );
+        } else {
+            assert!(per_camera_ray < 2.5, "{spp} spp: {per_camera_ray:.2} secondary rays, expected one path");
+        }
+    }
+}
