@@ -10,7 +10,9 @@
 //! the expected value is the same `F L_r + (1 - F) L_t` (an unbiased
 //! estimator, Russian roulette's choice between two branches), and a sample
 //! costs one path instead of a tree. With one sample per pixel the course's
-//! images need both rays, so that case keeps the deterministic split.
+//! images need both rays, so that case keeps the deterministic split. The
+//! path tracer's dielectrics choose the same way (a path through glass under
+//! Russian roulette was otherwise a tree followed in full).
 //!
 //! Reads no scene parameters itself: `F` comes from the material's
 //! `RefractionIndex`, the sample count from the camera's `NumSamples` (or
