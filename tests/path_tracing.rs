@@ -297,6 +297,20 @@ fn two_seed_mean(scene: &Scene, spp: u32, pixels: &[usize]) -> (f64, f64) {
     (sum / n, (d2 / 4.0).sqrt() / n)
 }
 
+/// The pixels of a 24×24 image, seen by a camera 5 from the origin with a
+/// vertical field of view of `2 · half_fov` degrees, whose centre ray passes
+/// within `r` of the origin (measured in the plane through it).
+fn pixels_within(half_fov: f32, r: f32) -> Vec<usize> {
+    let half = half_fov.to_radians().tan() * 5.0;
+    (0..24 * 24)
+        .filter(|&i| {
+            let x = ((i % 24) as f32 + 0.5) / 12.0 - 1.0;
+            let y = ((i / 24) as f32 + 0.5) / 12.0 - 1.0;
+            (x * x + y * y).sqrt() * half < r
+        })
+        .collect()
+}
+
 /// A diffuse unit sphere (the course's material: `kd cos θ`, no 1/π) under
 /// a constant sky `L` receives `π kd L` everywhere, and a convex object
 /// never sees itself, so the MIS path tracer's answer is exactly that
@@ -325,16 +339,8 @@ fn mis_weighs_escaping_rays_by_the_environment_sampler_in_use() {
 </Scene>"#
         );
         let scene = Scene::build(&load(dir.path(), &text)).expect("scene builds");
-        // Pixels whose centre ray meets the sphere well inside its outline:
-        // half the image spans tan(15°)·5 at the sphere's centre.
-        let half = 15f32.to_radians().tan() * 5.0;
-        let inner: Vec<usize> = (0..24 * 24)
-            .filter(|&i| {
-                let x = ((i % 24) as f32 + 0.5) / 12.0 - 1.0;
-                let y = ((i / 24) as f32 + 0.5) / 12.0 - 1.0;
-                (x * x + y * y).sqrt() * half < 0.8
-            })
-            .collect();
+        // Pixels whose centre ray meets the sphere well inside its outline.
+        let inner = pixels_within(15.0, 0.8);
         assert!(inner.len() > 150, "{} inner pixels", inner.len());
         let (m, se) = two_seed_mean(&scene, 16, &inner);
         println!("{sampler:<10} mean {m:.4} ± {se:.4} (expected {expected:.4})");
@@ -419,16 +425,8 @@ fn glass_paths_follow_one_branch_past_one_sample_and_keep_the_sky() {
   <Objects><Sphere id="1"><Material>1</Material><Center>1</Center><Radius>1</Radius></Sphere></Objects>
 </Scene>"#;
     let scene = Scene::build(&load(dir.path(), text)).expect("scene builds");
-    // Pixels whose rays all meet the sphere: half the image spans
-    // tan(10°)·5 = 0.88 at its centre.
-    let half = 10f32.to_radians().tan() * 5.0;
-    let inner: Vec<usize> = (0..24 * 24)
-        .filter(|&i| {
-            let x = ((i % 24) as f32 + 0.5) / 12.0 - 1.0;
-            let y = ((i / 24) as f32 + 0.5) / 12.0 - 1.0;
-            (x * x + y * y).sqrt() * half < 0.75
-        })
-        .collect();
+    // Pixels whose rays all meet the sphere (half the image spans 0.88).
+    let inner = pixels_within(10.0, 0.75);
     assert!(inner.len() > 150, "{} inner pixels", inner.len());
     for (spp, branching) in [(1, true), (16, false)] {
         let img = render_with(&scene, 0, &RenderOptions { spp: Some(spp), ..Default::default() }, &|_| {});
