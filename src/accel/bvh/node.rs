@@ -394,24 +394,26 @@ impl FusedRay {
     /// The CPU must have AVX2 and FMA.
     #[inline(always)]
     unsafe fn hit(&self, n: &Node8, t_max: f32) -> ([f32; WIDTH], u32) {
-        use std::arch::x86_64::*;
         let b = n.bounds.as_ptr().cast::<f32>();
-        // SAFETY: the offsets are rows 0 to 5 of the six rows, each row
-        // 32-byte aligned (the node is 64-byte aligned, a row 32 bytes).
-        let row = |off: usize| _mm256_load_ps(b.add(off));
+        // SAFETY: the offsets are rows 0 to 5 of the node's six rows.
+        self.planes(self.rows.map(|off| b.add(off as usize)), t_max)
+    }
+
+    /// The fused test on six rows of eight bounds, each 32-byte aligned:
+    /// the near planes of x, y and z, then their far planes.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 and FMA; each pointer must point to a row.
+    #[inline(always)]
+    unsafe fn planes(&self, rows: [*const f32; 6], t_max: f32) -> ([f32; WIDTH], u32) {
+        use std::arch::x86_64::*;
         let (inv, cn, cf) = (&self.inv, &self.c_near, &self.c_far);
-        let rows = self.rows;
-        let near = [rows[0] as usize, rows[1] as usize, rows[2] as usize];
-        let far = [rows[3] as usize, rows[4] as usize, rows[5] as usize];
-        let plane = |off: usize, a: usize, c: __m256| _mm256_fmadd_ps(row(off), inv[a], c);
+        let plane = |i: usize, a: usize, c: __m256| _mm256_fmadd_ps(_mm256_load_ps(rows[i]), inv[a], c);
         let tn = _mm256_max_ps(
-            _mm256_max_ps(plane(near[0], 0, cn[0]), plane(near[1], 1, cn[1])),
-            _mm256_max_ps(plane(near[2], 2, cn[2]), _mm256_setzero_ps()),
+            _mm256_max_ps(plane(0, 0, cn[0]), plane(1, 1, cn[1])),
+            _mm256_max_ps(plane(2, 2, cn[2]), _mm256_setzero_ps()),
         );
-        let tf = _mm256_min_ps(
-            _mm256_min_ps(plane(far[0], 0, cf[0]), plane(far[1], 1, cf[1])),
-            plane(far[2], 2, cf[2]),
-        );
+        let tf = _mm256_min_ps(_mm256_min_ps(plane(3, 0, cf[0]), plane(4, 1, cf[1])), plane(5, 2, cf[2]));
         let tf = _mm256_min_ps(_mm256_mul_ps(tf, _mm256_set1_ps(SLAB_EXPAND)), _mm256_set1_ps(t_max));
         let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
         let mut out = [0.0f32; WIDTH];
@@ -430,22 +432,9 @@ impl FusedRay {
     /// The CPU must have AVX2 and FMA.
     #[inline(always)]
     unsafe fn hit_rows(&self, rows: &[[f32; WIDTH]; 6], t_max: f32) -> ([f32; WIDTH], u32) {
-        use std::arch::x86_64::*;
         // SAFETY: each row is 32-byte aligned (a `SignedRoot` is 64-byte
         // aligned, a row 32 bytes).
-        let row = |i: usize| _mm256_load_ps(rows[i].as_ptr());
-        let (inv, cn, cf) = (&self.inv, &self.c_near, &self.c_far);
-        let plane = |i: usize, a: usize, c: __m256| _mm256_fmadd_ps(row(i), inv[a], c);
-        let tn = _mm256_max_ps(
-            _mm256_max_ps(plane(0, 0, cn[0]), plane(1, 1, cn[1])),
-            _mm256_max_ps(plane(2, 2, cn[2]), _mm256_setzero_ps()),
-        );
-        let tf = _mm256_min_ps(_mm256_min_ps(plane(3, 0, cf[0]), plane(4, 1, cf[1])), plane(5, 2, cf[2]));
-        let tf = _mm256_min_ps(_mm256_mul_ps(tf, _mm256_set1_ps(SLAB_EXPAND)), _mm256_set1_ps(t_max));
-        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
-        let mut out = [0.0f32; WIDTH];
-        _mm256_storeu_ps(out.as_mut_ptr(), tn);
-        (out, mask)
+        self.planes(std::array::from_fn(|i| rows[i].as_ptr()), t_max)
     }
 }
 
