@@ -18,6 +18,7 @@ pub mod flip;
 pub mod hdr_flip;
 pub mod heatmap;
 pub mod output;
+pub mod png_writer;
 pub mod ssim;
 
 pub use buffer::{Encoding, Rgb32Image};

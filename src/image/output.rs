@@ -61,6 +61,9 @@ pub fn write_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()
             path: path.to_path_buf(),
             reason: "only .png and .jpg/.jpeg outputs are supported for 8-bit images".into(),
         })?;
+    if format == image::ImageFormat::Png {
+        return write_atomic(path, |w| super::png_writer::write_rgb8(w, width, height, rgb));
+    }
     write_atomic(path, |w| {
         image::write_buffer_with_format(w, rgb, width, height, image::ExtendedColorType::Rgb8, format)
             .map_err(|e| e.to_string())
