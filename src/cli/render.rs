@@ -5,6 +5,7 @@
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use luster::film::outputs::{first_clash, plan_outputs, write_outputs};
+use luster::film::FilmReserve;
 use luster::render::{self, BuildOptions, RenderOptions, Scene};
 use luster::scene::obj::ModelView;
 use std::path::{Path, PathBuf};
@@ -63,6 +64,9 @@ fn render_scene(
     for w in &desc.warnings {
         eprintln!("warning: {}: {w}", path.display());
     }
+    // While the scene loads (an image decoding alone, say), a free worker
+    // writes the first camera's film memory.
+    let reserve = desc.cameras.first().map(|c| FilmReserve::start(c.resolution.0, c.resolution.1));
     let scene = Scene::build_with(&desc, build)?;
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", path.display());
@@ -88,7 +92,8 @@ fn render_scene(
         );
         bar.set_message(cam.image_name.clone());
         let t = Instant::now();
-        let img = render::try_render_with(&scene, i, opts, &|n| bar.inc(n));
+        let reserve = if i == 0 { reserve.as_ref() } else { None };
+        let img = render::try_render_reserved(&scene, i, opts, &|n| bar.inc(n), reserve);
         bar.finish_and_clear();
         let img = img.map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
         done.push((img, t.elapsed().as_secs_f64()));

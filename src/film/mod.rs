@@ -10,6 +10,8 @@
 //!   `stats`, its table-driven gamma and quantization in `quantize`.
 //! - [`display`]: the display transform of scenes that opt out of the
 //!   course's 8-bit semantics (`<Display>`, `--display`).
+//! - [`reserve`]: the first camera's film memory, written ahead by a worker
+//!   that would otherwise wait while the scene loads.
 //! - [`outputs`]: which files a camera's `ImageName` and `Tonemap`s ask for
 //!   (an `.exr`/`.hdr` and its tone-mapped `.png`, or a single PNG/JPEG), and
 //!   writing them.
@@ -21,11 +23,13 @@
 pub mod display;
 pub mod outputs;
 mod quantize;
+pub mod reserve;
 mod stats;
 pub mod tonemap;
 
 pub use display::Display;
 pub use outputs::{plan_outputs, Output, OutputKind};
+pub use reserve::FilmReserve;
 pub use tonemap::{Gamma, Operator, Tonemap};
 
 use crate::math::Vec3;
@@ -68,7 +72,9 @@ pub struct Tile<'a> {
 impl<'a> Tile<'a> {
     /// Empty tiles covering `rects` (`(x0, y0, x1, y1)`, ends excluded), in
     /// order, in consecutive parts of `store`, which is replaced by a zeroed
-    /// buffer of their size. One allocation for all the tiles, zeroed by the
+    /// buffer of their size unless it has that size (memory written ahead,
+    /// [`reserve`]; [`Tile::clear`] zeroes a tile before its first sample
+    /// either way). One allocation for all the tiles, zeroed by the
     /// allocator: fresh pages that the worker rendering a tile faults in.
     /// Two small vectors per tile, zeroed as they were made, grew the
     /// workers' malloc arenas a page at a time: ~2500 `mprotect` calls for
@@ -79,7 +85,10 @@ impl<'a> Tile<'a> {
         filter: Filter,
     ) -> Vec<Tile<'a>> {
         let area = |&(x0, y0, x1, y1): &(u32, u32, u32, u32)| (x1 - x0) as usize * (y1 - y0) as usize;
-        *store = vec![[0.0; 4]; rects.iter().map(area).sum()];
+        let n = rects.iter().map(area).sum();
+        if store.len() != n {
+            *store = vec![[0.0; 4]; n];
+        }
         let mut rest = store.as_mut_slice();
         let mut tiles = Vec::with_capacity(rects.len());
         for r @ &(x0, y0, x1, _) in rects {

@@ -21,7 +21,8 @@ pub use scene::{BuildOptions, Scene};
 
 pub use crate::film::Filter;
 
-use crate::film::{Film, Tile};
+use crate::film::reserve::FilmMemory;
+use crate::film::{Film, FilmReserve, Tile};
 use crate::integrator::{PathState, RayStats};
 use crate::math::{Vec2, Vec3};
 use crate::shader::ShaderError;
@@ -123,7 +124,7 @@ pub fn render_with(
     opts: &RenderOptions,
     on_tile: &(dyn Fn(u64) + Sync),
 ) -> RenderedImage {
-    render_tiles(scene, cam, opts, on_tile, &OnceLock::new(), None)
+    render_tiles(scene, cam, opts, on_tile, &OnceLock::new(), None, FilmMemory::default())
 }
 
 /// Renders camera `cam` of `scene` on the current rayon pool, or reports the
@@ -142,8 +143,22 @@ pub fn try_render_with(
     opts: &RenderOptions,
     on_tile: &(dyn Fn(u64) + Sync),
 ) -> Result<RenderedImage, Box<ShaderError>> {
+    try_render_reserved(scene, cam, opts, on_tile, None)
+}
+
+/// [`try_render_with`], in the memory `reserve` wrote ahead if it is this
+/// camera's size ([`FilmReserve`]).
+pub fn try_render_reserved(
+    scene: &Scene,
+    cam: usize,
+    opts: &RenderOptions,
+    on_tile: &(dyn Fn(u64) + Sync),
+    reserve: Option<&FilmReserve>,
+) -> Result<RenderedImage, Box<ShaderError>> {
     let failed = OnceLock::new();
-    let img = render_tiles(scene, cam, opts, on_tile, &failed, None);
+    let camera = &scene.cameras[cam];
+    let memory = reserve.map(|r| r.take(camera.width, camera.height)).unwrap_or_default();
+    let img = render_tiles(scene, cam, opts, on_tile, &failed, None, memory);
     match failed.into_inner() {
         Some(e) => Err(e),
         None => Ok(img),
@@ -169,7 +184,7 @@ pub fn render_progressive(
     progress: Progress<'_>,
 ) -> Result<RenderedImage, Box<ShaderError>> {
     let failed = OnceLock::new();
-    let img = render_tiles(scene, cam, opts, &|_| {}, &failed, Some(progress));
+    let img = render_tiles(scene, cam, opts, &|_| {}, &failed, Some(progress), FilmMemory::default());
     match failed.into_inner() {
         Some(e) => Err(e),
         None => Ok(img),
@@ -186,6 +201,7 @@ fn render_tiles(
     on_tile: &(dyn Fn(u64) + Sync),
     failed: &OnceLock<Box<ShaderError>>,
     mut progress: Option<Progress<'_>>,
+    memory: FilmMemory,
 ) -> RenderedImage {
     let cancel = progress.as_ref().map(|p| p.cancel);
     let stop = || failed.get().is_some() || cancel.is_some_and(|c| c.load(Ordering::Relaxed));
@@ -208,7 +224,7 @@ fn render_tiles(
     }
     let rects: Vec<(u32, u32, u32, u32)> =
         origins.into_iter().map(|(x0, y0)| (x0, y0, (x0 + TILE).min(w), (y0 + TILE).min(h))).collect();
-    let mut store = Vec::new();
+    let (mut store, mut pixels) = (memory.store.unwrap_or_default(), memory.pixels);
     let mut tiles: Vec<(Tile, RayStats)> =
         Tile::all_in(&mut store, &rects, opts.filter).into_iter().map(|t| (t, RayStats::default())).collect();
     let pass_floor = if progress.is_some() { 1 } else { BATCH_PASS };
@@ -278,14 +294,14 @@ fn render_tiles(
         });
         taken += n;
         if let (Some(p), false) = (progress.as_mut(), stop()) {
-            (p.on_pass)(&merged(w, h, &tiles), taken);
+            (p.on_pass)(&merged(w, h, &tiles, None), taken);
         }
     }
     let mut stats = RayStats::default();
     for (_, s) in &tiles {
         stats.add(s);
     }
-    let film = merged(w, h, &tiles);
+    let film = merged(w, h, &tiles, pixels.take());
     drop(tiles);
     // Unmapping the accumulators' ~10 MB (an 800×800 film) took ~1 ms on the
     // thread that goes on to encode the image: a free worker does it. On
@@ -302,11 +318,16 @@ fn render_tiles(
 /// serially, zeroing an 800×800 film (faulting its pages in) and copying the
 /// tiles into it took ~10 ms on one thread after the render had ended, the
 /// largest serial part of a small render. Each pixel is written by its one
-/// tile, so the bytes are those of a serial merge.
-fn merged(w: u32, h: u32, tiles: &[(Tile, RayStats)]) -> Film {
+/// tile, so the bytes are those of a serial merge. `zeroed`, of the film's
+/// size, is used instead of a new buffer (memory written ahead,
+/// [`FilmReserve`]).
+fn merged(w: u32, h: u32, tiles: &[(Tile, RayStats)], zeroed: Option<Vec<Vec3>>) -> Film {
     let band = (w as usize * TILE as usize).max(1);
-    let mut pixels: Vec<Vec3> =
-        (0..w as usize * h as usize).into_par_iter().with_min_len(band).map(|_| Vec3::ZERO).collect();
+    let n = w as usize * h as usize;
+    let mut pixels: Vec<Vec3> = match zeroed {
+        Some(p) if p.len() == n => p,
+        _ => (0..n).into_par_iter().with_min_len(band).map(|_| Vec3::ZERO).collect(),
+    };
     pixels.par_chunks_mut(band).enumerate().for_each(|(b, rows)| {
         let y0 = b as u32 * TILE;
         let first = tiles.partition_point(|(t, _)| t.bounds().1 < y0);
@@ -380,8 +401,13 @@ mod tests {
             }
             tiles.push((t, RayStats::default()));
         }
-        let film = merged(w, h, &tiles);
+        let film = merged(w, h, &tiles, None);
         assert_eq!((film.width, film.height, film.pixels.len()), (w, h, (w * h) as usize));
+        // In memory written ahead (zeroed), or in a buffer of the wrong size
+        // (replaced): the same film.
+        for zeroed in [vec![Vec3::ZERO; (w * h) as usize], vec![Vec3::ONE; 3]] {
+            assert_eq!(merged(w, h, &tiles, Some(zeroed)).pixels, film.pixels);
+        }
         let per_row = w.div_ceil(TILE);
         for y in 0..h {
             for x in 0..w {
@@ -390,7 +416,7 @@ mod tests {
                 assert_eq!(film.pixels[(y * w + x) as usize], want, "pixel ({x}, {y})");
             }
         }
-        assert!(merged(0, 0, &[]).pixels.is_empty());
+        assert!(merged(0, 0, &[], None).pixels.is_empty());
     }
 
     /// Passes cover the samples exactly; a preview grows to an eighth of
