@@ -143,10 +143,8 @@ fn costs(prev: &[u8], cur: &[u8]) -> [u64; 4] {
     let mag = |v: u8| u16::from((v as i8).unsigned_abs());
     // The first pixel has no left neighbour: its `a` and `c` are 0.
     for j in 0..BPP.min(n) {
-        let (x, b) = (cur[j], prev[j]);
-        let f = [x, x.wrapping_sub(b), x.wrapping_sub(b / 2), x.wrapping_sub(b)];
-        for (t, v) in total.iter_mut().zip(f) {
-            *t += u64::from(mag(v));
+        for (t, f) in total.iter_mut().zip([Filter::Sub, Filter::Up, Filter::Average, Filter::Paeth]) {
+            *t += u64::from(mag(cur[j].wrapping_sub(predict(f, 0, prev[j], 0))));
         }
     }
     let mut start = BPP.min(n);
@@ -176,12 +174,7 @@ fn write(f: Filter, prev: &[u8], cur: &[u8], out: &mut [u8]) {
     let n = cur.len().min(prev.len()).min(out.len());
     let h = BPP.min(n);
     for j in 0..h {
-        let (x, b) = (cur[j], prev[j]);
-        out[j] = x.wrapping_sub(match f {
-            Filter::Sub => 0,
-            Filter::Up | Filter::Paeth => b,
-            Filter::Average => b / 2,
-        });
+        out[j] = cur[j].wrapping_sub(predict(f, 0, prev[j], 0));
     }
     let (o, x, b) = (&mut out[h..n], &cur[h..n], &prev[h..n]);
     let (a, c) = (&cur[..n - h], &prev[..n - h]);
@@ -192,6 +185,19 @@ fn write(f: Filter, prev: &[u8], cur: &[u8], out: &mut [u8]) {
         Filter::Up => (0..m).for_each(|k| o[k] = x[k].wrapping_sub(b[k])),
         Filter::Average => (0..m).for_each(|k| o[k] = x[k].wrapping_sub(average(a[k], b[k]))),
         Filter::Paeth => (0..m).for_each(|k| o[k] = x[k].wrapping_sub(paeth(a[k], b[k], c[k]))),
+    }
+}
+
+/// Filter `f`'s prediction of a byte from the bytes left of it (`a`),
+/// above it (`b`) and above-left (`c`). The vector loops of [`costs`] and
+/// [`write`] spell it out per filter; the first pixel's few bytes use it.
+#[inline(always)]
+fn predict(f: Filter, a: u8, b: u8, c: u8) -> u8 {
+    match f {
+        Filter::Sub => a,
+        Filter::Up => b,
+        Filter::Average => average(a, b),
+        Filter::Paeth => paeth(a, b, c),
     }
 }
 

@@ -224,7 +224,7 @@ fn render_tiles(
     }
     let rects: Vec<(u32, u32, u32, u32)> =
         origins.into_iter().map(|(x0, y0)| (x0, y0, (x0 + TILE).min(w), (y0 + TILE).min(h))).collect();
-    let (mut store, mut pixels) = (memory.store.unwrap_or_default(), memory.pixels);
+    let (mut store, pixels) = (memory.store.unwrap_or_default(), memory.pixels);
     let mut tiles: Vec<(Tile, RayStats)> =
         Tile::all_in(&mut store, &rects, opts.filter).into_iter().map(|t| (t, RayStats::default())).collect();
     let pass_floor = if progress.is_some() { 1 } else { BATCH_PASS };
@@ -301,7 +301,7 @@ fn render_tiles(
     for (_, s) in &tiles {
         stats.add(s);
     }
-    let film = merged(w, h, &tiles, pixels.take());
+    let film = merged(w, h, &tiles, pixels);
     drop(tiles);
     // Unmapping the accumulators' ~10 MB (an 800×800 film) took ~1 ms on the
     // thread that goes on to encode the image: a free worker does it. On
