@@ -450,3 +450,94 @@ fn glass_paths_follow_one_branch_past_one_sample_and_keep_the_sky() {
         }
     }
 }
+
+/// A small box lit by a point light and a light mesh, with a glass and a
+/// mirror sphere, for paths of every kind of vertex.
+fn mixed_box(params: &str) -> String {
+    format!(
+        r#"<Scene>
+  <MaxRecursionDepth>4</MaxRecursionDepth>
+  <Cameras><Camera id="1" type="lookAt"><Position>0 0 1.8</Position><GazePoint>0 0 0</GazePoint><Up>0 1 0</Up>
+    <FovY>60</FovY><NearDistance>1</NearDistance><ImageResolution>8 8</ImageResolution>
+    <ImageName>a.exr</ImageName><Renderer>PathTracing</Renderer><RendererParams>{params}</RendererParams></Camera></Cameras>
+  <Lights><PointLight id="1"><Position>0.5 1.5 0.5</Position><Intensity>2 2 2</Intensity></PointLight></Lights>
+  <BRDFs><ModifiedPhong id="1" normalized="true"><Exponent>1</Exponent></ModifiedPhong>
+    <TorranceSparrow id="2"><Exponent>40</Exponent></TorranceSparrow></BRDFs>
+  <Materials>
+    <Material id="1" BRDF="1"><DiffuseReflectance>0.7 0.6 0.5</DiffuseReflectance><SpecularReflectance>0 0 0</SpecularReflectance></Material>
+    <Material id="2" type="dielectric"><DiffuseReflectance>0 0 0</DiffuseReflectance><SpecularReflectance>0 0 0</SpecularReflectance>
+      <AbsorptionCoefficient>0 0 0</AbsorptionCoefficient><RefractionIndex>1.5</RefractionIndex></Material>
+    <Material id="3" type="mirror"><DiffuseReflectance>0 0 0</DiffuseReflectance><SpecularReflectance>0 0 0</SpecularReflectance>
+      <MirrorReflectance>0.9 0.9 0.9</MirrorReflectance></Material>
+    <Material id="4" BRDF="2"><DiffuseReflectance>0.3 0.5 0.3</DiffuseReflectance><SpecularReflectance>0.4 0.4 0.4</SpecularReflectance></Material>
+    <Material id="5"><DiffuseReflectance>0 0 0</DiffuseReflectance><SpecularReflectance>0 0 0</SpecularReflectance></Material>
+  </Materials>
+  <VertexData>-2 -2 -2  2 -2 -2  2 2 -2  -2 2 -2  -2 -2 2  2 -2 2  2 2 2  -2 2 2
+    -0.7 -1.4 -0.6  0.7 -1.4 0.4  0 -1.2 -1.2
+    -0.3 1.9 -0.3  0.3 1.9 -0.3  0.3 1.9 0.3  -0.3 1.9 0.3</VertexData>
+  <Objects>
+    <Mesh id="1"><Material>1</Material><Faces>1 2 3 1 3 4  1 5 6 1 6 2  2 6 7 2 7 3  4 3 7 4 7 8  1 4 8 1 8 5</Faces></Mesh>
+    <Sphere id="1"><Material>2</Material><Center>9</Center><Radius>0.5</Radius></Sphere>
+    <Sphere id="2"><Material>3</Material><Center>10</Center><Radius>0.5</Radius></Sphere>
+    <Sphere id="3"><Material>4</Material><Center>11</Center><Radius>0.4</Radius></Sphere>
+    <LightMesh id="1"><Material>5</Material><Radiance>6 6 6</Radiance><Faces>12 13 14 12 14 15</Faces></LightMesh>
+  </Objects>
+</Scene>"#
+    )
+}
+
+/// The path tracer follows two samples' paths in step
+/// (`Integrator::radiance_pair`); each must come out exactly as it does
+/// alone, ray counts included, whatever its paths meet: light samples,
+/// bounces, roulette, glass, mirrors, a glossy lobe.
+#[test]
+fn paths_traced_in_pairs_are_the_paths_traced_alone() {
+    use luster::integrator::{PathState, RayStats};
+    use luster::math::{Ray, Vec3};
+    use luster::render::sampler::PixelSampler;
+    let dir = tempfile::tempdir().expect("temp dir");
+    let variants = [
+        "NextEventEstimation",
+        "NextEventEstimation ImportanceSampling RussianRoulette",
+        "ImportanceSampling",
+        "RussianRoulette",
+        "MIS",
+        "MIS OneLight",
+    ];
+    let bits = |v: Vec3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+    let mut nonzero = 0;
+    for params in variants {
+        let scene = Scene::build(&load(dir.path(), &mixed_box(params))).expect("scene builds");
+        let integrator = scene.integrators[0];
+        for count in [2u32, 3, 16] {
+            for pixel in 0..24u32 {
+                let (x, y) = (pixel % 6, pixel / 6);
+                // Directions from the camera spread over the box.
+                let a = pixel as f32 * 0.61;
+                let d = Vec3::new(a.cos() * 0.8, a.sin() * 0.8 - 0.2, -1.0).normalize();
+                let ray = Ray::new(Vec3::new(0.0, 0.0, 1.8), d);
+                let state = |s: u32| {
+                    let mut sampler = PixelSampler::new(7, x, y, 0, count);
+                    sampler.restart(s);
+                    sampler.skip();
+                    PathState::new(RayStats::default(), 0.0, sampler)
+                };
+                for s in (0..count - 1).step_by(2) {
+                    let (mut a1, mut b1) = (state(s), state(s + 1));
+                    let la = integrator.radiance(&scene, &ray, &mut a1);
+                    let lb = integrator.radiance(&scene, &ray, &mut b1);
+                    let (mut a2, mut b2) = (state(s), state(s + 1));
+                    let [pa, pb] = integrator.radiance_pair(&scene, [&ray, &ray], &mut a2, &mut b2);
+                    assert_eq!(bits(la), bits(pa), "{params}, {count} spp, pixel {pixel}, sample {s}");
+                    assert_eq!(bits(lb), bits(pb), "{params}, {count} spp, pixel {pixel}, sample {}", s + 1);
+                    for (one, two) in [(&a1, &a2), (&b1, &b2)] {
+                        let (o, t) = (one.stats, two.stats);
+                        assert_eq!((o.primary, o.secondary, o.shadow), (t.primary, t.secondary, t.shadow));
+                    }
+                    nonzero += usize::from(la != Vec3::ZERO) + usize::from(lb != Vec3::ZERO);
+                }
+            }
+        }
+    }
+    assert!(nonzero > 500, "only {nonzero} samples found light");
+}

@@ -21,7 +21,7 @@
 //! measures it).
 
 use super::sampling::{half_vector_pdf, reflect_about};
-use crate::math::Vec3;
+use crate::math::{sin_cos_turns, Vec3};
 use std::f32::consts::{FRAC_1_PI, PI};
 
 /// Narrowest lobe: below this width a lobe is a mirror in all but name, and
@@ -89,8 +89,8 @@ impl Microfacet {
         let tan2 = a2 * u1 / (1.0 - u1).max(1e-7);
         let cos = 1.0 / (1.0 + tan2).sqrt();
         let sin = (1.0 - cos * cos).max(0.0).sqrt();
-        let phi = 2.0 * PI * u2;
-        reflect_about(wo, Vec3::new(sin * phi.cos(), sin * phi.sin(), cos))
+        let (sp, cp) = sin_cos_turns(u2);
+        reflect_about(wo, Vec3::new(sin * cp, sin * sp, cos))
     }
 
     /// Density of [`sample_lobe`](Self::sample_lobe) at `wi`.

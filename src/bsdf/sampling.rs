@@ -1,8 +1,8 @@
 //! Warps from the unit square to directions around the local `+z` axis, with
 //! their densities (per unit solid angle). Shared by every BRDF's sampler.
 
-use crate::math::{orthonormal_basis, Vec3};
-use std::f32::consts::{FRAC_1_PI, PI};
+use crate::math::{orthonormal_basis, sin_cos_turns, Vec3};
+use std::f32::consts::FRAC_1_PI;
 
 /// A direction drawn with density `(e + 1) / 2π · cos^e θ` about `+z`
 /// (`e = 0`: uniform, `e = 1`: cosine-weighted). `θ` never exceeds 90°.
@@ -17,8 +17,8 @@ pub fn power_cosine(e: f32, (u1, u2): (f32, f32)) -> Vec3 {
         _ => u1.powf(1.0 / (e + 1.0)),
     };
     let sin = (1.0 - cos * cos).max(0.0).sqrt();
-    let phi = 2.0 * PI * u2;
-    Vec3::new(sin * phi.cos(), sin * phi.sin(), cos)
+    let (sp, cp) = sin_cos_turns(u2);
+    Vec3::new(sin * cp, sin * sp, cos)
 }
 
 /// Density of [`power_cosine`] at a direction whose cosine to the axis is `cos`.

@@ -59,6 +59,32 @@ impl Integrator {
             Integrator::Path(p) => path::radiance(scene, ray, p, st),
         }
     }
+
+    /// Whether [`Integrator::radiance_pair`] gains on two calls of
+    /// [`Integrator::radiance`]: the path tracer's (see there). The
+    /// recursive tracer's pair is two calls, and its render loop is left
+    /// as it was.
+    #[inline]
+    pub fn pairs(&self) -> bool {
+        matches!(self, Integrator::Path(_))
+    }
+
+    /// [`Integrator::radiance`] of two camera rays, each with its state:
+    /// the same two answers. The path tracer follows both paths in step
+    /// ([`path::radiance_pair`]).
+    #[inline]
+    pub fn radiance_pair(
+        &self,
+        scene: &Scene,
+        rays: [&Ray; 2],
+        sa: &mut PathState,
+        sb: &mut PathState,
+    ) -> [Vec3; 2] {
+        match self {
+            Integrator::Whitted => [self.radiance(scene, rays[0], sa), self.radiance(scene, rays[1], sb)],
+            Integrator::Path(p) => path::radiance_pair(scene, rays, p, sa, sb),
+        }
+    }
 }
 
 /// What a surface is at a hit once its texture maps (and shaders) have

@@ -27,7 +27,7 @@
 //! </LightSphere>
 //! ```
 
-use crate::math::{orthonormal_basis, Transform, Vec3};
+use crate::math::{orthonormal_basis, sin_cos_turns, Transform, Vec3};
 use std::f32::consts::PI;
 
 /// Lights with at most this many triangles pick one by a linear count.
@@ -180,10 +180,10 @@ impl LightSphere {
         let (_, one_minus) = self.cone(d2)?;
         let cos = 1.0 - u1 * one_minus;
         let sin = (1.0 - cos * cos).max(0.0).sqrt();
-        let phi = 2.0 * PI * u2;
+        let (sp, cp) = sin_cos_turns(u2);
         let axis = to_c / d2.sqrt();
         let (t, b) = orthonormal_basis(axis);
-        let wi = (t * (sin * phi.cos()) + b * (sin * phi.sin()) + axis * cos).normalize();
+        let wi = (t * (sin * cp) + b * (sin * sp) + axis * cos).normalize();
         // Nearest root of |p + s wi − c|² = R²; at the rim the discriminant
         // rounds to or below zero, where the tangent distance is the answer.
         let tc = to_c.dot(wi);
@@ -281,8 +281,8 @@ impl ShadedLight {
                     ShadedShape::Sphere(l) => {
                         let z = 1.0 - 2.0 * u.0;
                         let r = (1.0 - z * z).max(0.0).sqrt();
-                        let phi = 2.0 * PI * u.1;
-                        let d = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+                        let (sp, cp) = sin_cos_turns(u.1);
+                        let d = Vec3::new(r * cp, r * sp, z);
                         (l.center + d * l.radius, d)
                     }
                 }

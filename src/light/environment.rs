@@ -29,7 +29,7 @@
 //! and HDR, 0–255 for 8-bit images, like `BackgroundColor`).
 
 use super::distribution::Distribution2D;
-use crate::math::{orthonormal_basis, Vec2, Vec3};
+use crate::math::{orthonormal_basis, sin_cos_turns, Vec2, Vec3};
 use crate::scene::description::{EnvMapping, EnvSampling};
 use crate::texture::Image;
 use std::f32::consts::PI;
@@ -197,8 +197,8 @@ impl Environment {
                 // Uniform on the hemisphere: cos θ uniform in [0, 1].
                 let z = u.0;
                 let r = (1.0 - z * z).max(0.0).sqrt();
-                let phi = 2.0 * PI * u.1;
-                let d = frame(n, Vec3::new(r * phi.cos(), r * phi.sin(), z));
+                let (sp, cp) = sin_cos_turns(u.1);
+                let d = frame(n, Vec3::new(r * cp, r * sp, z));
                 Some((d, self.eval(d) * (2.0 * PI)))
             }
             (EnvSampling::Cosine, Some(n)) => {

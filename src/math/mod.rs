@@ -9,11 +9,13 @@
 mod aabb;
 mod ray;
 mod transform;
+mod turns;
 
 pub use aabb::Aabb;
 pub use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec3A, Vec4};
 pub use ray::Ray;
 pub use transform::Transform;
+pub use turns::sin_cos_turns;
 
 /// Builds an orthonormal basis around `n` (Duff et al. 2017, "Building an
 /// Orthonormal Basis, Revisited"): no branches on the hot path, no singularity.

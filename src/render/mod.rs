@@ -24,7 +24,7 @@ pub use crate::film::Filter;
 use crate::film::reserve::FilmMemory;
 use crate::film::{Film, FilmReserve, Tile};
 use crate::integrator::{PathState, RayStats};
-use crate::math::{Vec2, Vec3};
+use crate::math::{Ray, Vec2, Vec3};
 use crate::shader::ShaderError;
 use rayon::prelude::*;
 use sampler::{PixelSampler, MIN_BATCH_RUN};
@@ -213,6 +213,7 @@ fn render_tiles(
     let spread = camera.pixel_spread();
     let view = camera.view();
     let uses_time = scene.uses_shutter_time();
+    let pairs = integrator.pairs();
     let mut origins = tile_origins(w, h);
     if let Some(sel) = opts.tiles {
         origins = origins
@@ -255,31 +256,36 @@ fn render_tiles(
             let first = PixelSampler::new(opts.seed, x0, y0, 0, spp);
             let mut st = PathState::new(*stats, 0.0, first).for_pixel(Vec2::ZERO, spread);
             st.view = view;
+            // The second of two samples traced together (see
+            // `Integrator::radiance_pair`); its counts join the tile's.
+            let mut st2 = PathState::new(RayStats::default(), 0.0, first).for_pixel(Vec2::ZERO, spread);
+            st2.view = view;
+            let look = Look { camera, spp, uses_time, w, h };
             'rows: for y in y0..y1 {
                 if stop() {
                     break;
                 }
                 for x in x0..x1 {
                     st.sampler = PixelSampler::new(opts.seed, x, y, 0, spp).batched(samples.clone());
-                    for s in samples.clone() {
-                        st.sampler.restart(s);
-                        let sampler = &mut st.sampler;
-                        let (jx, jy) = if spp == 1 { (0.5, 0.5) } else { sampler.next_2d() };
-                        // A pinhole ignores the lens: its draw would cost a
-                        // stratified dimension for nothing.
-                        let lens = if camera.has_lens() { sampler.next_2d() } else { (0.5, 0.5) };
-                        // A scene where the time changes nothing skips its
-                        // draw; the later draws stay where they were.
-                        let time = if uses_time {
-                            sampler.next_1d()
-                        } else {
-                            sampler.skip();
-                            0.0
-                        };
-                        let ray = camera.lens_ray(x as f32 + jx, y as f32 + jy, lens);
-                        let screen = Vec2::new((x as f32 + jx) / w as f32, (y as f32 + jy) / h as f32);
-                        st.next_sample(time, screen, [x, y]);
-                        st.stats.primary += 1;
+                    st2.sampler = st.sampler;
+                    let mut s = samples.start;
+                    // Two samples at a time where the integrator follows
+                    // two paths in step, added in their order.
+                    while pairs && s + 1 < samples.end {
+                        let (ra, jxa, jya) = look.sample(&mut st, x, y, s);
+                        let (rb, jxb, jyb) = look.sample(&mut st2, x, y, s + 1);
+                        let [la, lb] = integrator.radiance_pair(scene, [&ra, &rb], &mut st, &mut st2);
+                        tile.add_sample(x, y, jxa, jya, la);
+                        tile.add_sample(x, y, jxb, jyb, lb);
+                        if let Some(e) = st.error.take().or_else(|| st2.error.take()) {
+                            let _ = failed.set(e);
+                            break 'rows;
+                        }
+                        s += 2;
+                    }
+                    while s < samples.end {
+                        let (ray, jx, jy) = look.sample(&mut st, x, y, s);
+                        s += 1;
                         let l = integrator.radiance(scene, &ray, &mut st);
                         tile.add_sample(x, y, jx, jy, l);
                         if let Some(e) = st.error.take() {
@@ -289,6 +295,7 @@ fn render_tiles(
                     }
                 }
             }
+            st.stats.add(&st2.stats);
             *stats = st.stats;
             on_tile(tile.len() as u64 * u64::from(n));
         });
@@ -311,6 +318,44 @@ fn render_tiles(
         rayon::spawn(move || drop(store));
     }
     RenderedImage { film, stats, spp: taken }
+}
+
+/// What a camera sample needs of the camera being rendered.
+struct Look<'a> {
+    camera: &'a camera::Camera,
+    spp: u32,
+    uses_time: bool,
+    w: u32,
+    h: u32,
+}
+
+impl Look<'_> {
+    /// Draws the camera's dimensions of sample `s` of pixel `(x, y)` and
+    /// readies `st` for it: the camera ray and the pixel jitter. Inlined
+    /// into the render loop: called, it cost the recursive tracer's hw4
+    /// scenes ~12% (their samples are cheap).
+    #[inline(always)]
+    fn sample(&self, st: &mut PathState, x: u32, y: u32, s: u32) -> (Ray, f32, f32) {
+        st.sampler.restart(s);
+        let sampler = &mut st.sampler;
+        let (jx, jy) = if self.spp == 1 { (0.5, 0.5) } else { sampler.next_2d() };
+        // A pinhole ignores the lens: its draw would cost a stratified
+        // dimension for nothing.
+        let lens = if self.camera.has_lens() { sampler.next_2d() } else { (0.5, 0.5) };
+        // A scene where the time changes nothing skips its draw; the later
+        // draws stay where they were.
+        let time = if self.uses_time {
+            sampler.next_1d()
+        } else {
+            sampler.skip();
+            0.0
+        };
+        let ray = self.camera.lens_ray(x as f32 + jx, y as f32 + jy, lens);
+        let screen = Vec2::new((x as f32 + jx) / self.w as f32, (y as f32 + jy) / self.h as f32);
+        st.next_sample(time, screen, [x, y]);
+        st.stats.primary += 1;
+        (ray, jx, jy)
+    }
 }
 
 /// The `w`×`h` film of `tiles`, which are in the row-major order of

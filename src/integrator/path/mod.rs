@@ -110,16 +110,21 @@ enum Came {
 /// draw independent uniforms.
 const STRATIFIED_FIRST_HIT: u32 = 4;
 
-/// Radiance arriving along the camera ray `ray`.
-pub fn radiance(scene: &Scene, ray: &Ray, p: &PathParams, st: &mut PathState) -> Vec3 {
-    // Sampling every light, the first hit draws once per light that draws,
-    // then the lobe and the direction.
-    let first_hit = if p.mis && scene.lights.len() > 1 && every_light(scene, p) {
+/// The sampler calls of a path's first hit that are stratified: sampling
+/// every light, the first hit draws once per light that draws, then the
+/// lobe and the direction.
+#[inline]
+fn first_hit_calls(scene: &Scene, p: &PathParams) -> u32 {
+    if p.mis && scene.lights.len() > 1 && every_light(scene, p) {
         2 + scene.lights.iter().filter(|l| l.draws()).count() as u32
     } else {
         STRATIFIED_FIRST_HIT
-    };
-    st.sampler.stratify_first(st.sampler.calls() + first_hit);
+    }
+}
+
+/// Radiance arriving along the camera ray `ray`.
+pub fn radiance(scene: &Scene, ray: &Ray, p: &PathParams, st: &mut PathState) -> Vec3 {
+    st.sampler.stratify_first(st.sampler.calls() + first_hit_calls(scene, p));
     li(scene, ray, 0, Vec3::ONE, Came::Direct, p, st)
 }
 
@@ -128,11 +133,11 @@ pub fn radiance(scene: &Scene, ray: &Ray, p: &PathParams, st: &mut PathState) ->
 ///
 /// A vertex whose bounce is the last thing it adds (no specular part, no
 /// media: most vertices) continues the loop with the bounce's ray instead of
-/// recursing: its colour, weight and `q` wait in `pending`, and once the path
-/// ends they are folded back deepest first as `c + w · L / q`, the
+/// recursing: its colour, weight and `q` wait in the [`Walk`], and once the
+/// path ends they are folded back deepest first as `c + w · L / q`, the
 /// recursion's operations in its order, so the same bits. A recursive call
 /// cost each vertex a prologue, an epilogue and its arguments through the
-/// stack. Other vertices, and a path longer than `pending`, recurse.
+/// stack. Other vertices, and a path longer than [`DEFERRED`], recurse.
 fn li(
     scene: &Scene,
     ray: &Ray,
@@ -142,21 +147,102 @@ fn li(
     p: &PathParams,
     st: &mut PathState,
 ) -> Vec3 {
-    let media = !scene.volumes.media.is_empty();
-    let entry = st.travelled;
-    let mut pending = [MaybeUninit::<Pending>::uninit(); DEFERRED];
-    let mut n = 0;
-    let (mut ray, mut depth, mut beta, mut came) = (*ray, depth, beta, came);
-    let mut color = loop {
-        let hit = volumes::trace(scene, &ray, depth == 0, st);
+    let mut w = Walk::new(scene, *ray, depth, beta, came, st);
+    let color = w.run(scene, p, st);
+    w.fold(color, st)
+}
+
+/// The radiance of two camera rays, each with its own state, their paths
+/// traced in step: a vertex of one, then the same vertex of the other.
+/// Each path's chain (hit, shading, sample, next ray) is serial, and the
+/// processor overlaps only work that is close in the instruction stream;
+/// two independent paths side by side give it that work. Each path draws
+/// from its own sampler and does exactly what [`radiance`] does for it, so
+/// the two answers are [`radiance`]'s, bit for bit.
+pub fn radiance_pair(
+    scene: &Scene,
+    rays: [&Ray; 2],
+    p: &PathParams,
+    sa: &mut PathState,
+    sb: &mut PathState,
+) -> [Vec3; 2] {
+    let first_hit = first_hit_calls(scene, p);
+    sa.sampler.stratify_first(sa.sampler.calls() + first_hit);
+    sb.sampler.stratify_first(sb.sampler.calls() + first_hit);
+    let mut a = Walk::new(scene, *rays[0], 0, Vec3::ONE, Came::Direct, sa);
+    let mut b = Walk::new(scene, *rays[1], 0, Vec3::ONE, Came::Direct, sb);
+    let (ca, cb) = loop {
+        let ha = volumes::trace(scene, &a.ray, a.depth == 0, sa);
+        let hb = volumes::trace(scene, &b.ray, b.depth == 0, sb);
+        let ra = a.step(scene, &ha, p, sa);
+        let rb = b.step(scene, &hb, p, sb);
+        match (ra, rb) {
+            (None, None) => {}
+            (Some(ca), Some(cb)) => break (ca, cb),
+            (Some(ca), None) => break (ca, b.run(scene, p, sb)),
+            (None, Some(cb)) => break (a.run(scene, p, sa), cb),
+        }
+    };
+    [a.fold(ca, sa), b.fold(cb, sb)]
+}
+
+/// A path being followed by [`li`]: the ray to trace next, its bounce,
+/// throughput and how it left its surface, and the vertices waiting for the
+/// light their bounce brings.
+struct Walk {
+    ray: Ray,
+    depth: u32,
+    beta: Vec3,
+    came: Came,
+    /// Whether the scene has media (then no vertex waits).
+    media: bool,
+    /// The distance travelled before the walk, given back at its end.
+    entry: f32,
+    n: usize,
+    pending: [MaybeUninit<Pending>; DEFERRED],
+}
+
+impl Walk {
+    #[inline(always)]
+    fn new(scene: &Scene, ray: Ray, depth: u32, beta: Vec3, came: Came, st: &PathState) -> Walk {
+        Walk {
+            ray,
+            depth,
+            beta,
+            came,
+            media: !scene.volumes.media.is_empty(),
+            entry: st.travelled,
+            n: 0,
+            pending: [MaybeUninit::uninit(); DEFERRED],
+        }
+    }
+
+    /// Follows the path to its end: the light along the walk's ray once
+    /// the vertices waiting have added theirs ([`Walk::fold`]).
+    #[inline(always)]
+    fn run(&mut self, scene: &Scene, p: &PathParams, st: &mut PathState) -> Vec3 {
+        loop {
+            let hit = volumes::trace(scene, &self.ray, self.depth == 0, st);
+            if let Some(c) = self.step(scene, &hit, p, st) {
+                break c;
+            }
+        }
+    }
+
+    /// The vertex where the walk's ray ends (`hit`, from
+    /// [`volumes::trace`]): `None` where the path goes on from there with
+    /// the bounce's ray, else the light arriving along the ray.
+    #[inline(always)]
+    fn step(&mut self, scene: &Scene, hit: &Option<Hit>, p: &PathParams, st: &mut PathState) -> Option<Vec3> {
+        let (ray, depth) = (self.ray, self.depth);
         // Borrowed in place: moving the hit out of the slot `trace` filled
         // copied it in wide loads that waited on its narrow stores.
-        let (t, color) = match &hit {
+        let (t, color) = match hit {
             Some(hit) => {
                 let before = st.travelled;
                 st.travelled += hit.t;
-                let defer = !media && n < DEFERRED;
-                match shade(scene, &ray, hit, depth, beta, came, p, defer, st) {
+                let defer = !self.media && self.n < DEFERRED;
+                match shade(scene, &ray, hit, depth, self.beta, self.came, p, defer, st) {
                     Shaded::Done(c) => {
                         st.travelled = before;
                         (hit.t, c)
@@ -164,37 +250,44 @@ fn li(
                     Shaded::Bounce(c, b) => {
                         // The next vertex sees this one's distance added,
                         // as the recursive call did.
-                        pending[n].write(Pending { color: c, weight: b.weight, q: b.q });
-                        n += 1;
-                        (ray, depth, beta, came) = (b.ray, depth + 1, b.next, b.came);
-                        continue;
+                        self.pending[self.n].write(Pending { color: c, weight: b.weight, q: b.q });
+                        self.n += 1;
+                        (self.ray, self.depth, self.beta, self.came) = (b.ray, depth + 1, b.next, b.came);
+                        return None;
                     }
                 }
             }
-            None => (f32::INFINITY, escaped(scene, &ray, came, p, st)),
+            None => (f32::INFINITY, escaped(scene, &ray, self.came, p, st)),
         };
         // Nothing on the way dims the light or adds to it.
-        if !media {
-            break color;
+        if !self.media {
+            return Some(color);
         }
         if past_limit(scene, depth, p) {
             // The light found past the depth limit arrives dimmed by the media
             // on the way; scattering there would be one bounce too many.
             if is_black(color) {
-                break color;
+                return Some(color);
             }
-            break color * volumes::media_transmittance(scene, &ray, t, st);
+            return Some(color * volumes::media_transmittance(scene, &ray, t, st));
         }
-        break volumes::through_media(scene, &ray, t, color, st);
-    };
-    while n > 0 {
-        n -= 1;
-        // SAFETY: entries below `n` were all written in the loop.
-        let v = unsafe { pending[n].assume_init() };
-        color = v.color + v.weight * color / v.q;
+        Some(volumes::through_media(scene, &ray, t, color, st))
     }
-    st.travelled = entry;
-    color
+
+    /// The light along the walk's first ray, given `color` arriving at its
+    /// last vertex: the waiting vertices' terms added deepest first.
+    #[inline(always)]
+    fn fold(&self, mut color: Vec3, st: &mut PathState) -> Vec3 {
+        let mut n = self.n;
+        while n > 0 {
+            n -= 1;
+            // SAFETY: entries below `self.n` were all written by `step`.
+            let v = unsafe { self.pending[n].assume_init() };
+            color = v.color + v.weight * color / v.q;
+        }
+        st.travelled = self.entry;
+        color
+    }
 }
 
 /// Vertices of a path that [`li`] keeps waiting for their bounce's light;
