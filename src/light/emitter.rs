@@ -13,7 +13,9 @@
 //! side of the sphere, and its density does not blow up at grazing angles.
 //! A mesh emits from both faces (like the course's square area lights; the
 //! course's mesh lights are closed boxes whose winding is not consistent),
-//! a sphere from its outside.
+//! a sphere from its outside. Where the mesh is a convex shell (the course's
+//! boxes), a point drawn on its far side is known to be blocked by its near
+//! side without a shadow ray ([`LightMesh::hides`], `shell.rs`).
 //!
 //! A `MotionBlur` translation moves the light with its object: a sample for
 //! a ray at shutter time `t` is drawn on the light moved by `t · motion`,
@@ -27,6 +29,7 @@
 //! </LightSphere>
 //! ```
 
+use super::shell::Shell;
 use crate::math::{orthonormal_basis, sin_cos_turns, Transform, Vec3};
 use std::f32::consts::PI;
 
@@ -54,6 +57,9 @@ pub struct LightMesh {
     pub radiance: Vec3,
     /// World-space translation over the shutter interval (`MotionBlur`).
     pub motion: Vec3,
+    /// Where the mesh is a convex shell, which hides its far side: then
+    /// each triangle's normal in `tris` points out.
+    shell: Option<Shell>,
 }
 
 impl LightMesh {
@@ -64,18 +70,23 @@ impl LightMesh {
         xf: &Transform,
         radiance: Vec3,
     ) -> Option<LightMesh> {
-        let mut tris = Vec::new();
-        let mut cdf = Vec::new();
+        let world: Vec<[Vec3; 3]> = corners
+            .map(|c| c.map(|p| xf.point(p)))
+            .filter(|[a, b, c]| {
+                let area = 0.5 * (*b - *a).cross(*c - *a).length();
+                area > 0.0 && area.is_finite()
+            })
+            .collect();
+        let shell = Shell::new(&world);
+        let mut tris = Vec::with_capacity(world.len());
+        let mut cdf = Vec::with_capacity(world.len());
         let mut total = 0.0f32;
-        for c in corners {
-            let [a, b, c] = c.map(|p| xf.point(p));
+        for [a, b, c] in world {
             let (e1, e2) = (b - a, c - a);
-            let area = 0.5 * e1.cross(e2).length();
-            if area > 0.0 && area.is_finite() {
-                total += area;
-                tris.push([a, e1, e2, e1.cross(e2).normalize()]);
-                cdf.push(total);
-            }
+            total += 0.5 * e1.cross(e2).length();
+            let n = e1.cross(e2).normalize();
+            tris.push([a, e1, e2, shell.as_ref().map_or(n, |s| s.outward(a, n))]);
+            cdf.push(total);
         }
         let scan = if cdf.len() <= SCAN_TRIANGLES {
             cdf.chunks(4)
@@ -85,7 +96,7 @@ impl LightMesh {
             Vec::new()
         };
         let spans = cdf.iter().scan(0.0, |lo, &hi| Some((std::mem::replace(lo, hi), hi))).collect();
-        (total > 0.0).then_some(LightMesh { tris, spans, scan, total, radiance, motion: Vec3::ZERO })
+        (total > 0.0).then_some(LightMesh { tris, spans, scan, total, radiance, motion: Vec3::ZERO, shell })
     }
 
     /// Total area.
@@ -121,6 +132,18 @@ impl LightMesh {
         let s = u1.sqrt();
         let (b1, b2) = (1.0 - s, u2 * s);
         (a + e1 * b1 + e2 * b2, n)
+    }
+
+    /// Whether the mesh itself certainly blocks the segment from `o` to `q`,
+    /// a point from [`point`](Self::point) with its normal `n`, at shutter
+    /// `time` (`q` already moved): `q` is on the far side of a convex shell
+    /// ([`Shell::hides`]). A shadow ray towards it need not be traced.
+    #[inline(always)]
+    pub fn hides(&self, o: Vec3, q: Vec3, n: Vec3, time: f32) -> bool {
+        self.shell.as_ref().is_some_and(|s| {
+            let back = self.motion * time;
+            s.hides(o - back, q - back, n)
+        })
     }
 
     /// Solid-angle density of reaching point `q` (normal `n`) from `p`
@@ -247,6 +270,9 @@ impl ShadedLight {
             ShadedShape::Mesh(l) => {
                 let (q, nq) = l.point(u);
                 let q = q + l.motion * time;
+                if l.hides(origin, q, nq, time) {
+                    return None;
+                }
                 let to = q - origin;
                 let dist = to.length();
                 let pdf = l.pdf(p, q, nq);

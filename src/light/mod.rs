@@ -36,6 +36,7 @@ pub mod distribution;
 pub mod emitter;
 pub mod environment;
 pub mod pick;
+mod shell;
 
 pub use emitter::{LightMesh, LightSphere, ShadedLight, ShadedShape};
 pub use environment::Environment;
@@ -266,6 +267,10 @@ impl Light {
             Light::Mesh(l) => {
                 let (q, nq) = l.point(sampler.next_2d());
                 let q = q + l.motion * time;
+                // The mesh's far side: the shadow ray would be blocked by it.
+                if l.hides(origin, q, nq, time) {
+                    return None;
+                }
                 let to = q - origin;
                 let dist = to.length();
                 let wi = to / dist;
