@@ -83,8 +83,9 @@ impl LightMesh {
         let mut total = 0.0f32;
         for [a, b, c] in world {
             let (e1, e2) = (b - a, c - a);
-            total += 0.5 * e1.cross(e2).length();
-            let n = e1.cross(e2).normalize();
+            let cross = e1.cross(e2);
+            total += 0.5 * cross.length();
+            let n = cross.normalize();
             tris.push([a, e1, e2, shell.as_ref().map_or(n, |s| s.outward(a, n))]);
             cdf.push(total);
         }
