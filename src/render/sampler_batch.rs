@@ -19,6 +19,13 @@
 //! batching is enabled, [`memo`]). A dimension's first use in a pass is
 //! drawn alone: deep dimensions that only some samples reach would
 //! otherwise cost a batch per sample.
+//!
+//! A walk's steps are chains of multiplications, and one batch's lanes
+//! leave most of the processor idle waiting on them. The dimensions the
+//! pixel before batched and drew are batched again together at the
+//! pixel's first batch, two at a time in one loop ([`fill_hot`]): the
+//! course's path-traced boxes batch three 2D dimensions a pixel, and the
+//! fill's share of pd1's profile went from 10% to 5%.
 
 use super::PixelSampler;
 use std::cell::UnsafeCell;
@@ -54,6 +61,10 @@ pub(super) struct Memo {
     /// Whether the entry's dimension was batched in the pixel before: such
     /// a dimension is batched from its first use in the next pixel.
     hot: [bool; SLOTS],
+    /// Whether the entry's values were drawn since it was filled: a
+    /// dimension filled ahead of its use ([`fill_hot`]) and then not used
+    /// is not filled ahead again.
+    used: [bool; SLOTS],
     values: [[[f32; 2]; LANES]; SLOTS],
 }
 
@@ -61,7 +72,12 @@ const NO_TAG: Tag = Tag { owner: 0, key: 0, first: 0, len: 0 };
 
 thread_local! {
     static MEMO: UnsafeCell<Memo> = const {
-        UnsafeCell::new(Memo { tags: [NO_TAG; SLOTS], hot: [false; SLOTS], values: [[[0.0; 2]; LANES]; SLOTS] })
+        UnsafeCell::new(Memo {
+            tags: [NO_TAG; SLOTS],
+            hot: [false; SLOTS],
+            used: [false; SLOTS],
+            values: [[[0.0; 2]; LANES]; SLOTS],
+        })
     };
 }
 
@@ -110,12 +126,13 @@ pub(super) fn hit(s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> {
     let key = key(dim, two_d);
     let slot = key as usize % SLOTS;
     // SAFETY: `memo` set `s.memo` on this thread (see there), and a sampler
-    // with samples to batch has a non-null one. The shared reference lives
+    // with samples to batch has a non-null one. The one reference lives
     // only in this function, which calls nothing that reaches the memo.
-    let memo = unsafe { &*(*s.memo).get() };
+    let memo = unsafe { &mut *(*s.memo).get() };
     let tag = &memo.tags[slot];
     let off = s.index.wrapping_sub(tag.first);
     if tag.owner == s.owner && tag.key == key && off < tag.len {
+        memo.used[slot] = true;
         return Some(memo.values[slot][off as usize % LANES]);
     }
     None
@@ -123,14 +140,15 @@ pub(super) fn hit(s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> {
 
 /// [`hit`] found nothing: the dimension's first use in this pixel is drawn
 /// alone (`None`), unless the pixel before batched it; a later use batches
-/// the samples from this one on.
+/// the samples from this one on. The first batch of a pixel also fills the
+/// other dimensions the pixel before batched and drew ([`fill_hot`]).
 #[inline(never)]
 pub(super) fn miss(s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> {
     let key = key(dim, two_d);
     let slot = key as usize % SLOTS;
     // SAFETY: as in `hit`, the memo is this thread's; the one reference to
-    // it lives in this call, which is not re-entered (`lanes::fill` only
-    // writes the values it is given), so it is exclusive.
+    // it lives in this call, which is not re-entered (`lanes` only computes
+    // values), so it is exclusive.
     let memo = unsafe { &mut *(*s.memo).get() };
     let tag = &mut memo.tags[slot];
     let this_pixel = tag.owner == s.owner;
@@ -139,29 +157,94 @@ pub(super) fn miss(s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> 
         *tag = Tag { owner: s.owner, key, first: s.index, len: 0 };
         return None;
     }
-    fill(memo, slot, key, s, dim, two_d)
-}
-
-/// Fills entry `slot` (of `key`) from sample `s.index` on; `None` where
-/// fewer than two samples are left to draw (or, never, no lanes to do it
-/// with).
-#[inline]
-fn fill(memo: &mut Memo, slot: usize, key: u32, s: &PixelSampler, dim: u32, two_d: bool) -> Option<[f32; 2]> {
     let len = (s.batch_end - s.index).min(LANES as u32);
     memo.tags[slot] = Tag { owner: s.owner, key, first: s.index, len: 0 };
     if len < 2 || cfg!(not(target_arch = "x86_64")) {
         return None;
     }
-    memo.tags[slot].len = len;
-    memo.hot[slot] = true;
-    let values = &mut memo.values[slot];
     #[cfg(target_arch = "x86_64")]
-    // SAFETY: `batch_end` is set only where `memo` found AVX2.
-    unsafe {
-        lanes::fill(values, s, dim, two_d, len as usize)
-    };
-    Some(values[0])
+    {
+        if this_pixel {
+            // SAFETY: `batch_end` is set only where `memo` found AVX2.
+            let values = unsafe { lanes::fill(s, dim, two_d, len as usize) };
+            store(memo, slot, key, s, len, values, true);
+        } else {
+            fill_hot(memo, slot, key, s, len);
+        }
+    }
+    Some(memo.values[slot][0])
 }
+
+/// Puts the `len` values of dimension `key` from sample `s.index` into
+/// entry `slot`; `used` if one of them is being drawn.
+fn store(memo: &mut Memo, slot: usize, key: u32, s: &PixelSampler, len: u32, values: Values, used: bool) {
+    memo.tags[slot] = Tag { owner: s.owner, key, first: s.index, len };
+    memo.hot[slot] = true;
+    memo.used[slot] = used;
+    memo.values[slot] = values;
+}
+
+/// The first batch of a pixel: dimension `key` (entry `slot`) and every
+/// other dimension the pixel before batched and drew, all from sample
+/// `s.index`, two of a kind at a time so that their walks overlap. A
+/// dimension's values depend only on the pixel, the dimension and the
+/// sample, so filling one ahead of its first use in this pixel changes
+/// none; a pass's dimensions are much the same from pixel to pixel.
+#[cfg(target_arch = "x86_64")]
+fn fill_hot(memo: &mut Memo, slot: usize, key: u32, s: &PixelSampler, len: u32) {
+    let mut keys = [0u32; SLOTS];
+    keys[0] = key;
+    let mut n = 1;
+    // The candidates as a mask first, eight entries to a word: a loop
+    // testing each tag cost a tenth of the fills it saved.
+    let (hot, used) = (memo.hot.map(u8::from), memo.used.map(u8::from));
+    let mut cand = 0u64;
+    for (c, (h, u)) in hot.chunks_exact(8).zip(used.chunks_exact(8)).enumerate() {
+        let (mut hb, mut ub) = ([0u8; 8], [0u8; 8]);
+        hb.copy_from_slice(h);
+        ub.copy_from_slice(u);
+        // Bytes of 0 or 1: the multiplication gathers byte i's bit into
+        // bit 56 + i, with no carries.
+        let both = u64::from_le_bytes(hb) & u64::from_le_bytes(ub);
+        cand |= (both.wrapping_mul(0x0102_0408_1020_4080) >> 56) << (8 * c);
+    }
+    cand &= !(1 << slot);
+    while cand != 0 {
+        let j = cand.trailing_zeros() as usize;
+        cand &= cand - 1;
+        let t = &memo.tags[j];
+        if t.owner != s.owner && t.len > 0 {
+            keys[n] = t.key;
+            n += 1;
+        }
+    }
+    let keys = &mut keys[..n];
+    // Grouped by kind, each group filled at once.
+    keys.sort_unstable_by_key(|&k| (k & 1, k));
+    for kind in keys.chunk_by(|a, b| a & 1 == b & 1) {
+        for group in kind.chunks(GROUP) {
+            let mut dims = [0; GROUP];
+            for (d, k) in dims.iter_mut().zip(group) {
+                *d = k / 2;
+            }
+            // SAFETY: `batch_end` is set only where `memo` found AVX2.
+            let values = unsafe { lanes::fill_group(s, dims, group.len(), kind[0] & 1 == 1, len as usize) };
+            for (&k, v) in group.iter().zip(values) {
+                store(memo, k as usize % SLOTS, k, s, len, v, k == key);
+            }
+        }
+    }
+}
+
+/// Dimensions filled at once by [`fill_hot`]. The course's path-traced
+/// boxes batch three 2D dimensions (the pixel position, the light sample,
+/// the bounce): filled two at a time, the CMJ fill went from 10% of pd1's
+/// profile to 5%; three at a time (their twelve walks spill registers)
+/// gained nothing more.
+const GROUP: usize = 2;
+
+/// A memo entry's values.
+type Values = [[f32; 2]; LANES];
 
 #[cfg(target_arch = "x86_64")]
 mod lanes {
@@ -170,7 +253,7 @@ mod lanes {
     use std::arch::x86_64::*;
 
     type V = __m256i;
-    type Values = [[f32; 2]; LANES];
+    use super::Values;
 
     #[inline]
     #[target_feature(enable = "avx2")]
@@ -214,45 +297,71 @@ mod lanes {
         _mm256_blend_epi32::<0b1010_1010>(even, odd)
     }
 
-    /// [`super::super::permute`] of every lane of `N` vectors: the walk
-    /// goes on until every lane is in range, a lane that is keeps its value,
-    /// and the final `(i + p) mod l` is taken by compares, not a division.
+    /// One step of [`super::super::permute`]'s walk from `x`, under the
+    /// mask `w` and the permutation's seed `p`.
     #[inline]
     #[target_feature(enable = "avx2")]
-    fn permute<const N: usize>(mut cur: [V; N], l: Span, p: u32) -> [V; N] {
-        if l.len <= 1 {
-            return [_mm256_setzero_si256(); N];
-        }
-        let (w, len) = (splat(l.mask), splat(l.len));
-        let mut done = [_mm256_setzero_si256(); N];
+    fn walk(x: V, w: V, p: u32) -> V {
+        let mut i = mul(xor(x, splat(p)), 0xe170_893d);
+        i = fold::<4>(xor(i, splat(p >> 16)), w);
+        i = mul(xor(i, splat(p >> 8)), 0x0929_eb3f);
+        i = fold::<1>(xor(i, splat(p >> 23)), w);
+        i = fold::<2>(mul(i, 1 | (p >> 27)), w);
+        i = _mm256_and_si256(mul(i, 0x9e50_1cc3), w);
+        xor(i, _mm256_srli_epi32::<5>(i))
+    }
+
+    /// [`super::super::permute`] of every lane of `K` groups of `N`
+    /// vectors, group `k` under `(ls[k], ps[k])`: the walk goes on until
+    /// every lane is in range, a lane that is keeps its value, and the final
+    /// `(i + p) mod l` is taken by compares, not a division. Each step of a
+    /// walk is a chain of multiplications whose latency, not their number,
+    /// bounds it: the groups are independent, so they walk in one loop,
+    /// with the same values as one at a time.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn permute<const N: usize, const K: usize>(
+        mut cur: [[V; N]; K],
+        ls: [Span; K],
+        ps: [u32; K],
+    ) -> [[V; N]; K] {
+        let zero = _mm256_setzero_si256();
+        let w: [V; K] = std::array::from_fn(|k| splat(ls[k].mask));
+        let len: [V; K] = std::array::from_fn(|k| splat(ls[k].len));
+        // A length of one has one value, 0: nothing to walk.
+        let mut done: [[V; N]; K] =
+            std::array::from_fn(|k| [if ls[k].len <= 1 { _mm256_set1_epi32(-1) } else { zero }; N]);
         loop {
             let mut all = -1;
-            for v in 0..N {
-                let mut i = mul(xor(cur[v], splat(p)), 0xe170_893d);
-                i = fold::<4>(xor(i, splat(p >> 16)), w);
-                i = mul(xor(i, splat(p >> 8)), 0x0929_eb3f);
-                i = fold::<1>(xor(i, splat(p >> 23)), w);
-                i = fold::<2>(mul(i, 1 | (p >> 27)), w);
-                i = _mm256_and_si256(mul(i, 0x9e50_1cc3), w);
-                i = xor(i, _mm256_srli_epi32::<5>(i));
-                cur[v] = _mm256_blendv_epi8(i, cur[v], done[v]);
-                done[v] = _mm256_or_si256(done[v], _mm256_cmpgt_epi32(len, i));
-                all &= _mm256_movemask_epi8(done[v]);
+            for k in 0..K {
+                for v in 0..N {
+                    let i = walk(cur[k][v], w[k], ps[k]);
+                    cur[k][v] = _mm256_blendv_epi8(i, cur[k][v], done[k][v]);
+                    done[k][v] = _mm256_or_si256(done[k][v], _mm256_cmpgt_epi32(len[k], i));
+                    all &= _mm256_movemask_epi8(done[k][v]);
+                }
             }
             if all == -1 {
                 break;
             }
         }
-        // `(i + p) mod l` for `i < l`: `i + p mod l`, less `2³² mod l`
-        // where the 32-bit sum wraps, brought into range.
+        std::array::from_fn(
+            |k| if ls[k].len <= 1 { [zero; N] } else { cur[k].map(|i| offset(i, ls[k], ps[k])) },
+        )
+    }
+
+    /// The walk's end, `i < l`, to `(i + p) mod l`: `i + p mod l`, less
+    /// `2³² mod l` where the 32-bit sum wraps, brought into range.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn offset(i: V, l: Span, p: u32) -> V {
+        let len = splat(l.len);
         let below_wrap = u32::MAX - p;
         let wrap = if below_wrap >= 1 << 31 { 0 } else { l.len - ((u32::MAX % l.len + 1) % l.len) };
         let (pl, wrap_add) = (splat(p % l.len), splat(wrap));
-        cur.map(|i| {
-            let wraps = _mm256_cmpgt_epi32(i, splat(below_wrap));
-            let r = _mm256_add_epi32(_mm256_add_epi32(i, pl), _mm256_and_si256(wraps, wrap_add));
-            reduce(reduce(r, len), len)
-        })
+        let wraps = _mm256_cmpgt_epi32(i, splat(below_wrap));
+        let r = _mm256_add_epi32(_mm256_add_epi32(i, pl), _mm256_and_si256(wraps, wrap_add));
+        reduce(reduce(r, len), len)
     }
 
     /// [`super::super::hash2`] of every lane with the same `b`.
@@ -291,24 +400,69 @@ mod lanes {
         _mm256_mul_ps(_mm256_cvtepi32_ps(a), _mm256_set1_ps(scale))
     }
 
-    /// Fills `e` with `len` samples from `s.index` of dimension `dim`.
+    /// The values of dimension `dim` (2D or not) for `len` samples from
+    /// `s.index`.
     ///
     /// # Safety
     /// The processor must have AVX2.
     #[target_feature(enable = "avx2")]
-    pub(super) fn fill(out: &mut Values, s: &PixelSampler, dim: u32, two_d: bool, len: usize) {
-        match (two_d, len > LANES / 2) {
-            (true, true) => fill_n::<2, true>(out, s, dim, len),
-            (true, false) => fill_n::<1, true>(out, s, dim, len),
-            (false, true) => fill_n::<2, false>(out, s, dim, len),
-            (false, false) => fill_n::<1, false>(out, s, dim, len),
-        }
+    pub(super) fn fill(s: &PixelSampler, dim: u32, two_d: bool, len: usize) -> Values {
+        let [out] = match (two_d, len > LANES / 2) {
+            (true, true) => fill_k::<2, 1, 2, true>(s, [dim], len),
+            (true, false) => fill_k::<1, 1, 2, true>(s, [dim], len),
+            (false, true) => fill_k::<2, 1, 2, false>(s, [dim], len),
+            (false, false) => fill_k::<1, 1, 2, false>(s, [dim], len),
+        };
+        out
     }
 
+    /// [`fill`] of up to [`GROUP`](super::GROUP) dimensions of the same
+    /// kind at once (`dims[..count]`): their walks overlap (see
+    /// [`permute`]).
+    ///
+    /// # Safety
+    /// The processor must have AVX2.
+    #[target_feature(enable = "avx2")]
+    pub(super) fn fill_group(
+        s: &PixelSampler,
+        dims: [u32; super::GROUP],
+        count: usize,
+        two_d: bool,
+        len: usize,
+    ) -> [Values; super::GROUP] {
+        let [a, b] = dims;
+        let mut out = [[[0.0; 2]; LANES]; super::GROUP];
+        macro_rules! run {
+            ($k:literal, $k2:literal, $dims:expr) => {{
+                let got = match (two_d, len > LANES / 2) {
+                    (true, true) => fill_k::<2, $k, $k2, true>(s, $dims, len),
+                    (true, false) => fill_k::<1, $k, $k2, true>(s, $dims, len),
+                    (false, true) => fill_k::<2, $k, $k2, false>(s, $dims, len),
+                    (false, false) => fill_k::<1, $k, $k2, false>(s, $dims, len),
+                };
+                out[..$k].copy_from_slice(&got);
+            }};
+        }
+        if count == 1 {
+            run!(1, 2, [a]);
+        } else {
+            run!(2, 4, [a, b]);
+        }
+        out
+    }
+
+    /// The values of `K` dimensions in `N` vectors each; `K2` is `2K`
+    /// (the grid's axes of every 2D dimension walk together).
     #[inline]
     #[target_feature(enable = "avx2")]
-    fn fill_n<const N: usize, const TWO_D: bool>(out: &mut Values, s: &PixelSampler, dim: u32, len: usize) {
-        let p = hash2(s.pixel_hash, dim);
+    fn fill_k<const N: usize, const K: usize, const K2: usize, const TWO_D: bool>(
+        s: &PixelSampler,
+        dims: [u32; K],
+        len: usize,
+    ) -> [Values; K] {
+        debug_assert_eq!(K2, 2 * K);
+        let mut out = [[[0.0; 2]; LANES]; K];
+        let ps = dims.map(|d| hash2(s.pixel_hash, d));
         // Lanes past the run repeat its last sample: a walk started out of
         // range need not come back into it, and one in range would only
         // lengthen the walk of them all.
@@ -319,37 +473,53 @@ mod lanes {
         let top = _mm256_set1_ps(ONE_MINUS_EPS);
         let inv_n = _mm256_set1_ps(s.inv_n);
         if !TWO_D {
-            let perm = permute(slots, s.n, p);
-            for v in 0..N {
-                let r = rand_float_lanes(slots[v], p ^ 0x9e37_79b9);
-                let x = _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(perm[v]), r), inv_n);
-                store(out, v, _mm256_min_ps(x, top), top);
+            let perm = permute([slots; K], [s.n; K], ps);
+            for k in 0..K {
+                for v in 0..N {
+                    let r = rand_float_lanes(slots[v], ps[k] ^ 0x9e37_79b9);
+                    let x = _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(perm[k][v]), r), inv_n);
+                    store(&mut out[k], v, _mm256_min_ps(x, top), top);
+                }
             }
-            return;
+            return out;
         }
-        let (m, k) = (s.cols, s.rows);
-        let perm = permute(slots, s.n, p.wrapping_mul(0x5163_3e2d));
+        let (m, rows) = (s.cols, s.rows);
+        let perm = permute([slots; K], [s.n; K], ps.map(|p| p.wrapping_mul(0x5163_3e2d)));
         // `s / m` and `s % m` by `⌈2³² / m⌉`: exact while `s · m < 2³²`.
-        let (col, row) = if m.len == 1 {
-            ([_mm256_setzero_si256(); N], perm)
+        let (col, row): ([[V; N]; K], [[V; N]; K]) = if m.len == 1 {
+            ([[_mm256_setzero_si256(); N]; K], perm)
         } else {
             let magic = u32::MAX / m.len + 1;
-            let row = perm.map(|a| mul_high(a, magic));
-            let col: [V; N] = std::array::from_fn(|v| _mm256_sub_epi32(perm[v], mul(row[v], m.len)));
+            let row = perm.map(|p| p.map(|a| mul_high(a, magic)));
+            let col = std::array::from_fn(|k| {
+                std::array::from_fn(|v| _mm256_sub_epi32(perm[k][v], mul(row[k][v], m.len)))
+            });
             (col, row)
         };
-        let sx = permute(col, m, p.wrapping_mul(0x68bc_21eb));
-        let sy = permute(row, k, p.wrapping_mul(0x02e5_be93));
-        let (kf, inv_mk) = (_mm256_set1_ps(k.len as f32), _mm256_set1_ps(s.inv_mk));
-        for v in 0..N {
-            let j = hash2_lanes(perm[v], p);
-            let jx = unit_lanes(_mm256_srli_epi32::<16>(j), 1.0 / 65_536.0);
-            let jy = unit_lanes(_mm256_and_si256(j, splat(0xffff)), 1.0 / 65_536.0);
-            let cell = _mm256_add_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(sx[v]), kf), _mm256_cvtepi32_ps(sy[v]));
-            let x = _mm256_mul_ps(_mm256_add_ps(cell, jx), inv_mk);
-            let y = _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(perm[v]), jy), inv_n);
-            store(out, v, _mm256_min_ps(x, top), _mm256_min_ps(y, top));
+        let axes: [[V; N]; K2] = std::array::from_fn(|i| if i < K { col[i] } else { row[i - K] });
+        let spans: [Span; K2] = std::array::from_fn(|i| if i < K { m } else { rows });
+        let seeds: [u32; K2] = std::array::from_fn(|i| {
+            if i < K {
+                ps[i].wrapping_mul(0x68bc_21eb)
+            } else {
+                ps[i - K].wrapping_mul(0x02e5_be93)
+            }
+        });
+        let sxy = permute(axes, spans, seeds);
+        let (kf, inv_mk) = (_mm256_set1_ps(rows.len as f32), _mm256_set1_ps(s.inv_mk));
+        for k in 0..K {
+            for v in 0..N {
+                let (sx, sy, pv) = (sxy[k][v], sxy[K + k][v], perm[k][v]);
+                let j = hash2_lanes(pv, ps[k]);
+                let jx = unit_lanes(_mm256_srli_epi32::<16>(j), 1.0 / 65_536.0);
+                let jy = unit_lanes(_mm256_and_si256(j, splat(0xffff)), 1.0 / 65_536.0);
+                let cell = _mm256_add_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(sx), kf), _mm256_cvtepi32_ps(sy));
+                let x = _mm256_mul_ps(_mm256_add_ps(cell, jx), inv_mk);
+                let y = _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(pv), jy), inv_n);
+                store(&mut out[k], v, _mm256_min_ps(x, top), _mm256_min_ps(y, top));
+            }
         }
+        out
     }
 
     /// [`permute`] of sixteen values, for the tests.
@@ -364,7 +534,8 @@ mod lanes {
             // SAFETY: eight u32 from `slots`, unaligned loads allowed.
             unsafe { _mm256_loadu_si256(slots[8 * v..].as_ptr().cast()) }
         });
-        for (v, r) in permute(vs, l, p).into_iter().enumerate() {
+        let [perm] = permute([vs], [l], [p]);
+        for (v, r) in perm.into_iter().enumerate() {
             // SAFETY: eight u32 into `out`.
             unsafe { _mm256_storeu_si256(out[8 * v..].as_mut_ptr().cast(), r) };
         }
