@@ -255,6 +255,10 @@ mod lanes {
     type V = __m256i;
     use super::Values;
 
+    /// Largest walk (its mask plus one) whose steps are looked up in a
+    /// table ([`permute`]).
+    const TABLE: usize = 16;
+
     #[inline]
     #[target_feature(enable = "avx2")]
     fn splat(a: u32) -> V {
@@ -318,36 +322,95 @@ mod lanes {
     /// walk is a chain of multiplications whose latency, not their number,
     /// bounds it: the groups are independent, so they walk in one loop,
     /// with the same values as one at a time.
-    #[inline]
-    #[target_feature(enable = "avx2")]
-    fn permute<const N: usize, const K: usize>(
+    ///
+    /// Always inlined, so not itself compiled for AVX2 (`#[target_feature]`
+    /// forbids `#[inline(always)]`): called, its groups went through memory.
+    ///
+    /// # Safety
+    /// The processor must have AVX2; only called from code compiled for it.
+    #[inline(always)]
+    unsafe fn permute<const N: usize, const K: usize>(
         mut cur: [[V; N]; K],
         ls: [Span; K],
         ps: [u32; K],
     ) -> [[V; N]; K] {
-        let zero = _mm256_setzero_si256();
-        let w: [V; K] = std::array::from_fn(|k| splat(ls[k].mask));
-        let len: [V; K] = std::array::from_fn(|k| splat(ls[k].len));
-        // A length of one has one value, 0: nothing to walk.
-        let mut done: [[V; N]; K] =
-            std::array::from_fn(|k| [if ls[k].len <= 1 { _mm256_set1_epi32(-1) } else { zero }; N]);
-        loop {
-            let mut all = -1;
+        // SAFETY: the caller runs where the processor has AVX2.
+        unsafe {
+            let zero = _mm256_setzero_si256();
+            let (mut w, mut len) = ([zero; K], [zero; K]);
+            // A length of one has one value, 0: nothing to walk.
+            let mut done = [[zero; N]; K];
+            // A walk over at most sixteen values (the grid's axes at the
+            // course's counts) looks its steps up in a table of the step
+            // function, two vectors made by two steps' work: a lookup
+            // costs a few cycles where a step costs a chain of five
+            // multiplications. The same function, so the same values.
+            let mut table = [[zero; 2]; K];
+            let mut small = [false; K];
             for k in 0..K {
-                for v in 0..N {
-                    let i = walk(cur[k][v], w[k], ps[k]);
-                    cur[k][v] = _mm256_blendv_epi8(i, cur[k][v], done[k][v]);
-                    done[k][v] = _mm256_or_si256(done[k][v], _mm256_cmpgt_epi32(len[k], i));
-                    all &= _mm256_movemask_epi8(done[k][v]);
+                (w[k], len[k]) = (splat(ls[k].mask), splat(ls[k].len));
+                if ls[k].len <= 1 {
+                    done[k] = [_mm256_set1_epi32(-1); N];
+                } else if ls[k].mask < TABLE as u32 {
+                    small[k] = true;
+                    table[k] = [
+                        walk(_mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7), w[k], ps[k]),
+                        walk(_mm256_setr_epi32(8, 9, 10, 11, 12, 13, 14, 15), w[k], ps[k]),
+                    ];
                 }
             }
-            if all == -1 {
-                break;
+            for k in 0..K {
+                if !small[k] {
+                    continue;
+                }
+                loop {
+                    let mut all = -1;
+                    for v in 0..N {
+                        let i = look_up(table[k], cur[k][v]);
+                        cur[k][v] = _mm256_blendv_epi8(i, cur[k][v], done[k][v]);
+                        done[k][v] = _mm256_or_si256(done[k][v], _mm256_cmpgt_epi32(len[k], i));
+                        all &= _mm256_movemask_epi8(done[k][v]);
+                    }
+                    if all == -1 {
+                        break;
+                    }
+                }
             }
+            loop {
+                let mut all = -1;
+                for k in 0..K {
+                    if small[k] {
+                        continue;
+                    }
+                    for v in 0..N {
+                        let i = walk(cur[k][v], w[k], ps[k]);
+                        cur[k][v] = _mm256_blendv_epi8(i, cur[k][v], done[k][v]);
+                        done[k][v] = _mm256_or_si256(done[k][v], _mm256_cmpgt_epi32(len[k], i));
+                        all &= _mm256_movemask_epi8(done[k][v]);
+                    }
+                }
+                if all == -1 {
+                    break;
+                }
+            }
+            for ((group, l), p) in cur.iter_mut().zip(ls).zip(ps) {
+                for i in group.iter_mut() {
+                    *i = if l.len <= 1 { zero } else { offset(*i, l, p) };
+                }
+            }
+            cur
         }
-        std::array::from_fn(
-            |k| if ls[k].len <= 1 { [zero; N] } else { cur[k].map(|i| offset(i, ls[k], ps[k])) },
-        )
+    }
+
+    /// Entry `x` (below [`TABLE`]) of a walk's step table, per lane.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn look_up(table: [V; 2], x: V) -> V {
+        let lo = _mm256_castsi256_ps(_mm256_permutevar8x32_epi32(table[0], x));
+        let hi = _mm256_castsi256_ps(_mm256_permutevar8x32_epi32(table[1], x));
+        // Bit 3 of the index, moved to the sign, picks the upper vector.
+        let upper = _mm256_castsi256_ps(_mm256_slli_epi32::<28>(x));
+        _mm256_castps_si256(_mm256_blendv_ps(lo, hi, upper))
     }
 
     /// The walk's end, `i < l`, to `(i + p) mod l`: `i + p mod l`, less
@@ -473,7 +536,7 @@ mod lanes {
         let top = _mm256_set1_ps(ONE_MINUS_EPS);
         let inv_n = _mm256_set1_ps(s.inv_n);
         if !TWO_D {
-            let perm = permute([slots; K], [s.n; K], ps);
+            let perm = unsafe { permute([slots; K], [s.n; K], ps) };
             for k in 0..K {
                 for v in 0..N {
                     let r = rand_float_lanes(slots[v], ps[k] ^ 0x9e37_79b9);
@@ -484,7 +547,7 @@ mod lanes {
             return out;
         }
         let (m, rows) = (s.cols, s.rows);
-        let perm = permute([slots; K], [s.n; K], ps.map(|p| p.wrapping_mul(0x5163_3e2d)));
+        let perm = unsafe { permute([slots; K], [s.n; K], ps.map(|p| p.wrapping_mul(0x5163_3e2d))) };
         // `s / m` and `s % m` by `⌈2³² / m⌉`: exact while `s · m < 2³²`.
         let (col, row): ([[V; N]; K], [[V; N]; K]) = if m.len == 1 {
             ([[_mm256_setzero_si256(); N]; K], perm)
@@ -505,7 +568,7 @@ mod lanes {
                 ps[i - K].wrapping_mul(0x02e5_be93)
             }
         });
-        let sxy = permute(axes, spans, seeds);
+        let sxy = unsafe { permute(axes, spans, seeds) };
         let (kf, inv_mk) = (_mm256_set1_ps(rows.len as f32), _mm256_set1_ps(s.inv_mk));
         for k in 0..K {
             for v in 0..N {
@@ -534,7 +597,7 @@ mod lanes {
             // SAFETY: eight u32 from `slots`, unaligned loads allowed.
             unsafe { _mm256_loadu_si256(slots[8 * v..].as_ptr().cast()) }
         });
-        let [perm] = permute([vs], [l], [p]);
+        let [perm] = unsafe { permute([vs], [l], [p]) };
         for (v, r) in perm.into_iter().enumerate() {
             // SAFETY: eight u32 into `out`.
             unsafe { _mm256_storeu_si256(out[8 * v..].as_mut_ptr().cast(), r) };
