@@ -536,6 +536,7 @@ mod lanes {
         let top = _mm256_set1_ps(ONE_MINUS_EPS);
         let inv_n = _mm256_set1_ps(s.inv_n);
         if !TWO_D {
+            // SAFETY: this function is compiled for AVX2.
             let perm = unsafe { permute([slots; K], [s.n; K], ps) };
             for k in 0..K {
                 for v in 0..N {
@@ -547,6 +548,7 @@ mod lanes {
             return out;
         }
         let (m, rows) = (s.cols, s.rows);
+        // SAFETY: this function is compiled for AVX2.
         let perm = unsafe { permute([slots; K], [s.n; K], ps.map(|p| p.wrapping_mul(0x5163_3e2d))) };
         // `s / m` and `s % m` by `⌈2³² / m⌉`: exact while `s · m < 2³²`.
         let (col, row): ([[V; N]; K], [[V; N]; K]) = if m.len == 1 {
@@ -568,6 +570,7 @@ mod lanes {
                 ps[i - K].wrapping_mul(0x02e5_be93)
             }
         });
+        // SAFETY: as above.
         let sxy = unsafe { permute(axes, spans, seeds) };
         let (kf, inv_mk) = (_mm256_set1_ps(rows.len as f32), _mm256_set1_ps(s.inv_mk));
         for k in 0..K {
@@ -597,6 +600,7 @@ mod lanes {
             // SAFETY: eight u32 from `slots`, unaligned loads allowed.
             unsafe { _mm256_loadu_si256(slots[8 * v..].as_ptr().cast()) }
         });
+        // SAFETY: this function is compiled for AVX2.
         let [perm] = unsafe { permute([vs], [l], [p]) };
         for (v, r) in perm.into_iter().enumerate() {
             // SAFETY: eight u32 into `out`.
