@@ -29,8 +29,9 @@
 //! hash of (seed, pixel, sample, call) each.
 //!
 //! The render loop's runs of samples ([`PixelSampler::batched`]) draw their
-//! stratified calls from a per-thread memo filled sixteen samples at a time
-//! in AVX2 lanes (`sampler_batch.rs`), with the same values bit for bit.
+//! stratified calls from a per-thread memo (`sampler_batch.rs`) filled
+//! sixteen samples at a time in AVX2 lanes (`sampler_lanes.rs`), with the
+//! same values bit for bit.
 //!
 //! A single-sample image has nothing to stratify: its draws are the earlier
 //! sampler's hashed values, bit for bit, so 1-spp images keep their bytes.
