@@ -23,7 +23,7 @@ use std::f32::consts::TAU;
 /// accuracy falls off.
 #[inline(always)]
 pub fn sin_cos_turns(u: f32) -> (f32, f32) {
-    let q = (u * 4.0).round();
+    let q = super::round(u * 4.0);
     // Exact: `u` and `q/4` are within a factor of two unless `q` is 0.
     let x = (u - q * 0.25) * TAU;
     let z = x * x;

@@ -7,6 +7,7 @@
 
 use super::vertex::{light_terms, At};
 use super::{every_light, pick_chance, Came, PathParams};
+use crate::bsdf::diffuse_pdf;
 use crate::integrator::{is_black, light_reaching_inline, shadow_reach, surface_at, PathState, Surface};
 use crate::light::{Light, ShadedLight};
 use crate::material::Material;
@@ -37,11 +38,17 @@ pub(super) fn next_event(
     st: &mut PathState,
 ) -> Vec3A {
     let vols = &scene.volumes;
-    if !p.mis && at.f.is_some() && vols.surfaces.is_empty() && vols.media.is_empty() {
-        next_event_diffuse(scene, m, hit, at, origin, depth, p, st)
-    } else {
-        next_event_any(scene, m, hit, at, origin, depth, p, st)
+    if at.f.is_some() && vols.surfaces.is_empty() && vols.media.is_empty() {
+        if !p.mis {
+            return next_event_diffuse::<false>(scene, m, hit, at, origin, depth, p, st);
+        }
+        // [`light_terms`]'s arm for a diffuse-only BRDF under MIS, with
+        // every light sampled (scale 1).
+        if m.traits.diffuse_only && m.brdf.is_some() && every_light(scene, p) {
+            return next_event_diffuse::<true>(scene, m, hit, at, origin, depth, p, st);
+        }
     }
+    next_event_any(scene, m, hit, at, origin, depth, p, st)
 }
 
 /// [`next_event`] at any vertex.
@@ -86,16 +93,18 @@ fn next_event_any(
     color.into()
 }
 
-/// [`next_event`] for the course's variant at a vertex whose BRDF value is
-/// the same for every light direction above it (`at.f`), in a scene without
-/// volumes: each light's term is `f cos · E`, the weight and the shadow
-/// ray's transmittance exactly 1 (multiplying by them kept the bits).
+/// [`next_event`] at a vertex whose BRDF value is the same for every light
+/// direction above it (`at.f`), in a scene without volumes: each light's
+/// term is `f cos · E`, times, under MIS (with every light sampled), the
+/// power heuristic against the cosine-weighted bounce's density; the
+/// shadow ray's transmittance is exactly 1, and so are the other factors
+/// [`next_event_any`] multiplies by (dropping them keeps the bits).
 /// Apart, because LLVM hoisted the set-up of every case of [`light_terms`]
 /// (the frame's rows, the whole view direction) out of [`next_event_any`]'s
 /// light loop, ~160 instructions a call that this vertex never uses.
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
-fn next_event_diffuse(
+fn next_event_diffuse<const MIS: bool>(
     scene: &Scene,
     m: &Material,
     hit: &Hit,
@@ -125,8 +134,14 @@ fn next_event_diffuse(
         if scene.occluded(&Ray::new(origin, ls.wi), t_max, st.time) {
             continue;
         }
-        // [`brdf_cos`]'s `f cos`.
-        color += f * cos * ls.e;
+        if MIS {
+            // [`light_terms`]'s density of a diffuse-only BRDF's bounce.
+            let w = if hittable(light) { power_heuristic(ls.pdf, diffuse_pdf(at.wo.z, cos)) } else { 1.0 };
+            color += f * cos * ls.e * w;
+        } else {
+            // [`brdf_cos`]'s `f cos`.
+            color += f * cos * ls.e;
+        }
     }
     color.into()
 }
@@ -235,3 +250,7 @@ pub(super) fn power_heuristic(a: f32, b: f32) -> f32 {
     }
     a2 / (a2 + b2)
 }
+
+#[cfg(test)]
+#[path = "next_event_tests.rs"]
+mod tests;
