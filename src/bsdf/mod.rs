@@ -27,7 +27,7 @@ pub use torrance_sparrow::TorranceSparrow;
 
 use crate::math::{orthonormal_basis, Vec3};
 use crate::scene::description::{BrdfDesc, BrdfKind};
-use sampling::{power_cosine, power_cosine_pdf};
+use sampling::{cosine_weighted, power_cosine_pdf};
 
 /// A reflection model.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -92,7 +92,7 @@ impl Brdf {
             return None;
         }
         let wi = if choice < diffuse_probability(kd, ks) {
-            power_cosine(1.0, u)
+            cosine_weighted(u)
         } else {
             match self {
                 Brdf::Phong(b) => b.sample_lobe(wo, u),
@@ -187,7 +187,7 @@ impl DiffuseOnly<'_> {
         if wo.z <= 0.0 {
             return None;
         }
-        let wi = power_cosine(1.0, u);
+        let wi = cosine_weighted(u);
         if wi.z <= 0.0 {
             return None;
         }

@@ -7,7 +7,21 @@ use std::f32::consts::FRAC_1_PI;
 /// A direction drawn with density `(e + 1) / 2π · cos^e θ` about `+z`
 /// (`e = 0`: uniform, `e = 1`: cosine-weighted). `θ` never exceeds 90°.
 #[inline]
-pub fn power_cosine(e: f32, (u1, u2): (f32, f32)) -> Vec3 {
+pub fn power_cosine(e: f32, u: (f32, f32)) -> Vec3 {
+    power_cosine_inline(e, u)
+}
+
+/// [`power_cosine`] at `e = 1`: a cosine-weighted direction, always
+/// inlined. Every diffuse bounce under MIS draws one; the call LLVM left
+/// to [`power_cosine`] there was 3% of the MIS Cornell box's time.
+#[inline(always)]
+pub fn cosine_weighted(u: (f32, f32)) -> Vec3 {
+    power_cosine_inline(1.0, u)
+}
+
+/// [`power_cosine`]'s body.
+#[inline(always)]
+fn power_cosine_inline(e: f32, (u1, u2): (f32, f32)) -> Vec3 {
     // Uniform and cosine-weighted bounces, the path tracer's every bounce,
     // without a libm `powf` call (`sqrt` is one instruction; it and
     // `powf(u, ½)` differ in the last bit for 0.06% of the floats).
