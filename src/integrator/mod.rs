@@ -82,7 +82,7 @@ impl Integrator {
     ) -> [Vec3; 2] {
         match self {
             Integrator::Whitted => [self.radiance(scene, rays[0], sa), self.radiance(scene, rays[1], sb)],
-            Integrator::Path(p) => path::radiance_pair(scene, rays, p, sa, sb),
+            Integrator::Path(p) => path::radiance_pair(scene, rays, p, sa, sb).map(Vec3::from),
         }
     }
 }

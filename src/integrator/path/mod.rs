@@ -32,7 +32,7 @@ use std::mem::MaybeUninit;
 use super::{is_black, surface_at, PathState, Surface};
 use crate::light::Light;
 use crate::material::{Material, Specular};
-use crate::math::{Ray, Vec3};
+use crate::math::{Ray, Vec3, Vec3A};
 use crate::render::scene::{Hit, Scene};
 use crate::render::volumes;
 use crate::scene::description::LightSamples;
@@ -158,14 +158,17 @@ fn li(
 /// processor overlaps only work that is close in the instruction stream;
 /// two independent paths side by side give it that work. Each path draws
 /// from its own sampler and does exactly what [`radiance`] does for it, so
-/// the two answers are [`radiance`]'s, bit for bit.
+/// the two answers are [`radiance`]'s, bit for bit. They come back as
+/// `Vec3A`, each written and read in one 16-byte move: as `Vec3`s the
+/// render loop read the first with the second's `x` in one load, which
+/// waited for the narrower stores that wrote them.
 pub fn radiance_pair(
     scene: &Scene,
     rays: [&Ray; 2],
     p: &PathParams,
     sa: &mut PathState,
     sb: &mut PathState,
-) -> [Vec3; 2] {
+) -> [Vec3A; 2] {
     let first_hit = first_hit_calls(scene, p);
     sa.sampler.stratify_first(sa.sampler.calls() + first_hit);
     sb.sampler.stratify_first(sb.sampler.calls() + first_hit);
@@ -183,7 +186,7 @@ pub fn radiance_pair(
             (None, Some(cb)) => break (a.run(scene, p, sa), cb),
         }
     };
-    [a.fold(ca, sa), b.fold(cb, sb)]
+    [a.fold(ca, sa).into(), b.fold(cb, sb).into()]
 }
 
 /// A path being followed by [`li`]: the ray to trace next, its bounce,
