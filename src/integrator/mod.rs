@@ -170,7 +170,18 @@ pub(crate) fn light_reaching_inline(
     n: Vec3,
     st: &mut PathState,
 ) -> Option<(LightSample, f32, Vec3)> {
-    let ls = light.sample(origin, p, Some(n), st.time, &mut st.sampler)?;
+    light_reaching_from(scene, light.sample(origin, p, Some(n), st.time, &mut st.sampler)?, origin, n, st)
+}
+
+/// [`light_reaching_inline`] for the light sample `ls` already made.
+#[inline(always)]
+pub(crate) fn light_reaching_from(
+    scene: &Scene,
+    ls: LightSample,
+    origin: Vec3,
+    n: Vec3,
+    st: &mut PathState,
+) -> Option<(LightSample, f32, Vec3)> {
     let cos = n.dot(ls.wi);
     if cos <= 0.0 || is_black(ls.e) {
         return None;

@@ -264,23 +264,7 @@ impl Light {
                 let pdf = (q - p).length_squared() / (l.area * cos_light);
                 Some(LightSample { wi, dist, e: l.radiance / pdf, point_source: false, pdf })
             }
-            Light::Mesh(l) => {
-                let (q, nq) = l.point(sampler.next_2d());
-                let q = q + l.motion * time;
-                // The mesh's far side: the shadow ray would be blocked by it.
-                if l.hides(origin, q, nq, time) {
-                    return None;
-                }
-                let to = q - origin;
-                let dist = to.length();
-                let wi = to / dist;
-                let pdf = l.pdf(p, q, nq);
-                // `pdf <= 0 || !pdf.is_finite()` in one test (NaN fails both).
-                if !(pdf > 0.0 && pdf < f32::INFINITY) {
-                    return None;
-                }
-                Some(LightSample { wi, dist, e: l.radiance / pdf, point_source: false, pdf })
-            }
+            Light::Mesh(l) => l.sample_from(origin, p, l.point(sampler.next_2d()), time),
             Light::Sphere(l) => {
                 // Moving the origin back is moving the sphere forward.
                 let (wi, dist, pdf) = l.sample(origin - l.motion * time, sampler.next_2d())?;
@@ -314,6 +298,34 @@ impl Light {
             self,
             Light::Area(_) | Light::Mesh(_) | Light::Sphere(_) | Light::Environment(_) | Light::Shaded(_)
         )
+    }
+}
+
+impl LightMesh {
+    /// [`Light::sample`] of this mesh for its point `q` of normal `nq`
+    /// ([`LightMesh::point`], at rest) already drawn.
+    #[inline(always)]
+    pub fn sample_from(
+        &self,
+        origin: Vec3,
+        p: Vec3,
+        (q, nq): (Vec3, Vec3),
+        time: f32,
+    ) -> Option<LightSample> {
+        let q = q + self.motion * time;
+        // The mesh's far side: the shadow ray would be blocked by it.
+        if self.hides(origin, q, nq, time) {
+            return None;
+        }
+        let to = q - origin;
+        let dist = to.length();
+        let wi = to / dist;
+        let pdf = self.pdf(p, q, nq);
+        // `pdf <= 0 || !pdf.is_finite()` in one test (NaN fails both).
+        if !(pdf > 0.0 && pdf < f32::INFINITY) {
+            return None;
+        }
+        Some(LightSample { wi, dist, e: self.radiance / pdf, point_source: false, pdf })
     }
 }
 

@@ -329,6 +329,36 @@ enum Shaded {
     Bounce(Vec3, Bounce),
 }
 
+/// The point on a light that a vertex's light samples take first, drawn
+/// at the top of [`shade`]. A vertex samples its lights as soon as its hit
+/// is known; drawing the point on a light mesh there (a count over the
+/// triangles, a division, a square root) put that chain between the hit
+/// and the shadow ray. Drawn earlier, it is worked out while the vertex's
+/// frame and emission are.
+#[derive(Clone, Copy)]
+struct LightAhead {
+    /// The light (an index into the scene's lights): the first that draws.
+    light: usize,
+    /// Its point, at rest, and the normal there.
+    q: Vec3,
+    n: Vec3,
+}
+
+impl LightAhead {
+    /// The point of the first light that draws, where it is a mesh and the
+    /// light samples take every light (not one chosen by a draw of its own).
+    #[inline(always)]
+    fn draw(scene: &Scene, p: &PathParams, st: &mut PathState) -> Option<LightAhead> {
+        if p.mis && !every_light(scene, p) {
+            return None;
+        }
+        let light = scene.lights.iter().position(Light::draws)?;
+        let Light::Mesh(l) = &scene.lights[light] else { return None };
+        let (q, n) = l.point(st.sampler.next_2d());
+        Some(LightAhead { light, q, n })
+    }
+}
+
 /// Whether a vertex at `depth` lies past the path's depth limit. Only MIS
 /// traces a ray there: the last vertex's bounce, which finds the light its
 /// direction hits so that the light samples drawn at that vertex can be
@@ -392,6 +422,13 @@ fn shade(
     let (n, ng) = if entering { (ns, hit.ng) } else { (-ns, -hit.ng) };
     let eps = scene.shadow_epsilon;
     let mut color = Vec3::ZERO;
+    let inside_dielectric = !entering && matches!(m.kind, Specular::Dielectric { .. });
+    // The light samples' first draw, made as soon as the vertex is known to
+    // sample lights: nothing draws between here and [`next_event`], so it
+    // is the value that would be drawn there (see [`LightAhead`]).
+    let samples_lights = (p.next_event || p.mis) && m.traits.reflects && !inside_dielectric;
+    let ahead =
+        if samples_lights && !past_limit(scene, depth, p) { LightAhead::draw(scene, p, st) } else { None };
 
     // Under the course's next-event estimation an object light that a
     // random bounce hits counts nothing (its samples counted it): skip the
@@ -418,13 +455,12 @@ fn shade(
     if past_limit(scene, depth, p) {
         return Shaded::Done(color);
     }
-    let inside_dielectric = !entering && matches!(m.kind, Specular::Dielectric { .. });
     let origin = hit.p + ng * eps;
     if m.traits.reflects && !inside_dielectric {
         let more = depth < MAX_BOUNCES && (p.russian_roulette || depth < scene.max_depth);
         let at = At::new(m, n, ray.d);
         if p.next_event || p.mis {
-            color += Vec3::from(next_event(scene, m, hit, &at, origin, depth, p, st));
+            color += Vec3::from(next_event(scene, m, hit, &at, origin, depth, p, ahead, st));
         }
         // Under MIS the last vertex's bounce is traced too, for emission
         // only (see [`past_limit`]).

@@ -6,9 +6,11 @@
 //! vertex's [`At`].
 
 use super::vertex::{light_terms, At};
-use super::{every_light, pick_chance, Came, PathParams};
+use super::{every_light, pick_chance, Came, LightAhead, PathParams};
 use crate::bsdf::diffuse_pdf;
-use crate::integrator::{is_black, light_reaching_inline, shadow_reach, surface_at, PathState, Surface};
+use crate::integrator::{
+    is_black, light_reaching_from, light_reaching_inline, shadow_reach, surface_at, PathState, Surface,
+};
 use crate::light::{Light, ShadedLight};
 use crate::material::Material;
 use crate::math::{Ray, Vec3, Vec3A};
@@ -35,20 +37,21 @@ pub(super) fn next_event(
     origin: Vec3,
     depth: u32,
     p: &PathParams,
+    ahead: Option<LightAhead>,
     st: &mut PathState,
 ) -> Vec3A {
     let vols = &scene.volumes;
     if at.f.is_some() && vols.surfaces.is_empty() && vols.media.is_empty() {
         if !p.mis {
-            return next_event_diffuse::<false>(scene, m, hit, at, origin, depth, p, st);
+            return next_event_diffuse::<false>(scene, m, hit, at, origin, depth, p, ahead, st);
         }
         // [`light_terms`]'s arm for a diffuse-only BRDF under MIS, with
         // every light sampled (scale 1).
         if m.traits.diffuse_only && m.brdf.is_some() && every_light(scene, p) {
-            return next_event_diffuse::<true>(scene, m, hit, at, origin, depth, p, st);
+            return next_event_diffuse::<true>(scene, m, hit, at, origin, depth, p, ahead, st);
         }
     }
-    next_event_any(scene, m, hit, at, origin, depth, p, st)
+    next_event_any(scene, m, hit, at, origin, depth, p, ahead, st)
 }
 
 /// [`next_event`] at any vertex.
@@ -62,6 +65,7 @@ fn next_event_any(
     origin: Vec3,
     depth: u32,
     p: &PathParams,
+    ahead: Option<LightAhead>,
     st: &mut PathState,
 ) -> Vec3A {
     let mut color = Vec3::ZERO;
@@ -77,12 +81,20 @@ fn next_event_any(
     } else {
         (&scene.lights[..], 1.0)
     };
-    for light in lights {
+    for (i, light) in lights.iter().enumerate() {
         if let Light::Shaded(l) = light {
             color += shaded_sample(scene, l, m, hit, at, origin, depth, scale, p, st);
             continue;
         }
-        let Some((ls, cos, tr)) = light_reaching_inline(scene, light, origin, hit.p, at.n, st) else {
+        // A point drawn ahead is taken only where every light is sampled
+        // (`lights` is then all of them).
+        let reaching = match (light, ahead) {
+            (Light::Mesh(l), Some(a)) if a.light == i => l
+                .sample_from(origin, hit.p, (a.q, a.n), st.time)
+                .and_then(|ls| light_reaching_from(scene, ls, origin, at.n, st)),
+            _ => light_reaching_inline(scene, light, origin, hit.p, at.n, st),
+        };
+        let Some((ls, cos, tr)) = reaching else {
             continue;
         };
         let (f, bsdf_pdf) = light_terms(m, at, ls.wi, cos, p);
@@ -112,17 +124,23 @@ fn next_event_diffuse<const MIS: bool>(
     origin: Vec3,
     depth: u32,
     p: &PathParams,
+    ahead: Option<LightAhead>,
     st: &mut PathState,
 ) -> Vec3A {
     let f = Vec3::from(at.f.unwrap_or_default());
     let mut color = Vec3::ZERO;
-    for light in &scene.lights {
+    for (i, light) in scene.lights.iter().enumerate() {
         if let Light::Shaded(l) = light {
             color += shaded_sample(scene, l, m, hit, at, origin, depth, 1.0, p, st);
             continue;
         }
-        // [`light_reaching_inline`] without media: the shadow ray passes or not.
-        let Some(ls) = light.sample_at(origin, hit.p, at.n, st.time, &mut st.sampler) else {
+        // [`light_reaching_inline`] without media: the shadow ray passes or
+        // not. The first light's point may have been drawn ahead.
+        let ls = match (light, ahead) {
+            (Light::Mesh(l), Some(a)) if a.light == i => l.sample_from(origin, hit.p, (a.q, a.n), st.time),
+            _ => light.sample_at(origin, hit.p, at.n, st.time, &mut st.sampler),
+        };
+        let Some(ls) = ls else {
             continue;
         };
         let cos = at.n.dot(ls.wi);

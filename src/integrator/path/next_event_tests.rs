@@ -1,7 +1,8 @@
 //! The light samples' fast path at a vertex of constant BRDF value
-//! ([`next_event_diffuse`], with and without MIS) against the general one
-//! ([`next_event_any`]): the same sum to the bit, the same draws and the same
-//! shadow rays, at hits all over a box lit by a point light and a light box.
+//! ([`next_event_diffuse`], with and without MIS, its light point drawn
+//! ahead) against the general one ([`next_event_any`], drawing it in turn
+//! or ahead): the same sum to the bit, the same draws and the same shadow
+//! rays, at hits all over a box lit by a point light and a light box.
 
 use super::*;
 use crate::integrator::path::vertex::At;
@@ -60,13 +61,20 @@ fn the_constant_brdf_light_samples_are_the_general_ones() {
             let at = At::new(&m, n, ray.d);
             assert!(at.f.is_some() && m.traits.diffuse_only, "ray {k}: every surface is diffuse only");
             let origin = hit.p + ng * scene.shadow_epsilon;
-            let (mut fast, mut general) = (st.clone(), st);
+            // The light box's point drawn ahead (as `shade` does), or in turn.
+            let (mut fast, mut general, mut any) = (st.clone(), st.clone(), st);
+            let ahead = LightAhead::draw(&scene, &p, &mut fast);
+            assert!(ahead.is_some(), "ray {k}: the light box is the first light that draws");
             let a = if mis {
-                next_event_diffuse::<true>(&scene, &m, &hit, &at, origin, 1, &p, &mut fast)
+                next_event_diffuse::<true>(&scene, &m, &hit, &at, origin, 1, &p, ahead, &mut fast)
             } else {
-                next_event_diffuse::<false>(&scene, &m, &hit, &at, origin, 1, &p, &mut fast)
+                next_event_diffuse::<false>(&scene, &m, &hit, &at, origin, 1, &p, ahead, &mut fast)
             };
-            let b = next_event_any(&scene, &m, &hit, &at, origin, 1, &p, &mut general);
+            let b = next_event_any(&scene, &m, &hit, &at, origin, 1, &p, None, &mut general);
+            let ahead = LightAhead::draw(&scene, &p, &mut any);
+            let c = next_event_any(&scene, &m, &hit, &at, origin, 1, &p, ahead, &mut any);
+            assert_eq!(bits(b), bits(c), "ray {k}, MIS {mis}: drawn ahead");
+            assert_eq!(any.sampler.calls(), general.sampler.calls(), "ray {k}: draws");
             assert_eq!(bits(a), bits(b), "ray {k}, MIS {mis}");
             assert_eq!(fast.stats.shadow, general.stats.shadow, "ray {k}, MIS {mis}: shadow rays");
             assert_eq!(
