@@ -95,11 +95,19 @@ mod tests {
             f32::NEG_INFINITY,
             f32::NAN,
         ];
-        // Every 997th bit pattern covers all exponents and both signs.
+        same_bits_as_libm("floor", floor, f32::floor, &special);
+    }
+
+    /// `ours` against `libm` on `special` and every 997th bit pattern (all
+    /// exponents and both signs): the same bits, or NaN for NaN.
+    fn same_bits_as_libm(name: &str, ours: fn(f32) -> f32, libm: fn(f32) -> f32, special: &[f32]) {
         let sweep = (0..=u32::MAX / 997).map(|i| f32::from_bits(i.wrapping_mul(997)));
-        for x in special.into_iter().chain(sweep) {
-            let (a, b) = (floor(x), x.floor());
-            assert!(a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()), "floor({x:e}): {a:e} vs {b:e}");
+        for x in special.iter().copied().chain(sweep) {
+            let (a, b) = (ours(x), libm(x));
+            assert!(
+                a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
+                "{name}({x:e}): {a:e} vs {b:e}"
+            );
         }
     }
 
@@ -129,11 +137,7 @@ mod tests {
             f32::NEG_INFINITY,
             f32::NAN,
         ];
-        let sweep = (0..=u32::MAX / 997).map(|i| f32::from_bits(i.wrapping_mul(997)));
-        for x in special.into_iter().chain(sweep) {
-            let (a, b) = (round(x), x.round());
-            assert!(a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()), "round({x:e}): {a:e} vs {b:e}");
-        }
+        same_bits_as_libm("round", round, f32::round, &special);
     }
 
     #[test]
