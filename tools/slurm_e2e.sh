@@ -182,10 +182,13 @@ for _ in $(seq 600); do
         say "requeued task $requeued of $hw3_array while it ran (checkpoint $(basename "$ckpt"))"
         # Slurm holds a requeued job back for a couple of minutes (its
         # BeginTime, set once the killed task has finished completing); a
-        # test need not wait for that.
+        # test need not wait for that, but not none either: slurmd refuses a
+        # launch whose credential is from the second it revoked the old one
+        # ("Job credential revoked", the task then fails and its merge never
+        # runs), so the rerun starts a few seconds on.
         for _ in $(seq 150); do
             if [ "$(squeue -h -j "${hw3_array}_$requeued" -o %T 2>/dev/null)" = PENDING ]; then
-                scontrol update JobId="${hw3_array}_$requeued" StartTime=now
+                scontrol update JobId="${hw3_array}_$requeued" StartTime=now+3
                 break
             fi
             sleep 0.2
