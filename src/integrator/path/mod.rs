@@ -30,7 +30,7 @@
 use std::mem::MaybeUninit;
 
 use super::{is_black, surface_at, PathState, Surface};
-use crate::light::Light;
+use crate::light::{Light, LightSample};
 use crate::material::{Material, Specular};
 use crate::math::{Ray, Vec3, Vec3A};
 use crate::render::scene::{Hit, Scene};
@@ -356,6 +356,26 @@ impl LightAhead {
         let Light::Mesh(l) = &scene.lights[light] else { return None };
         let (q, n) = l.point(st.sampler.next_2d());
         Some(LightAhead { light, q, n })
+    }
+
+    /// The sample of `light`, the `i`th of the scene's, for a surface point
+    /// `p` of normal `n` (shadow rays from `origin`): from the point drawn
+    /// ahead where it is that light's, else drawn now.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn sample(
+        ahead: Option<LightAhead>,
+        i: usize,
+        light: &Light,
+        origin: Vec3,
+        p: Vec3,
+        n: Vec3,
+        st: &mut PathState,
+    ) -> Option<LightSample> {
+        match (light, ahead) {
+            (Light::Mesh(l), Some(a)) if a.light == i => l.sample_from(origin, p, (a.q, a.n), st.time),
+            _ => light.sample_at(origin, p, n, st.time, &mut st.sampler),
+        }
     }
 }
 

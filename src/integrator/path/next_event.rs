@@ -8,9 +8,7 @@
 use super::vertex::{light_terms, At};
 use super::{every_light, pick_chance, Came, LightAhead, PathParams};
 use crate::bsdf::diffuse_pdf;
-use crate::integrator::{
-    is_black, light_reaching_from, light_reaching_inline, shadow_reach, surface_at, PathState, Surface,
-};
+use crate::integrator::{is_black, light_reaching_from, shadow_reach, surface_at, PathState, Surface};
 use crate::light::{Light, ShadedLight};
 use crate::material::Material;
 use crate::math::{Ray, Vec3, Vec3A};
@@ -88,12 +86,8 @@ fn next_event_any(
         }
         // A point drawn ahead is taken only where every light is sampled
         // (`lights` is then all of them).
-        let reaching = match (light, ahead) {
-            (Light::Mesh(l), Some(a)) if a.light == i => l
-                .sample_from(origin, hit.p, (a.q, a.n), st.time)
-                .and_then(|ls| light_reaching_from(scene, ls, origin, at.n, st)),
-            _ => light_reaching_inline(scene, light, origin, hit.p, at.n, st),
-        };
+        let reaching = LightAhead::sample(ahead, i, light, origin, hit.p, at.n, st)
+            .and_then(|ls| light_reaching_from(scene, ls, origin, at.n, st));
         let Some((ls, cos, tr)) = reaching else {
             continue;
         };
@@ -136,11 +130,7 @@ fn next_event_diffuse<const MIS: bool>(
         }
         // [`light_reaching_inline`] without media: the shadow ray passes or
         // not. The first light's point may have been drawn ahead.
-        let ls = match (light, ahead) {
-            (Light::Mesh(l), Some(a)) if a.light == i => l.sample_from(origin, hit.p, (a.q, a.n), st.time),
-            _ => light.sample_at(origin, hit.p, at.n, st.time, &mut st.sampler),
-        };
-        let Some(ls) = ls else {
+        let Some(ls) = LightAhead::sample(ahead, i, light, origin, hit.p, at.n, st) else {
             continue;
         };
         let cos = at.n.dot(ls.wi);
