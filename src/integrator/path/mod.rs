@@ -35,62 +35,18 @@ use crate::material::{Material, Specular};
 use crate::math::{Ray, Vec3, Vec3A};
 use crate::render::scene::{Hit, Scene};
 use crate::render::volumes;
-use crate::scene::description::LightSamples;
 
 mod next_event;
+mod params;
 mod vertex;
 use next_event::{hit_weight, next_event, power_heuristic};
+pub use params::PathParams;
+use params::{by_variant, every_light, pick_chance};
 use vertex::{bounce, specular, At};
 
 /// Bounces after which even Russian roulette stops a path (the throughput of
 /// a path that long is far below anything visible).
 pub const MAX_BOUNCES: u32 = 64;
-
-/// The path tracer's switches (the course's `<RendererParams>` words).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct PathParams {
-    /// Sample every light at every hit.
-    pub next_event: bool,
-    /// Cosine-weighted bounces instead of uniform ones.
-    pub importance: bool,
-    /// End paths by their throughput instead of the depth.
-    pub russian_roulette: bool,
-    /// Multiple importance sampling of light and BSDF samples.
-    pub mis: bool,
-    /// Under MIS, how many lights a hit samples.
-    pub lights: LightSamples,
-}
-
-/// Under MIS, a scene with at most this many lights has every one sampled
-/// at every hit ([`LightSamples::Auto`]); with more, one is chosen by power.
-/// One light sample per hit leaves the noise of the choice: on the Cornell
-/// box of `tools/mitsuba_cornell_check.py` (a point light and a light box)
-/// sampling both removes 57% of the variance for 20% more time (docs/path-tracing.md,
-/// "Lights per hit"). Each light adds a shadow ray to every hit, so the
-/// count is kept small.
-const EVERY_LIGHT_UP_TO: usize = 4;
-
-/// Whether MIS samples every light at a hit rather than one chosen by power.
-#[inline]
-fn every_light(scene: &Scene, p: &PathParams) -> bool {
-    match p.lights {
-        LightSamples::All => true,
-        LightSamples::One => scene.lights.len() <= 1,
-        LightSamples::Auto => scene.lights.len() <= EVERY_LIGHT_UP_TO,
-    }
-}
-
-/// The chance that MIS's light sampling takes a light at a hit, whose
-/// chance of being chosen by power is `by_power`: 1 where every light is
-/// sampled.
-#[inline]
-fn pick_chance(scene: &Scene, p: &PathParams, by_power: f32) -> f32 {
-    if every_light(scene, p) {
-        1.0
-    } else {
-        by_power
-    }
-}
 
 /// How the ray being traced left its last surface, which decides how much an
 /// emitter it hits counts.
@@ -114,7 +70,7 @@ const STRATIFIED_FIRST_HIT: u32 = 4;
 /// every light, the first hit draws once per light that draws, then the
 /// lobe and the direction.
 #[inline]
-fn first_hit_calls(scene: &Scene, p: &PathParams) -> u32 {
+fn first_hit_calls(scene: &Scene, p: PathParams) -> u32 {
     if p.mis && scene.lights.len() > 1 && every_light(scene, p) {
         2 + scene.lights.iter().filter(|l| l.draws()).count() as u32
     } else {
@@ -124,8 +80,9 @@ fn first_hit_calls(scene: &Scene, p: &PathParams) -> u32 {
 
 /// Radiance arriving along the camera ray `ray`.
 pub fn radiance(scene: &Scene, ray: &Ray, p: &PathParams, st: &mut PathState) -> Vec3 {
+    let p = *p;
     st.sampler.stratify_first(st.sampler.calls() + first_hit_calls(scene, p));
-    li(scene, ray, 0, Vec3::ONE, Came::Direct, p, st)
+    by_variant!(p, V => li::<V>(scene, ray, 0, Vec3::ONE, Came::Direct, p, st))
 }
 
 /// Radiance along `ray`, which is bounce `depth` of a path of throughput
@@ -138,17 +95,18 @@ pub fn radiance(scene: &Scene, ray: &Ray, p: &PathParams, st: &mut PathState) ->
 /// recursion's operations in its order, so the same bits. A recursive call
 /// cost each vertex a prologue, an epilogue and its arguments through the
 /// stack. Other vertices, and a path longer than [`DEFERRED`], recurse.
-fn li(
+fn li<const V: u8>(
     scene: &Scene,
     ray: &Ray,
     depth: u32,
     beta: Vec3,
     came: Came,
-    p: &PathParams,
+    p: PathParams,
     st: &mut PathState,
 ) -> Vec3 {
+    let p = p.fixed::<V>();
     let mut w = Walk::new(scene, *ray, depth, beta, came, st);
-    let color = w.run(scene, p, st);
+    let color = w.run::<V>(scene, p, st);
     w.fold(color, st)
 }
 
@@ -169,6 +127,20 @@ pub fn radiance_pair(
     sa: &mut PathState,
     sb: &mut PathState,
 ) -> [Vec3A; 2] {
+    let p = *p;
+    by_variant!(p, V => pair::<V>(scene, rays, p, sa, sb))
+}
+
+/// [`radiance_pair`] for the variant `V`.
+#[inline(never)]
+fn pair<const V: u8>(
+    scene: &Scene,
+    rays: [&Ray; 2],
+    p: PathParams,
+    sa: &mut PathState,
+    sb: &mut PathState,
+) -> [Vec3A; 2] {
+    let p = p.fixed::<V>();
     let first_hit = first_hit_calls(scene, p);
     sa.sampler.stratify_first(sa.sampler.calls() + first_hit);
     sb.sampler.stratify_first(sb.sampler.calls() + first_hit);
@@ -177,13 +149,13 @@ pub fn radiance_pair(
     let (ca, cb) = loop {
         let ha = volumes::trace(scene, &a.ray, a.depth == 0, sa);
         let hb = volumes::trace(scene, &b.ray, b.depth == 0, sb);
-        let ra = a.step(scene, &ha, p, sa);
-        let rb = b.step(scene, &hb, p, sb);
+        let ra = a.step::<V>(scene, &ha, p, sa);
+        let rb = b.step::<V>(scene, &hb, p, sb);
         match (ra, rb) {
             (None, None) => {}
             (Some(ca), Some(cb)) => break (ca, cb),
-            (Some(ca), None) => break (ca, b.run(scene, p, sb)),
-            (None, Some(cb)) => break (a.run(scene, p, sa), cb),
+            (Some(ca), None) => break (ca, b.run::<V>(scene, p, sb)),
+            (None, Some(cb)) => break (a.run::<V>(scene, p, sa), cb),
         }
     };
     [a.fold(ca, sa).into(), b.fold(cb, sb).into()]
@@ -223,10 +195,10 @@ impl Walk {
     /// Follows the path to its end: the light along the walk's ray once
     /// the vertices waiting have added theirs ([`Walk::fold`]).
     #[inline(always)]
-    fn run(&mut self, scene: &Scene, p: &PathParams, st: &mut PathState) -> Vec3 {
+    fn run<const V: u8>(&mut self, scene: &Scene, p: PathParams, st: &mut PathState) -> Vec3 {
         loop {
             let hit = volumes::trace(scene, &self.ray, self.depth == 0, st);
-            if let Some(c) = self.step(scene, &hit, p, st) {
+            if let Some(c) = self.step::<V>(scene, &hit, p, st) {
                 break c;
             }
         }
@@ -236,7 +208,13 @@ impl Walk {
     /// [`volumes::trace`]): `None` where the path goes on from there with
     /// the bounce's ray, else the light arriving along the ray.
     #[inline(always)]
-    fn step(&mut self, scene: &Scene, hit: &Option<Hit>, p: &PathParams, st: &mut PathState) -> Option<Vec3> {
+    fn step<const V: u8>(
+        &mut self,
+        scene: &Scene,
+        hit: &Option<Hit>,
+        p: PathParams,
+        st: &mut PathState,
+    ) -> Option<Vec3> {
         // The ray, like the hit, is read where it lies: a copy was written
         // in a 16- and an 8-byte store, and the direction read back across
         // both, a load the store buffer cannot forward (~1.5% of pg1's time
@@ -249,7 +227,7 @@ impl Walk {
                 let before = st.travelled;
                 st.travelled += hit.t;
                 let defer = !self.media && self.n < DEFERRED;
-                match shade(scene, &self.ray, hit, depth, self.beta, self.came, p, defer, st) {
+                match shade::<V>(scene, &self.ray, hit, depth, self.beta, self.came, p, defer, st) {
                     Shaded::Done(c) => {
                         st.travelled = before;
                         (hit.t, c)
@@ -348,7 +326,7 @@ impl LightAhead {
     /// The point of the first light that draws, where it is a mesh and the
     /// light samples take every light (not one chosen by a draw of its own).
     #[inline(always)]
-    fn draw(scene: &Scene, p: &PathParams, st: &mut PathState) -> Option<LightAhead> {
+    fn draw(scene: &Scene, p: PathParams, st: &mut PathState) -> Option<LightAhead> {
         if p.mis && !every_light(scene, p) {
             return None;
         }
@@ -386,7 +364,7 @@ impl LightAhead {
 /// samples in full instead has the same mean but not the same noise: near
 /// an area light, light samples alone have a variance that grows as 1/d².
 #[inline]
-fn past_limit(scene: &Scene, depth: u32, p: &PathParams) -> bool {
+fn past_limit(scene: &Scene, depth: u32, p: PathParams) -> bool {
     if p.russian_roulette {
         depth > MAX_BOUNCES
     } else {
@@ -396,7 +374,7 @@ fn past_limit(scene: &Scene, depth: u32, p: &PathParams) -> bool {
 
 /// What a ray that leaves the scene brings: the environment (weighed against
 /// its light samples) or the background.
-fn escaped(scene: &Scene, ray: &Ray, came: Came, p: &PathParams, st: &PathState) -> Vec3 {
+fn escaped(scene: &Scene, ray: &Ray, came: Came, p: PathParams, st: &PathState) -> Vec3 {
     let Some(env) = &scene.environment else {
         return scene.textures.background(st.screen).unwrap_or(scene.background);
     };
@@ -419,14 +397,14 @@ fn escaped(scene: &Scene, ray: &Ray, came: Came, p: &PathParams, st: &PathState)
 /// answer (a [`Shaded`], ray and all) went through memory.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn shade(
+fn shade<const V: u8>(
     scene: &Scene,
     ray: &Ray,
     hit: &Hit,
     depth: u32,
     beta: Vec3,
     came: Came,
-    p: &PathParams,
+    p: PathParams,
     defer: bool,
     st: &mut PathState,
 ) -> Shaded {
@@ -488,7 +466,7 @@ fn shade(
             match bounce(scene, m, &at, origin, depth, beta, p, st) {
                 // Nothing follows the bounce at this vertex (see [`li`]).
                 Some(b) if defer && matches!(m.kind, Specular::None) => return Shaded::Bounce(color, b),
-                Some(b) => color += b.weight * li(scene, &b.ray, depth + 1, b.next, b.came, p, st) / b.q,
+                Some(b) => color += b.weight * li::<V>(scene, &b.ray, depth + 1, b.next, b.came, p, st) / b.q,
                 // Adding zero as the recursion did: it turns a -0.0 channel
                 // into +0.0, so the output keeps its bits.
                 None => color += Vec3::ZERO,
@@ -499,7 +477,7 @@ fn shade(
     // the set-up of the specular rays.
     let specular_part = !matches!(m.kind, Specular::None);
     if specular_part && (depth < scene.max_depth || (p.russian_roulette && depth < MAX_BOUNCES)) {
-        color += specular(scene, m, hit, n, ng, ray, entering, depth, beta, p, st);
+        color += specular::<V>(scene, m, hit, n, ng, ray, entering, depth, beta, p, st);
     }
     if inside_dielectric {
         if let Specular::Dielectric { absorption, .. } = &m.kind {

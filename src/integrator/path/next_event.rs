@@ -34,7 +34,7 @@ pub(super) fn next_event(
     at: &At,
     origin: Vec3,
     depth: u32,
-    p: &PathParams,
+    p: PathParams,
     ahead: Option<LightAhead>,
     st: &mut PathState,
 ) -> Vec3A {
@@ -62,7 +62,7 @@ fn next_event_any(
     at: &At,
     origin: Vec3,
     depth: u32,
-    p: &PathParams,
+    p: PathParams,
     ahead: Option<LightAhead>,
     st: &mut PathState,
 ) -> Vec3A {
@@ -117,7 +117,7 @@ fn next_event_diffuse<const MIS: bool>(
     at: &At,
     origin: Vec3,
     depth: u32,
-    p: &PathParams,
+    p: PathParams,
     ahead: Option<LightAhead>,
     st: &mut PathState,
 ) -> Vec3A {
@@ -167,7 +167,7 @@ fn shaded_sample(
     origin: Vec3,
     depth: u32,
     scale: f32,
-    p: &PathParams,
+    p: PathParams,
     st: &mut PathState,
 ) -> Vec3 {
     let u = st.sampler.next_2d();
@@ -217,7 +217,7 @@ pub(super) fn hit_weight(
     came: Came,
     ray: &Ray,
     hit: &Hit,
-    p: &PathParams,
+    p: PathParams,
     time: f32,
 ) -> f32 {
     match came {

@@ -67,7 +67,7 @@ impl At {
 /// the cosine, and the density with which [`bounce`] would draw `wi` (zero
 /// unless MIS needs it), the BRDF's local directions worked out once.
 #[inline(always)]
-pub(super) fn light_terms(m: &Material, at: &At, wi: Vec3, cos: f32, p: &PathParams) -> (Vec3, f32) {
+pub(super) fn light_terms(m: &Material, at: &At, wi: Vec3, cos: f32, p: PathParams) -> (Vec3, f32) {
     match &m.brdf {
         Some(b) if p.mis => {
             // Without a lobe only the cosines count: the local `z` of `wi` is
@@ -115,7 +115,7 @@ pub(super) fn bounce(
     origin: Vec3,
     depth: u32,
     beta: Vec3,
-    p: &PathParams,
+    p: PathParams,
     st: &mut PathState,
 ) -> Option<Bounce> {
     let (n, frame) = (at.n, &at.frame);
@@ -195,7 +195,7 @@ pub(super) fn bounce(
 /// Mirror, conductor and dielectric rays, as the recursive ray tracer sends
 /// them (with its glossy roughness), each weighted by its reflectance.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn specular(
+pub(super) fn specular<const V: u8>(
     scene: &Scene,
     m: &Material,
     hit: &Hit,
@@ -205,7 +205,7 @@ pub(super) fn specular(
     entering: bool,
     depth: u32,
     beta: Vec3,
-    p: &PathParams,
+    p: PathParams,
     st: &mut PathState,
 ) -> Vec3 {
     let eps = scene.shadow_epsilon;
@@ -216,7 +216,7 @@ pub(super) fn specular(
         if !st.spawn(next.max_element()) {
             return Vec3::ZERO;
         }
-        k * li(scene, &Ray::new(o, d), depth + 1, next, Came::Direct, p, st)
+        k * li::<V>(scene, &Ray::new(o, d), depth + 1, next, Came::Direct, p, st)
     };
     match m.kind {
         Specular::None => Vec3::ZERO,

@@ -1,0 +1,156 @@
+//! The path tracer's switches, the course's `<RendererParams>` words and
+//! luster's `MIS` ([`PathParams`]), and the copies of the path tracer
+//! compiled for them: one per variant, chosen per camera ([`by_variant`]),
+//! each with its words as constants ([`PathParams::fixed`]). Also how many
+//! lights an MIS hit samples (`AllLights`, `OneLight`).
+
+use crate::render::scene::Scene;
+use crate::scene::description::LightSamples;
+
+/// The path tracer's switches (the course's `<RendererParams>` words).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PathParams {
+    /// Sample every light at every hit.
+    pub next_event: bool,
+    /// Cosine-weighted bounces instead of uniform ones.
+    pub importance: bool,
+    /// End paths by their throughput instead of the depth.
+    pub russian_roulette: bool,
+    /// Multiple importance sampling of light and BSDF samples.
+    pub mis: bool,
+    /// Under MIS, how many lights a hit samples.
+    pub lights: LightSamples,
+}
+
+impl PathParams {
+    /// These switches with the four words fixed to the bits of `V` (1
+    /// next-event estimation, 2 importance sampling, 4 Russian roulette,
+    /// 8 MIS), which are this camera's: the path tracer is compiled once
+    /// per variant ([`by_variant`]), and each copy reads its switches
+    /// through here, as constants. A branch on a word costs little, but
+    /// with the words known LLVM drops the other variants' code and keeps
+    /// more of a vertex in registers: pg1 −3.4% instructions, 3–5% of the
+    /// time. The switches travel by value: behind a reference LLVM loaded
+    /// them again after each out-of-line call (which might, for all it
+    /// knew, have written them), and the copies gained nothing.
+    #[inline(always)]
+    pub(super) fn fixed<const V: u8>(self) -> PathParams {
+        let p = PathParams {
+            next_event: V & 1 != 0,
+            importance: V & 2 != 0,
+            russian_roulette: V & 4 != 0,
+            mis: V & 8 != 0,
+            lights: self.lights,
+        };
+        debug_assert!(p.mis == self.mis && p.russian_roulette == self.russian_roulette);
+        debug_assert!(self.mis || (p.next_event, p.importance) == (self.next_event, self.importance));
+        p
+    }
+}
+
+/// Evaluates `$call` with the const `$v` set to the variant of the switches
+/// `$p` ([`PathParams::fixed`]). Under MIS the course's `NextEventEstimation`
+/// and `ImportanceSampling` change nothing (every test of them is behind a
+/// test of MIS), so ten copies cover every camera.
+macro_rules! by_variant {
+    ($p:expr, $v:ident => $call:expr) => {
+        match ($p.mis, $p.russian_roulette, $p.next_event, $p.importance) {
+            (false, false, false, false) => {
+                const $v: u8 = 0;
+                $call
+            }
+            (false, false, true, false) => {
+                const $v: u8 = 1;
+                $call
+            }
+            (false, false, false, true) => {
+                const $v: u8 = 2;
+                $call
+            }
+            (false, false, true, true) => {
+                const $v: u8 = 3;
+                $call
+            }
+            (false, true, false, false) => {
+                const $v: u8 = 4;
+                $call
+            }
+            (false, true, true, false) => {
+                const $v: u8 = 5;
+                $call
+            }
+            (false, true, false, true) => {
+                const $v: u8 = 6;
+                $call
+            }
+            (false, true, true, true) => {
+                const $v: u8 = 7;
+                $call
+            }
+            (true, false, _, _) => {
+                const $v: u8 = 8;
+                $call
+            }
+            (true, true, _, _) => {
+                const $v: u8 = 12;
+                $call
+            }
+        }
+    };
+}
+
+pub(super) use by_variant;
+
+/// Under MIS, a scene with at most this many lights has every one sampled
+/// at every hit ([`LightSamples::Auto`]); with more, one is chosen by power.
+/// One light sample per hit leaves the noise of the choice: on the Cornell
+/// box of `tools/mitsuba_cornell_check.py` (a point light and a light box)
+/// sampling both removes 57% of the variance for 20% more time (docs/path-tracing.md,
+/// "Lights per hit"). Each light adds a shadow ray to every hit, so the
+/// count is kept small.
+const EVERY_LIGHT_UP_TO: usize = 4;
+
+/// Whether MIS samples every light at a hit rather than one chosen by power.
+#[inline]
+pub(super) fn every_light(scene: &Scene, p: PathParams) -> bool {
+    match p.lights {
+        LightSamples::All => true,
+        LightSamples::One => scene.lights.len() <= 1,
+        LightSamples::Auto => scene.lights.len() <= EVERY_LIGHT_UP_TO,
+    }
+}
+
+/// The chance that MIS's light sampling takes a light at a hit, whose
+/// chance of being chosen by power is `by_power`: 1 where every light is
+/// sampled.
+#[inline]
+pub(super) fn pick_chance(scene: &Scene, p: PathParams, by_power: f32) -> f32 {
+    if every_light(scene, p) {
+        1.0
+    } else {
+        by_power
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every combination of the words reaches the copy of its own switches;
+    /// under MIS the two course words it overrides are dropped.
+    #[test]
+    fn each_variant_runs_with_its_own_switches() {
+        for bits in 0u8..16 {
+            let p = PathParams {
+                next_event: bits & 1 != 0,
+                importance: bits & 2 != 0,
+                russian_roulette: bits & 4 != 0,
+                mis: bits & 8 != 0,
+                lights: LightSamples::One,
+            };
+            let got = by_variant!(p, V => p.fixed::<V>());
+            let want = if p.mis { PathParams { next_event: false, importance: false, ..p } } else { p };
+            assert_eq!(got, want, "words {bits:04b}");
+        }
+    }
+}
