@@ -261,4 +261,4 @@ pub(super) fn power_heuristic(a: f32, b: f32) -> f32 {
 
 #[cfg(test)]
 #[path = "next_event_tests.rs"]
-mod tests;
+pub(super) mod tests;

@@ -10,7 +10,9 @@ use crate::integrator::{surface_at, RayStats};
 use crate::render::sampler::PixelSampler;
 use crate::scene::description::LightSamples;
 
-const SCENE: &str = r#"<Scene>
+/// A box lit by a point light and a light box, every surface diffuse (also
+/// read by `vertex_tests.rs`).
+pub(in crate::integrator::path) const SCENE: &str = r#"<Scene>
   <MaxRecursionDepth>3</MaxRecursionDepth>
   <Cameras><Camera id="1" type="lookAt"><Position>0 0 1.8</Position><GazePoint>0 0 0</GazePoint><Up>0 1 0</Up>
     <FovY>60</FovY><NearDistance>1</NearDistance><ImageResolution>8 8</ImageResolution>

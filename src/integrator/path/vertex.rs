@@ -186,6 +186,14 @@ pub(super) fn bounce(
     if past_limit(scene, depth + 1, p) && !scene.may_find_emission(&ray) {
         return None;
     }
+    // So does the bounce to the last vertex of a course variant that
+    // samples no lights: that vertex only adds the light it finds (its
+    // specular rays and bounce would pass the limit). Where that light can
+    // only come from emitters the ray misses, its trace would add zero.
+    let to_last = !p.next_event && !p.mis && !p.russian_roulette && depth + 1 == scene.max_depth;
+    if to_last && !scene.may_bring_light(&ray) {
+        return None;
+    }
     if !st.spawn(next.max_element()) {
         return None;
     }
@@ -252,3 +260,7 @@ pub(super) fn specular<const V: u8>(
         }
     }
 }
+
+#[cfg(test)]
+#[path = "vertex_tests.rs"]
+mod tests;

@@ -199,12 +199,14 @@ impl Scene {
             integrators: desc.cameras.iter().map(|c| Integrator::from_desc(&c.renderer)).collect(),
             warnings,
             emitting_bounds: None,
+            emitters_alone: false,
             simd: simd_available(),
             axes_by_table: false,
         };
         scene.axes_by_table = scene.meshes.iter().all(|m| m.accel().bvh().node_count() <= 1);
         scene.add_shaded_lights();
         scene.emitting_bounds = scene.emitting_boxes(|p| prim_bounds(p, &scene.meshes, &scene.ellipsoids));
+        scene.emitters_alone = scene.only_emitters_shine();
         let bounds = scene.tlas.bounds();
         let radius = 0.5 * (bounds.max - bounds.min).length();
         scene.light_pick = LightPick::by_power(&scene.lights, radius);

@@ -204,6 +204,9 @@ pub struct Scene {
     pub warnings: Vec<Warning>,
     /// Boxes around everything that can emit ([`Scene::emitting_boxes`]).
     emitting_bounds: Option<Vec<Aabb>>,
+    /// Whether only those boxes' emitters give a ray light of their own
+    /// ([`Scene::only_emitters_shine`]).
+    emitters_alone: bool,
     /// Whether the CPU has AVX2 and FMA, detected once at build: every
     /// query asks, and the detection's cached answer took two loads and
     /// two branches each time.

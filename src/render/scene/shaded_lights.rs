@@ -107,6 +107,30 @@ impl Scene {
         boxes.iter().any(|b| b.hit(ray.o, inv, f32::INFINITY).is_some())
     }
 
+    /// Whether a ray that ends on a surface without lighting it, or finds
+    /// nothing, can bring light: false only where every emitter is bounded
+    /// ([`Scene::emitting_boxes`]), the background is black without a
+    /// texture, and no object or plane has texture maps (a `replace_all`
+    /// map shows its colour unlit, and a shader may fail, which the render
+    /// reports).
+    pub(super) fn only_emitters_shine(&self) -> bool {
+        self.emitting_bounds.is_some()
+            && self.background == Vec3::ZERO
+            && self.textures.background.is_none()
+            && self.prims.iter().all(|p| p.textures.is_empty())
+            && self.planes.iter().all(|p| p.2.is_empty())
+    }
+
+    /// Whether a ray whose end adds nothing but the light found there (no
+    /// lighting, no bounce: the last vertex of the course's path tracer
+    /// without light samples) can bring any: false only where only the
+    /// emitters shine ([`Scene::only_emitters_shine`]) and the ray misses
+    /// their boxes ([`Scene::may_find_emission`]).
+    #[inline]
+    pub fn may_bring_light(&self, ray: &Ray) -> bool {
+        !self.emitters_alone || self.may_find_emission(ray)
+    }
+
     /// The largest emission component the shader gives at the probe points
     /// (infinite when it fails there: the render will report the failure,
     /// and until then the object counts as a light).
