@@ -242,7 +242,7 @@ impl Walk {
                     }
                 }
             }
-            None => (f32::INFINITY, escaped(scene, &self.ray, self.came, p, st)),
+            None => (f32::INFINITY, escaped(scene, &self.ray, self.came, past_limit(scene, depth, p), p, st)),
         };
         // Nothing on the way dims the light or adds to it.
         if !self.media {
@@ -363,6 +363,9 @@ impl LightAhead {
 /// weighed against it (as Mitsuba's path tracer does). Counting those light
 /// samples in full instead has the same mean but not the same noise: near
 /// an area light, light samples alone have a variance that grows as 1/d².
+/// Only lights count there (emitters, shaders' emission, the environment):
+/// not the background, nor an unlit map's colour, which a path stopped by
+/// the limit never sees.
 #[inline]
 fn past_limit(scene: &Scene, depth: u32, p: PathParams) -> bool {
     if p.russian_roulette {
@@ -373,9 +376,15 @@ fn past_limit(scene: &Scene, depth: u32, p: PathParams) -> bool {
 }
 
 /// What a ray that leaves the scene brings: the environment (weighed against
-/// its light samples) or the background.
-fn escaped(scene: &Scene, ray: &Ray, came: Came, p: PathParams, st: &PathState) -> Vec3 {
+/// its light samples) or the background. Past the depth limit (`past`) a
+/// ray looks for lights alone ([`past_limit`]), and the background is none:
+/// counted there, it came only with the rays that pass an emitter's box,
+/// the others being skipped untraced ([`Scene::may_find_emission`]).
+fn escaped(scene: &Scene, ray: &Ray, came: Came, past: bool, p: PathParams, st: &PathState) -> Vec3 {
     let Some(env) = &scene.environment else {
+        if past {
+            return Vec3::ZERO;
+        }
         return scene.textures.background(st.screen).unwrap_or(scene.background);
     };
     let d = ray.d.normalize();
@@ -413,6 +422,8 @@ fn shade<const V: u8>(
     let surface = surface_at(scene, ray, hit, depth, st);
     let (m, ns): (&Material, Vec3) = match &surface {
         Surface::Lit(m, ns) => (m, *ns),
+        // An unlit map's colour is no light (see [`escaped`]).
+        Surface::Unlit(_) if past_limit(scene, depth, p) => return Shaded::Done(Vec3::ZERO),
         Surface::Unlit(c) => return Shaded::Done(*c),
         Surface::Failed => return Shaded::Done(Vec3::ZERO),
     };

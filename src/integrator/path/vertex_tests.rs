@@ -71,3 +71,18 @@ fn light_from_elsewhere_keeps_every_last_bounce() {
         assert!(rays().all(|(_, r)| scene.may_bring_light(&r)), "with {what}");
     }
 }
+
+#[test]
+fn past_the_depth_limit_the_background_is_no_light() {
+    let grey = SCENE.replacen("<Cameras>", "<BackgroundColor>10 10 10</BackgroundColor><Cameras>", 1);
+    let scene = scene_of(&grey);
+    let p = PathParams { mis: true, ..PathParams::default() };
+    // From outside the box, away from it: the ray finds nothing.
+    let ray = Ray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::Z);
+    let came = Came::Bounce { pdf: 0.5, n: Vec3::Z };
+    let mut st = PathState::new(RayStats::default(), 0.0, PixelSampler::new(3, 0, 0, 0, 16));
+    let within = li::<8>(&scene, &ray, scene.max_depth, Vec3::ONE, came, p, &mut st);
+    let past = li::<8>(&scene, &ray, scene.max_depth + 1, Vec3::ONE, came, p, &mut st);
+    assert_eq!(within, Vec3::splat(10.0));
+    assert_eq!(past, Vec3::ZERO);
+}
