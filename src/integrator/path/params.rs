@@ -23,6 +23,21 @@ pub struct PathParams {
 }
 
 impl PathParams {
+    /// The bits of this camera's variant, as [`PathParams::fixed`] reads
+    /// them. Under MIS the course's `NextEventEstimation` and
+    /// `ImportanceSampling` change nothing (every test of them is behind a
+    /// test of MIS) and are left out, so ten copies cover every camera:
+    /// 0–7, 8 and 12.
+    #[inline]
+    pub(super) fn key(self) -> u8 {
+        let roulette = u8::from(self.russian_roulette) << 2;
+        if self.mis {
+            8 | roulette
+        } else {
+            u8::from(self.next_event) | u8::from(self.importance) << 1 | roulette
+        }
+    }
+
     /// These switches with the four words fixed to the bits of `V` (1
     /// next-event estimation, 2 importance sampling, 4 Russian roulette,
     /// 8 MIS), which are this camera's: the path tracer is compiled once
@@ -42,63 +57,30 @@ impl PathParams {
             mis: V & 8 != 0,
             lights: self.lights,
         };
-        debug_assert!(p.mis == self.mis && p.russian_roulette == self.russian_roulette);
-        debug_assert!(self.mis || (p.next_event, p.importance) == (self.next_event, self.importance));
+        debug_assert_eq!(self.key(), V);
         p
     }
 }
 
 /// Evaluates `$call` with the const `$v` set to the variant of the switches
-/// `$p` ([`PathParams::fixed`]). Under MIS the course's `NextEventEstimation`
-/// and `ImportanceSampling` change nothing (every test of them is behind a
-/// test of MIS), so ten copies cover every camera.
+/// `$p` ([`PathParams::key`]): one arm per copy.
 macro_rules! by_variant {
     ($p:expr, $v:ident => $call:expr) => {
-        match ($p.mis, $p.russian_roulette, $p.next_event, $p.importance) {
-            (false, false, false, false) => {
-                const $v: u8 = 0;
+        by_variant!(@arms $p.key(), $v, $call, [0 1 2 3 4 5 6 7 8] 12)
+    };
+    (@arms $key:expr, $v:ident, $call:expr, [$($k:literal)*] $last:literal) => {
+        match $key {
+            $($k => {
+                const $v: u8 = $k;
                 $call
-            }
-            (false, false, true, false) => {
-                const $v: u8 = 1;
-                $call
-            }
-            (false, false, false, true) => {
-                const $v: u8 = 2;
-                $call
-            }
-            (false, false, true, true) => {
-                const $v: u8 = 3;
-                $call
-            }
-            (false, true, false, false) => {
-                const $v: u8 = 4;
-                $call
-            }
-            (false, true, true, false) => {
-                const $v: u8 = 5;
-                $call
-            }
-            (false, true, false, true) => {
-                const $v: u8 = 6;
-                $call
-            }
-            (false, true, true, true) => {
-                const $v: u8 = 7;
-                $call
-            }
-            (true, false, _, _) => {
-                const $v: u8 = 8;
-                $call
-            }
-            (true, true, _, _) => {
-                const $v: u8 = 12;
+            })*
+            _ => {
+                const $v: u8 = $last;
                 $call
             }
         }
     };
 }
-
 pub(super) use by_variant;
 
 /// Under MIS, a scene with at most this many lights has every one sampled
