@@ -420,10 +420,11 @@ fn shade<const V: u8>(
     // Matched in place, not moved out: a move copies the whole `Cow`, room
     // for an owned material, even when it borrows.
     let surface = surface_at(scene, ray, hit, depth, st);
+    let past = past_limit(scene, depth, p);
     let (m, ns): (&Material, Vec3) = match &surface {
         Surface::Lit(m, ns) => (m, *ns),
         // An unlit map's colour is no light (see [`escaped`]).
-        Surface::Unlit(_) if past_limit(scene, depth, p) => return Shaded::Done(Vec3::ZERO),
+        Surface::Unlit(_) if past => return Shaded::Done(Vec3::ZERO),
         Surface::Unlit(c) => return Shaded::Done(*c),
         Surface::Failed => return Shaded::Done(Vec3::ZERO),
     };
@@ -436,8 +437,7 @@ fn shade<const V: u8>(
     // sample lights: nothing draws between here and [`next_event`], so it
     // is the value that would be drawn there (see [`LightAhead`]).
     let samples_lights = (p.next_event || p.mis) && m.traits.reflects && !inside_dielectric;
-    let ahead =
-        if samples_lights && !past_limit(scene, depth, p) { LightAhead::draw(scene, p, st) } else { None };
+    let ahead = if samples_lights && !past { LightAhead::draw(scene, p, st) } else { None };
 
     // Under the course's next-event estimation an object light that a
     // random bounce hits counts nothing (its samples counted it): skip the
@@ -461,7 +461,7 @@ fn shade<const V: u8>(
         color += m.emission * w;
     }
 
-    if past_limit(scene, depth, p) {
+    if past {
         return Shaded::Done(color);
     }
     let origin = hit.p + ng * eps;

@@ -34,12 +34,17 @@ pub(in crate::integrator::path) const SCENE: &str = r#"<Scene>
   </Objects>
 </Scene>"#;
 
-#[test]
-fn the_constant_brdf_light_samples_are_the_general_ones() {
+/// The render scene of the scene file `text`.
+pub(in crate::integrator::path) fn scene_of(text: &str) -> Scene {
     let dir = tempfile::tempdir().expect("temp dir");
     let path = dir.path().join("box.xml");
-    std::fs::write(&path, SCENE).expect("scene written");
-    let scene = Scene::build(&crate::scene::load(&path).expect("scene loads")).expect("scene builds");
+    std::fs::write(&path, text).expect("scene written");
+    Scene::build(&crate::scene::load(&path).expect("scene loads")).expect("scene builds")
+}
+
+#[test]
+fn the_constant_brdf_light_samples_are_the_general_ones() {
+    let scene = scene_of(SCENE);
     let bits = |v: Vec3A| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
     let (mut lit, mut checked) = (0, 0);
     for mis in [false, true] {

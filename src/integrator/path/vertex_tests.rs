@@ -3,17 +3,10 @@
 //! is then exactly zero, and the skip is made only where nothing but the
 //! emitters shines.
 
-use super::super::next_event::tests::SCENE;
+use super::super::next_event::tests::{scene_of, SCENE};
 use super::*;
 use crate::integrator::RayStats;
 use crate::render::sampler::PixelSampler;
-
-fn scene_of(text: &str) -> Scene {
-    let dir = tempfile::tempdir().expect("temp dir");
-    let path = dir.path().join("box.xml");
-    std::fs::write(&path, text).expect("scene written");
-    Scene::build(&crate::scene::load(&path).expect("scene loads")).expect("scene builds")
-}
 
 /// Rays from points in the box: every other one in a direction spread over
 /// the sphere, the others towards points around the light box.
