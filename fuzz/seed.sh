@@ -13,13 +13,13 @@ add() { # target, files...
     mkdir -p corpus/$t
     for f in "$@"; do cp "$f" "corpus/$t/$(name "$f")"; done
 }
-add scene_xml $(small "$shared" "$root/tests" -name '*.xml')
-add scene_json $(small "$shared" "$root/tests" -name '*.json')
-add ply $(small "$shared" "$root/tests" -name '*.ply')
-add image $(small "$shared" "$root/tests" \( -name '*.png' -o -name '*.jpg' -o -name '*.exr' -o -name '*.hdr' \))
-add shader $(small "$root/tests" "$root/examples" "$root/docs" -name '*.lua')
+add scene_xml $(small "$shared" "$root/crates/luster/tests" -name '*.xml')
+add scene_json $(small "$shared" "$root/crates/luster/tests" -name '*.json')
+add ply $(small "$shared" "$root/crates/luster/tests" -name '*.ply')
+add image $(small "$shared" "$root/crates/luster/tests" \( -name '*.png' -o -name '*.jpg' -o -name '*.exr' -o -name '*.hdr' \))
+add shader $(small "$root/crates/luster/tests" "$root/examples" "$root/docs" -name '*.lua')
 mkdir -p corpus/obj
-for o in $(small "$root/tests" -name '*.obj'); do
+for o in $(small "$root/crates/luster/tests" -name '*.obj'); do
     out="corpus/obj/$(name "$o")"
     cp "$o" "$out"
     for m in $(sed -n 's/^mtllib[[:space:]]*//p' "$o"); do

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
-"""Mean FLIP of the image pairs in tests/fixtures/flip/, by NVIDIA's
+"""Mean FLIP of the image pairs in crates/luster/tests/fixtures/flip/, by NVIDIA's
 reference implementation (the `flip-evaluator` package from PyPI), printed as
-the two tables that tests/flip_reference.rs checks luster's FLIP against:
+the two tables that crates/luster/tests/it/flip_reference.rs checks luster's FLIP against:
 LDR-FLIP of the `*_ref.png` / `*_test.png` pairs, HDR-FLIP of the
 `*_ref.exr` / `*_test.exr` pairs.
 
@@ -15,7 +15,7 @@ import pathlib
 
 import flip_evaluator as flip
 
-FIXTURES = pathlib.Path(__file__).resolve().parent.parent / "tests" / "fixtures" / "flip"
+FIXTURES = pathlib.Path(__file__).resolve().parent.parent / "crates" / "luster" / "tests" / "fixtures" / "flip"
 
 for ext, mode in (("png", "LDR"), ("exr", "HDR")):
     print(f"{mode}:")

@@ -1,3 +1,3 @@
 //! Fuzz target: arbitrary bytes through luster's ply loader.
 #![no_main]
-libfuzzer_sys::fuzz_target!(|data: &[u8]| luster::fuzzing::Target::Ply.run(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| luster_qa::fuzzing::Target::Ply.run(data));

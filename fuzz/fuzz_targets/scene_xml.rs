@@ -1,3 +1,3 @@
 //! Fuzz target: arbitrary bytes through luster's scene xml loader.
 #![no_main]
-libfuzzer_sys::fuzz_target!(|data: &[u8]| luster::fuzzing::Target::SceneXml.run(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| luster_qa::fuzzing::Target::SceneXml.run(data));

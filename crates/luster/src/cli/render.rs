@@ -1,0 +1,127 @@
+//! `luster render`: load (a scene, or an OBJ model in a scene made around it),
+//! build, render every camera, write its files (see `luster::image::outputs`)
+//! atomically.
+
+use anyhow::Context;
+use indicatif::{ProgressBar, ProgressStyle};
+use luster::film::write_outputs;
+use luster::film::FilmReserve;
+use luster::image::outputs::{first_clash, plan_outputs};
+use luster::render::{self, BuildOptions, RenderOptions, Scene};
+use luster::scene::obj::ModelView;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+/// Renders every scene; errors in one scene do not stop the others.
+#[allow(clippy::too_many_arguments)] // the command's options, passed through as given
+pub fn run(
+    scenes: &[PathBuf],
+    outdir: &Path,
+    threads: Option<usize>,
+    quiet: bool,
+    opts: &RenderOptions,
+    build: &BuildOptions,
+    view: &ModelView,
+    frame: &(Option<(u32, u32)>, super::reframe::FrameArgs),
+) -> ExitCode {
+    let pool = match super::args::pool(threads) {
+        Ok(p) => p,
+        Err(code) => return code,
+    };
+    let mut failed = 0;
+    for s in scenes {
+        if let Err(e) = pool.install(|| render_scene(s, outdir, quiet, opts, build, view, frame)) {
+            eprintln!("error: {e:#}");
+            failed += 1;
+        }
+    }
+    if failed > 0 {
+        if scenes.len() > 1 {
+            eprintln!("{failed} of {} scenes failed", scenes.len());
+        }
+        return ExitCode::from(2);
+    }
+    ExitCode::SUCCESS
+}
+
+/// Renders every camera of one scene, then writes the images: a shader that
+/// fails in any camera leaves no image of the scene behind.
+fn render_scene(
+    path: &Path,
+    outdir: &Path,
+    quiet: bool,
+    opts: &RenderOptions,
+    build: &BuildOptions,
+    view: &ModelView,
+    frame: &(Option<(u32, u32)>, super::reframe::FrameArgs),
+) -> anyhow::Result<()> {
+    let t0 = Instant::now();
+    let obj = luster::scene::is_obj(path);
+    let mut desc = luster::scene::load_viewed(path, view)?;
+    // A model's --size already made its camera; --scale and --crop apply to both.
+    super::reframe::apply(&mut desc, if obj { None } else { frame.0 }, &frame.1)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    for w in &desc.warnings {
+        eprintln!("warning: {}: {w}", path.display());
+    }
+    // While the scene loads (an image decoding alone, say), a free worker
+    // writes the first camera's film memory.
+    let reserve = desc.cameras.first().map(|c| FilmReserve::start(c.resolution.0, c.resolution.1));
+    let scene = Scene::build_with(&desc, build)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {}: {w}", path.display());
+    }
+    let plans = scene
+        .cameras
+        .iter()
+        .map(|c| plan_outputs(&c.image_name, &c.tonemaps, c.display))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    if let Some(clash) = first_clash(plans.iter().flatten().map(|o| o.name.as_path())) {
+        anyhow::bail!("{}: two outputs would be written to {}", path.display(), clash.display());
+    }
+    let setup = t0.elapsed().as_secs_f64();
+    let mut done = Vec::with_capacity(scene.cameras.len());
+    for (i, cam) in scene.cameras.iter().enumerate() {
+        // Pixel samples, which passes finish evenly: the ETA holds from the first pass.
+        let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(render::work(&scene, i, opts)) };
+        bar.set_style(
+            ProgressStyle::with_template("{msg} [{bar:40}] {percent:>3}% {elapsed}<{eta}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> "),
+        );
+        bar.set_message(cam.image_name.clone());
+        let t = Instant::now();
+        let reserve = if i == 0 { reserve.as_ref() } else { None };
+        let img = render::try_render_reserved(&scene, i, opts, &|n| bar.inc(n), reserve);
+        bar.finish_and_clear();
+        let img = img.map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+        done.push((img, t.elapsed().as_secs_f64()));
+    }
+    let triangles = scene.triangle_count();
+    // Freed by a free worker while the images are encoded, not after them
+    // on the thread that ends the process (textures, meshes, trees).
+    if rayon::current_num_threads() > 1 {
+        rayon::spawn(move || drop((scene, desc)));
+    }
+    for ((img, secs), plan) in done.iter().zip(&plans) {
+        let written = write_outputs(&img.film, outdir, plan)
+            .with_context(|| format!("rendering {}", path.display()))?;
+        if !quiet {
+            let names: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
+            println!(
+                "{}  {}x{}  {} spp  {:.2} s render (+{:.2} s load and build)  {:.1} Mrays/s  {} triangles",
+                names.join(" + "),
+                img.width,
+                img.height,
+                img.spp,
+                secs,
+                setup,
+                img.stats.total() as f64 / secs.max(1e-9) / 1e6,
+                triangles
+            );
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,79 @@
+//! What the integration tests share.
+
+use std::path::PathBuf;
+
+/// The course folder beside the repository, when it is there.
+///
+/// Without it a golden test cannot run. On a developer's machine it says so
+/// and skips; on CI (`CI=true`, as every CI service sets it) a missing folder
+/// is a broken checkout, and the test fails rather than pass unseen.
+#[allow(dead_code)] // the golden tests use it, the others do not
+pub fn course_root(what: &str) -> Option<PathBuf> {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/ceng795");
+    if root.is_dir() {
+        return Some(root);
+    }
+    let on_ci = std::env::var("CI").is_ok_and(|v| v.eq_ignore_ascii_case("true") || v == "1");
+    assert!(
+        !on_ci,
+        "CI=true but {} is missing, so the {what} golden images cannot be checked",
+        root.display()
+    );
+    eprintln!("skipped: {} is absent, so the {what} golden images were not checked", root.display());
+    None
+}
+
+/// Writes `files` (name, text) into a fresh temporary folder; returns it.
+#[allow(dead_code)] // not every test crate that shares this module writes files
+pub fn folder(files: &[(&str, &str)]) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    for (name, text) in files {
+        std::fs::write(dir.path().join(name), text).expect("a test file");
+    }
+    dir
+}
+
+/// How a run of the luster binary ended: its exit code (`None` when it was
+/// killed at the time limit or by a signal) and everything it wrote to stderr.
+#[allow(dead_code)] // only the command-line tests run the binary
+pub struct Run {
+    /// Exit code.
+    pub code: Option<i32>,
+    /// Standard error, lossily decoded.
+    pub stderr: String,
+}
+
+/// Runs `cmd` with no backtraces, stdin closed and stderr captured, killing
+/// it after `limit`, so a hang fails a test instead of stalling the suite.
+#[allow(dead_code)] // only the command-line tests run the binary
+pub fn run_limited(mut cmd: std::process::Command, limit: std::time::Duration) -> Run {
+    use std::io::Read;
+    use std::process::Stdio;
+    let mut child = cmd
+        .env_remove("RUST_BACKTRACE")
+        .env_remove("RUST_LIB_BACKTRACE")
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the luster binary starts");
+    let mut pipe = child.stderr.take().expect("stderr is piped");
+    let reader = std::thread::spawn(move || {
+        let mut bytes = Vec::new();
+        let _ = pipe.read_to_end(&mut bytes);
+        String::from_utf8_lossy(&bytes).into_owned()
+    });
+    let start = std::time::Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("waiting for luster") {
+            break Some(status);
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            break None;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    };
+    Run { code: status.and_then(|s| s.code()), stderr: reader.join().unwrap_or_default() }
+}

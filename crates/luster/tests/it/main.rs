@@ -1,0 +1,35 @@
+//! The integration tests of luster, one binary: the command line, bad and
+//! hostile input, golden images of the course scenes, shaders, volumes,
+//! OBJ models, split renders, the watch server and the fuzz smoke run.
+
+mod bad_input;
+mod camera_gaze;
+mod cluster;
+mod cluster_camera;
+mod common;
+mod compare;
+mod display;
+mod distribution;
+mod ellipsoid;
+mod flip_reference;
+mod fuzz_smoke;
+mod golden;
+mod golden_hw3;
+mod golden_hw4;
+mod golden_hw6;
+mod golden_hw7;
+mod hdr_lights;
+mod hostile;
+mod instances;
+mod obj;
+mod path_tracing;
+mod perlin_space;
+mod shader_aa;
+mod shader_bump_smooth;
+mod shader_context;
+mod shader_material;
+mod shaders;
+mod suite;
+mod volumes;
+mod watch;
+mod whitted_glass;

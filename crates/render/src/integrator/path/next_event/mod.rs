@@ -1,0 +1,259 @@
+//! Next-event estimation of the path tracer: at each hit, one sample of
+//! every light (or, under MIS in a scene with many lights, of one chosen by
+//! power), shadowed and weighed, and the weight that an emitter a bounce hits
+//! gets against those samples. Reads the scene's lights and the camera's
+//! `<RendererParams>` (through [`PathParams`]); the BRDF terms come from the
+//! vertex's [`Bsdf`].
+
+use super::{every_light, pick_chance, Came, LightAhead, PathParams};
+use crate::bsdf::diffuse_pdf;
+use crate::bsdf::Bsdf;
+use crate::integrator::media;
+use crate::integrator::{is_black, light_reaching_from, shadow_reach, surface_at, PathState, Surface};
+use crate::light::{Light, ShadedLight};
+use crate::render::scene::{Hit, Scene};
+use luster_core::math::{Ray, Vec3, Vec3A};
+
+/// One sample of every light, shadowed; with MIS each weighed against the
+/// chance that the BSDF would have drawn its direction. Only picks the
+/// version: both take its arguments as they are, so each is a jump (the
+/// choice made in `li` instead cost pd5, which samples no light, ~19
+/// instructions a path in `li`'s code).
+///
+/// The sum comes back as a `Vec3A`: returned through memory either way, a
+/// `Vec3` was written as `x` alone and `y, z` together, and `li` read `x, y`
+/// together at once, a load the store buffer cannot forward (8.9% of `li`'s
+/// time on the hw7 box stalled there).
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+pub(super) fn next_event(
+    scene: &Scene,
+    hit: &Hit,
+    at: &Bsdf,
+    origin: Vec3,
+    depth: u32,
+    p: PathParams,
+    ahead: Option<LightAhead>,
+    st: &mut PathState,
+) -> Vec3A {
+    let vols = &scene.volumes;
+    let m = at.material();
+    if at.f.is_some() && vols.surfaces.is_empty() && vols.media.is_empty() {
+        if !p.mis {
+            return next_event_diffuse::<false>(scene, hit, at, origin, depth, p, ahead, st);
+        }
+        // [`Bsdf::eval_pdf`]'s arm for a diffuse-only BRDF under MIS, with
+        // every light sampled (scale 1).
+        if m.traits.diffuse_only && m.brdf.is_some() && every_light(scene, p) {
+            return next_event_diffuse::<true>(scene, hit, at, origin, depth, p, ahead, st);
+        }
+    }
+    next_event_any(scene, hit, at, origin, depth, p, ahead, st)
+}
+
+/// [`next_event`] at any vertex.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn next_event_any(
+    scene: &Scene,
+    hit: &Hit,
+    at: &Bsdf,
+    origin: Vec3,
+    depth: u32,
+    p: PathParams,
+    ahead: Option<LightAhead>,
+    st: &mut PathState,
+) -> Vec3A {
+    let mut color = Vec3::ZERO;
+    // MIS takes every light of a scene with few ([`every_light`]), else one
+    // per hit, chosen by power: a shadow ray per hit whatever the number of
+    // lights. The course's variant samples them all.
+    let (lights, scale) = if p.mis && !every_light(scene, p) {
+        let (i, pick) = scene.light_pick.choose(st.sampler.next_1d());
+        if pick <= 0.0 {
+            return Vec3A::ZERO;
+        }
+        (&scene.lights[i..=i], 1.0 / pick)
+    } else {
+        (&scene.lights[..], 1.0)
+    };
+    for (i, light) in lights.iter().enumerate() {
+        if let Light::Shaded(l) = light {
+            color += shaded_sample(scene, l, hit, at, origin, depth, scale, p, st);
+            continue;
+        }
+        // A point drawn ahead is taken only where every light is sampled
+        // (`lights` is then all of them).
+        let reaching = LightAhead::sample(ahead, i, light, origin, hit.p, at.n, st)
+            .and_then(|ls| light_reaching_from(scene, ls, origin, at.n, st));
+        let Some((ls, cos, tr)) = reaching else {
+            continue;
+        };
+        let (f, bsdf_pdf) = at.eval_pdf(ls.wi, cos, p.strategy());
+        let w =
+            if p.mis && hittable(light) { power_heuristic(ls.pdf / scale, bsdf_pdf) * scale } else { scale };
+        color += f * (tr * ls.e) * w;
+    }
+    color.into()
+}
+
+/// [`next_event`] at a vertex whose BRDF value is the same for every light
+/// direction above it (`at.f`), in a scene without volumes: each light's
+/// term is `f cos · E`, times, under MIS (with every light sampled), the
+/// power heuristic against the cosine-weighted bounce's density; the
+/// shadow ray's transmittance is exactly 1, and so are the other factors
+/// [`next_event_any`] multiplies by (dropping them keeps the bits).
+/// Apart, because LLVM hoisted the set-up of every case of [`Bsdf::eval_pdf`]
+/// (the frame's rows, the whole view direction) out of [`next_event_any`]'s
+/// light loop, ~160 instructions a call that this vertex never uses.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn next_event_diffuse<const MIS: bool>(
+    scene: &Scene,
+    hit: &Hit,
+    at: &Bsdf,
+    origin: Vec3,
+    depth: u32,
+    p: PathParams,
+    ahead: Option<LightAhead>,
+    st: &mut PathState,
+) -> Vec3A {
+    let f = Vec3::from(at.f.unwrap_or_default());
+    let mut color = Vec3::ZERO;
+    for (i, light) in scene.lights.iter().enumerate() {
+        if let Light::Shaded(l) = light {
+            color += shaded_sample(scene, l, hit, at, origin, depth, 1.0, p, st);
+            continue;
+        }
+        // [`light_reaching_inline`] without media: the shadow ray passes or
+        // not. The first light's point may have been drawn ahead.
+        let Some(ls) = LightAhead::sample(ahead, i, light, origin, hit.p, at.n, st) else {
+            continue;
+        };
+        let cos = at.n.dot(ls.wi);
+        if cos <= 0.0 || is_black(ls.e) {
+            continue;
+        }
+        let t_max = shadow_reach(scene, &ls);
+        st.stats.shadow += 1;
+        if scene.occluded(&Ray::new(origin, ls.wi), t_max, st.time) {
+            continue;
+        }
+        if MIS {
+            // [`Bsdf::eval_pdf`]'s density of a diffuse-only BRDF's bounce.
+            let w = if hittable(light) { power_heuristic(ls.pdf, diffuse_pdf(at.wo.z, cos)) } else { 1.0 };
+            color += f * cos * ls.e * w;
+        } else {
+            // [`Bsdf::f_cos`]'s `f cos`.
+            color += f * cos * ls.e;
+        }
+    }
+    color.into()
+}
+
+/// One sample of an object whose shader emits: a ray towards a point drawn
+/// on it, which counts only where its first hit is that point (for a sphere,
+/// any point of the object), with the shader's emission found there.
+#[allow(clippy::too_many_arguments)]
+fn shaded_sample(
+    scene: &Scene,
+    l: &ShadedLight,
+    hit: &Hit,
+    at: &Bsdf,
+    origin: Vec3,
+    depth: u32,
+    scale: f32,
+    p: PathParams,
+    st: &mut PathState,
+) -> Vec3 {
+    let u = st.sampler.next_2d();
+    let Some((wi, dist, pdf)) = l.sample(origin, hit.p, st.time, u) else { return Vec3::ZERO };
+    let cos = at.n.dot(wi);
+    if cos <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let r = Ray::new(origin, wi);
+    st.stats.shadow += 1;
+    let Some(h) = scene.intersect(&r, st.time, false) else { return Vec3::ZERO };
+    let eps = scene.shadow_epsilon;
+    // Another part of the same mesh in front of the sampled point blocks it
+    // (that part is a sample of its own).
+    if scene.prim_of(&h) != Some(l.prim) || (dist.is_finite() && h.t < dist * (1.0 - 1e-3) - eps) {
+        return Vec3::ZERO;
+    }
+    let vols = &scene.volumes;
+    let tr = if vols.surfaces.is_empty() && vols.media.is_empty() {
+        Vec3::ONE
+    } else {
+        media::shadow(scene, &r, h.t - eps, st)
+    };
+    if is_black(tr) {
+        return Vec3::ZERO;
+    }
+    let before = st.travelled;
+    st.travelled += h.t;
+    let s = surface_at(scene, &r, &h, depth + 1, st);
+    st.travelled = before;
+    let Surface::Lit(e, _) = s else { return Vec3::ZERO };
+    if !e.traits.emits {
+        return Vec3::ZERO;
+    }
+    let (f, bsdf_pdf) = at.eval_pdf(wi, cos, p.strategy());
+    let w = if p.mis { power_heuristic(pdf / scale, bsdf_pdf) * scale } else { scale };
+    f * (tr * e.emission) * (w / pdf)
+}
+
+/// How much an emitter (light `li`) that a ray hit counts, by how the ray
+/// left its last surface: in full after the camera or a specular bounce;
+/// after a random bounce by the power heuristic under MIS, not at all under
+/// the course's next-event estimation (the light samples counted it).
+pub(super) fn hit_weight(
+    scene: &Scene,
+    li: usize,
+    came: Came,
+    ray: &Ray,
+    hit: &Hit,
+    p: PathParams,
+    time: f32,
+) -> f32 {
+    match came {
+        Came::Direct => 1.0,
+        Came::Bounce { pdf, .. } if p.mis => {
+            let pick = pick_chance(scene, p, scene.light_pick.pmf(li));
+            power_heuristic(pdf, pick * light_pdf(&scene.lights[li], ray.o, hit, ray.d, time))
+        }
+        Came::Bounce { .. } if p.next_event => 0.0,
+        Came::Bounce { .. } => 1.0,
+    }
+}
+
+/// Whether a bounce can hit the light (then MIS weighs its two samples).
+#[inline]
+fn hittable(light: &Light) -> bool {
+    matches!(light, Light::Mesh(_) | Light::Sphere(_) | Light::Environment(_) | Light::Shaded(_))
+}
+
+/// The light's density for the direction `d` of a ray from `from` at
+/// shutter `time` that hit it at `hit`.
+fn light_pdf(light: &Light, from: Vec3, hit: &Hit, d: Vec3, time: f32) -> f32 {
+    match light {
+        Light::Mesh(l) => l.pdf(from, hit.p, hit.ng),
+        Light::Sphere(l) => l.pdf(from - l.motion * time, d.normalize()),
+        Light::Shaded(l) => l.pdf(from, hit.p, hit.ng, d, time),
+        _ => 0.0,
+    }
+}
+
+/// The power heuristic with exponent 2 for a sample of density `a` against
+/// the other technique's `b`.
+#[inline]
+pub(super) fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 <= 0.0 || !a2.is_finite() {
+        return 1.0;
+    }
+    a2 / (a2 + b2)
+}
+
+#[cfg(test)]
+pub(super) mod tests;

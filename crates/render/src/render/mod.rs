@@ -1,0 +1,499 @@
+//! Rendering: the render scene, cameras, and the tiled, multi-threaded loop
+//! that fills a [`Film`] with linear radiance from the camera's integrator
+//! ([`crate::integrator`]).
+//!
+//! The samples of a pixel are taken in passes: every tile gets the first
+//! sample, then the next, then two more, four, ... (at most an eighth of the
+//! count at a time), so a long render is refined evenly over the image, its
+//! progress gives a fair estimate of the time left, and a time limit
+//! ([`RenderOptions::time_limit`]) can stop it between two passes with every
+//! pixel at the same sample count. A pixel's samples are summed in the same
+//! order whatever the passes and the threads, so the image's bytes depend
+//! only on the scene, the options and the samples taken.
+
+pub mod camera;
+pub mod sampler;
+pub mod scene;
+
+pub use scene::{BuildOptions, Scene};
+
+pub use crate::film::Filter;
+
+use crate::film::reserve::FilmMemory;
+use crate::film::{Film, FilmReserve, Tile};
+use crate::integrator::{Integrator, PathState, RayStats};
+use luster_core::math::{Ray, Vec2, Vec3};
+use luster_shading::shader::ShaderError;
+use rayon::prelude::*;
+use sampler::{PixelSampler, MIN_BATCH_RUN};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+/// Tile edge in pixels: small enough to balance two to sixty-four threads on
+/// an 800×800 image, large enough that per-tile overhead vanishes.
+pub const TILE: u32 = 16;
+
+/// The top-left corners of the tiles of a `w`×`h` image, numbered row by
+/// row: tile `i` of [`TileSelection`] is the `i`-th of these.
+pub fn tile_origins(w: u32, h: u32) -> Vec<(u32, u32)> {
+    (0..h.div_ceil(TILE)).flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE))).collect()
+}
+
+/// Some of an image's tiles (numbered as by [`tile_origins`]): `first`,
+/// `first + step`, ... below `end`. A render of a selection leaves the other
+/// tiles black; the parts of a cluster render are selections
+/// (`luster::cluster`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TileSelection {
+    /// The first tile.
+    pub first: u32,
+    /// The distance between two selected tiles (at least 1).
+    pub step: u32,
+    /// One past the last tile that may be selected.
+    pub end: u32,
+}
+
+impl TileSelection {
+    /// Whether tile `i` is selected.
+    pub fn contains(&self, i: u32) -> bool {
+        i >= self.first && i < self.end && (i - self.first) % self.step.max(1) == 0
+    }
+}
+
+/// A rendered image: the film (linear radiance) and the rays it took. What
+/// files it becomes is the film's business ([`luster_core::image::outputs`]); it
+/// dereferences to the [`Film`] for its size and pixels.
+pub struct RenderedImage {
+    /// The linear image.
+    pub film: Film,
+    /// Rays traced.
+    pub stats: RayStats,
+    /// Samples per pixel taken (fewer than asked when a time limit stopped
+    /// the render).
+    pub spp: u32,
+}
+
+impl std::ops::Deref for RenderedImage {
+    type Target = Film;
+    fn deref(&self) -> &Film {
+        &self.film
+    }
+}
+
+/// Settings of a render beyond the scene's own.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RenderOptions {
+    /// Stop after the pass during which this much time has gone by, or before
+    /// a pass that would end after it (at least one sample per pixel is taken).
+    pub time_limit: Option<Duration>,
+    /// Samples per pixel instead of the camera's `NumSamples`.
+    pub spp: Option<u32>,
+    /// Changes every random choice (and so the noise) without changing the
+    /// expected image.
+    pub seed: u32,
+    /// Reconstruction filter.
+    pub filter: Filter,
+    /// Only these tiles (`None`: all).
+    pub tiles: Option<TileSelection>,
+    /// This integrator instead of the one the camera asks for.
+    pub integrator: Option<Integrator>,
+}
+
+/// Units of work in rendering camera `cam` with `opts`: pixels times samples.
+/// `on_tile` callbacks add up to this (for progress bars).
+pub fn work(scene: &Scene, cam: usize, opts: &RenderOptions) -> u64 {
+    let c = &scene.cameras[cam];
+    u64::from(c.width) * u64::from(c.height) * u64::from(opts.spp.unwrap_or(c.num_samples).max(1))
+}
+
+/// Renders camera `cam` of `scene` with default options on the current rayon
+/// pool. `on_tile` is called with the pixel samples of every finished tile
+/// pass (see [`work`]; for progress bars).
+pub fn render(scene: &Scene, cam: usize, on_tile: &(dyn Fn(u64) + Sync)) -> RenderedImage {
+    render_with(scene, cam, &RenderOptions::default(), on_tile)
+}
+
+/// Renders camera `cam` of `scene` on the current rayon pool, ignoring shader
+/// failures: a point whose shader fails is black, and the tiles not yet
+/// started when it happened stay black. Use [`try_render_with`] to learn of
+/// the failure; scenes without shaders cannot fail.
+pub fn render_with(
+    scene: &Scene,
+    cam: usize,
+    opts: &RenderOptions,
+    on_tile: &(dyn Fn(u64) + Sync),
+) -> RenderedImage {
+    render_tiles(scene, cam, opts, on_tile, &OnceLock::new(), None, FilmMemory::default())
+}
+
+/// Renders camera `cam` of `scene` on the current rayon pool, or reports the
+/// first shader failure (naming the shader, the script's `file:line` and the
+/// object). After a failure the workers stop taking new tiles, so an error
+/// ends the render within a tile's time.
+///
+/// One sample per pixel goes through the pixel centre (as the course's
+/// single-sample images do); more are spread by the [`PixelSampler`]'s
+/// stratified pattern. Every sample has its own lens position and shutter
+/// time. The image depends only on the scene, the options and the sample
+/// count, not on the number of threads.
+pub fn try_render_with(
+    scene: &Scene,
+    cam: usize,
+    opts: &RenderOptions,
+    on_tile: &(dyn Fn(u64) + Sync),
+) -> Result<RenderedImage, Box<ShaderError>> {
+    try_render_reserved(scene, cam, opts, on_tile, None)
+}
+
+/// [`try_render_with`], in the memory `reserve` wrote ahead if it is this
+/// camera's size ([`FilmReserve`]).
+pub fn try_render_reserved(
+    scene: &Scene,
+    cam: usize,
+    opts: &RenderOptions,
+    on_tile: &(dyn Fn(u64) + Sync),
+    reserve: Option<&FilmReserve>,
+) -> Result<RenderedImage, Box<ShaderError>> {
+    let failed = OnceLock::new();
+    let camera = &scene.cameras[cam];
+    let memory = reserve.map(|r| r.take(camera.width, camera.height)).unwrap_or_default();
+    let img = render_tiles(scene, cam, opts, on_tile, &failed, None, memory);
+    match failed.into_inner() {
+        Some(e) => Err(e),
+        None => Ok(img),
+    }
+}
+
+/// A caller following a render pass by pass (`luster watch`).
+pub struct Progress<'a> {
+    /// Stops the render, within a row of a tile, once set (by any thread);
+    /// the image returned then holds a partial pass and is to be dropped.
+    pub cancel: &'a AtomicBool,
+    /// Called on the calling thread after every finished pass with the
+    /// image so far and the samples per pixel in it.
+    pub on_pass: &'a mut dyn FnMut(&Film, u32),
+}
+
+/// [`try_render_with`], showing every finished pass to `progress` and
+/// stopping early when it is cancelled.
+pub fn render_progressive(
+    scene: &Scene,
+    cam: usize,
+    opts: &RenderOptions,
+    progress: Progress<'_>,
+) -> Result<RenderedImage, Box<ShaderError>> {
+    let failed = OnceLock::new();
+    let img = render_tiles(scene, cam, opts, &|_| {}, &failed, Some(progress), FilmMemory::default());
+    match failed.into_inner() {
+        Some(e) => Err(e),
+        None => Ok(img),
+    }
+}
+
+/// The tiled render loop; the first shader failure goes into `failed`, and
+/// from then on tiles are skipped. Checking it costs one atomic load per tile
+/// and per row, and nothing per sample unless a path failed.
+fn render_tiles(
+    scene: &Scene,
+    cam: usize,
+    opts: &RenderOptions,
+    on_tile: &(dyn Fn(u64) + Sync),
+    failed: &OnceLock<Box<ShaderError>>,
+    mut progress: Option<Progress<'_>>,
+    memory: FilmMemory,
+) -> RenderedImage {
+    let cancel = progress.as_ref().map(|p| p.cancel);
+    let stop = || failed.get().is_some() || cancel.is_some_and(|c| c.load(Ordering::Relaxed));
+    let start = Instant::now();
+    let camera = &scene.cameras[cam];
+    let integrator = opts.integrator.unwrap_or_else(|| Integrator::from_desc(&camera.renderer));
+    let spp = opts.spp.unwrap_or(camera.num_samples).max(1);
+    let (w, h) = (camera.width, camera.height);
+    let spread = camera.pixel_spread();
+    let view = camera.view();
+    let uses_time = scene.uses_shutter_time();
+    let pairs = integrator.pairs();
+    let mut origins = tile_origins(w, h);
+    if let Some(sel) = opts.tiles {
+        origins = origins
+            .into_iter()
+            .enumerate()
+            .filter(|&(i, _)| sel.contains(i as u32))
+            .map(|(_, t)| t)
+            .collect();
+    }
+    let rects: Vec<(u32, u32, u32, u32)> =
+        origins.into_iter().map(|(x0, y0)| (x0, y0, (x0 + TILE).min(w), (y0 + TILE).min(h))).collect();
+    let (mut store, pixels) = (memory.store.unwrap_or_default(), memory.pixels);
+    let mut tiles: Vec<(Tile, RayStats)> =
+        Tile::all_in(&mut store, &rects, opts.filter).into_iter().map(|t| (t, RayStats::default())).collect();
+    let pass_floor = if progress.is_some() { 1 } else { BATCH_PASS };
+    let mut taken = 0;
+    while taken < spp && !stop() {
+        let n = pass_size(taken, spp, pass_floor);
+        if let (Some(limit), true) = (opts.time_limit, taken > 0) {
+            // Stop if this pass would end after the limit, at the pace so far.
+            let per_sample = start.elapsed().as_secs_f64() / f64::from(taken);
+            if start.elapsed().as_secs_f64() + per_sample * f64::from(n) > limit.as_secs_f64() {
+                break;
+            }
+        }
+        let samples = taken..taken + n;
+        // One tile per rayon job: with rayon's default splitting a worker
+        // runs a run of hundreds of neighbouring tiles as one job, and on a
+        // scene whose cost sits in a few rows (one object in the middle of
+        // the frame) the other worker idles through that job's tail: 77% of
+        // the samples on one of two threads for hw4 sphere_perlin_bump.
+        tiles.par_iter_mut().with_max_len(1).for_each(|(tile, stats)| {
+            if taken == 0 {
+                // Written first: see `Tile::clear`.
+                tile.clear();
+            }
+            let (x0, y0, x1, y1) = tile.bounds();
+            // One state for the tile, readied per sample: the view, spread
+            // and counts carry over.
+            let first = PixelSampler::new(opts.seed, x0, y0, 0, spp);
+            let mut st = PathState::new(*stats, 0.0, first).for_pixel(Vec2::ZERO, spread);
+            st.view = view;
+            // The second of two samples traced together (see
+            // `Integrator::radiance_pair`); its counts join the tile's.
+            let mut st2 = PathState::new(RayStats::default(), 0.0, first).for_pixel(Vec2::ZERO, spread);
+            st2.view = view;
+            let look = Look { camera, spp, uses_time, w, h };
+            'rows: for y in y0..y1 {
+                if stop() {
+                    break;
+                }
+                for x in x0..x1 {
+                    st.sampler = PixelSampler::new(opts.seed, x, y, 0, spp).batched(samples.clone());
+                    st2.sampler = st.sampler;
+                    let mut s = samples.start;
+                    // Two samples at a time where the integrator follows
+                    // two paths in step, added in their order.
+                    while pairs && s + 1 < samples.end {
+                        let (ra, jxa, jya) = look.sample(&mut st, x, y, s);
+                        let (rb, jxb, jyb) = look.sample(&mut st2, x, y, s + 1);
+                        let [la, lb] = integrator.radiance_pair(scene, [&ra, &rb], &mut st, &mut st2);
+                        tile.add_sample(x, y, jxa, jya, la);
+                        tile.add_sample(x, y, jxb, jyb, lb);
+                        if let Some(e) = st.error.take().or_else(|| st2.error.take()) {
+                            let _ = failed.set(e);
+                            break 'rows;
+                        }
+                        s += 2;
+                    }
+                    while s < samples.end {
+                        let (ray, jx, jy) = look.sample(&mut st, x, y, s);
+                        s += 1;
+                        let l = integrator.radiance(scene, &ray, &mut st);
+                        tile.add_sample(x, y, jx, jy, l);
+                        if let Some(e) = st.error.take() {
+                            let _ = failed.set(e);
+                            break 'rows;
+                        }
+                    }
+                }
+            }
+            st.stats.add(&st2.stats);
+            *stats = st.stats;
+            on_tile(tile.len() as u64 * u64::from(n));
+        });
+        taken += n;
+        if let (Some(p), false) = (progress.as_mut(), stop()) {
+            (p.on_pass)(&merged(w, h, &tiles, None), taken);
+        }
+    }
+    let mut stats = RayStats::default();
+    for (_, s) in &tiles {
+        stats.add(s);
+    }
+    let film = merged(w, h, &tiles, pixels);
+    drop(tiles);
+    // Unmapping the accumulators' ~10 MB (an 800×800 film) took ~1 ms on the
+    // thread that goes on to encode the image: a free worker does it. On
+    // one thread it would wait for the end of the command, every camera's
+    // store held till then.
+    if rayon::current_num_threads() > 1 {
+        rayon::spawn(move || drop(store));
+    }
+    RenderedImage { film, stats, spp: taken }
+}
+
+/// What a camera sample needs of the camera being rendered.
+struct Look<'a> {
+    camera: &'a camera::Camera,
+    spp: u32,
+    uses_time: bool,
+    w: u32,
+    h: u32,
+}
+
+impl Look<'_> {
+    /// Draws the camera's dimensions of sample `s` of pixel `(x, y)` and
+    /// readies `st` for it: the camera ray and the pixel jitter. Inlined
+    /// into the render loop: called, it cost the recursive tracer's hw4
+    /// scenes ~12% (their samples are cheap).
+    #[inline(always)]
+    fn sample(&self, st: &mut PathState, x: u32, y: u32, s: u32) -> (Ray, f32, f32) {
+        st.sampler.restart(s);
+        let sampler = &mut st.sampler;
+        let (jx, jy) = if self.spp == 1 { (0.5, 0.5) } else { sampler.next_2d() };
+        // A pinhole ignores the lens: its draw would cost a stratified
+        // dimension for nothing.
+        let lens = if self.camera.has_lens() { sampler.next_2d() } else { (0.5, 0.5) };
+        // A scene where the time changes nothing skips its draw; the later
+        // draws stay where they were.
+        let time = if self.uses_time {
+            sampler.next_1d()
+        } else {
+            sampler.skip();
+            0.0
+        };
+        let ray = self.camera.lens_ray(x as f32 + jx, y as f32 + jy, lens);
+        let screen = Vec2::new((x as f32 + jx) / self.w as f32, (y as f32 + jy) / self.h as f32);
+        st.next_sample(time, screen, [x, y]);
+        st.stats.primary += 1;
+        (ray, jx, jy)
+    }
+}
+
+/// The `w`×`h` film of `tiles`, which are in the row-major order of
+/// [`tile_origins`]. Filled in parallel, a band of tile rows per job: done
+/// serially, zeroing an 800×800 film (faulting its pages in) and copying the
+/// tiles into it took ~10 ms on one thread after the render had ended, the
+/// largest serial part of a small render. Each pixel is written by its one
+/// tile, so the bytes are those of a serial merge. `zeroed`, of the film's
+/// size, is used instead of a new buffer (memory written ahead,
+/// [`FilmReserve`]).
+fn merged(w: u32, h: u32, tiles: &[(Tile, RayStats)], zeroed: Option<Vec<Vec3>>) -> Film {
+    let band = (w as usize * TILE as usize).max(1);
+    let n = w as usize * h as usize;
+    let mut pixels: Vec<Vec3> = match zeroed {
+        Some(p) if p.len() == n => p,
+        _ => (0..n).into_par_iter().with_min_len(band).map(|_| Vec3::ZERO).collect(),
+    };
+    pixels.par_chunks_mut(band).enumerate().for_each(|(b, rows)| {
+        let y0 = b as u32 * TILE;
+        let first = tiles.partition_point(|(t, _)| t.bounds().1 < y0);
+        let end = tiles.partition_point(|(t, _)| t.bounds().1 < y0 + TILE);
+        for (tile, _) in &tiles[first..end] {
+            tile.write_rows(rows, w as usize, y0);
+        }
+    });
+    Film { width: w, height: h, pixels }
+}
+
+/// Samples per pixel of the pass after `taken` of `spp`: 1, 1, 2, 4, ...,
+/// at most an eighth of `spp` (or `floor`, where that is more), never past
+/// it. A plain render (`floor` above 1) leaves no last pass too short for
+/// the sampler to batch ([`MIN_BATCH_RUN`]) after its first: 4 samples
+/// were passes of 1, 1 and 2, none batched, so every camera sample of a
+/// 4-sample render (the shader benches) drew its pixel position and
+/// shutter time alone; they are now passes of 1 and 3.
+fn pass_size(taken: u32, spp: u32, floor: u32) -> u32 {
+    let cap = spp.div_ceil(8).max(floor);
+    let n = taken.max(1).min(cap).min(spp - taken);
+    let rest = spp - taken - n;
+    if floor == 1 || taken == 0 || rest == 0 || rest >= MIN_BATCH_RUN {
+        return n;
+    }
+    let left = spp - taken;
+    if left <= cap {
+        left
+    } else {
+        left - MIN_BATCH_RUN
+    }
+}
+
+/// How long a pass may always grow when nobody watches the passes (only
+/// `--time` and the ETA use them): a pixel's samples of one pass are what
+/// the sampler batches (sixteen lanes, runs of three or more), and an
+/// eighth of 16 or 100 samples (passes of 2 or 13) left its lanes idle. A
+/// preview (`luster watch`) keeps its finer steps.
+const BATCH_PASS: u32 = 16;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The parallel merge puts every sampled pixel of every tile given where
+    /// it belongs, leaves unsampled pixels and missing tiles black, and
+    /// handles sizes that are not multiples of the tile edge.
+    #[test]
+    fn merged_film_holds_each_tiles_pixels() {
+        let (w, h) = (37, 45);
+        let value = |x: u32, y: u32| Vec3::new(x as f32, y as f32, (x * 7 + y) as f32 * 0.25);
+        let sel = TileSelection { first: 1, step: 2, end: 100 };
+        let rects: Vec<_> = tile_origins(w, h)
+            .into_iter()
+            .enumerate()
+            .filter(|&(i, _)| sel.contains(i as u32))
+            .map(|(_, (x0, y0))| (x0, y0, (x0 + TILE).min(w), (y0 + TILE).min(h)))
+            .collect();
+        let mut store = Vec::new();
+        let mut tiles = Vec::new();
+        for mut t in Tile::all_in(&mut store, &rects, Filter::Box) {
+            let (x0, y0, _, _) = t.bounds();
+            for y in y0..(y0 + TILE).min(h) {
+                for x in x0..(x0 + TILE).min(w) {
+                    if (x + y) % 5 != 0 {
+                        // Two samples: the pixel is their average.
+                        t.add_sample(x, y, 0.5, 0.5, value(x, y) * 0.5);
+                        t.add_sample(x, y, 0.5, 0.5, value(x, y) * 1.5);
+                    }
+                }
+            }
+            tiles.push((t, RayStats::default()));
+        }
+        let film = merged(w, h, &tiles, None);
+        assert_eq!((film.width, film.height, film.pixels.len()), (w, h, (w * h) as usize));
+        // In memory written ahead (zeroed), or in a buffer of the wrong size
+        // (replaced): the same film.
+        for zeroed in [vec![Vec3::ZERO; (w * h) as usize], vec![Vec3::ONE; 3]] {
+            assert_eq!(merged(w, h, &tiles, Some(zeroed)).pixels, film.pixels);
+        }
+        let per_row = w.div_ceil(TILE);
+        for y in 0..h {
+            for x in 0..w {
+                let tile = (y / TILE) * per_row + x / TILE;
+                let want = if sel.contains(tile) && (x + y) % 5 != 0 { value(x, y) } else { Vec3::ZERO };
+                assert_eq!(film.pixels[(y * w + x) as usize], want, "pixel ({x}, {y})");
+            }
+        }
+        assert!(merged(0, 0, &[], None).pixels.is_empty());
+    }
+
+    /// Passes cover the samples exactly; a preview grows to an eighth of
+    /// them, a plain render to a sampler batch at least.
+    #[test]
+    fn passes_cover_the_samples_and_grow_to_their_cap() {
+        let passes = |spp: u32, floor: u32| {
+            let (mut taken, mut out) = (0, Vec::new());
+            while taken < spp {
+                let n = pass_size(taken, spp, floor);
+                out.push(n);
+                taken += n;
+            }
+            out
+        };
+        assert_eq!(passes(16, 1), [1, 1, 2, 2, 2, 2, 2, 2, 2]);
+        assert_eq!(passes(16, BATCH_PASS), [1, 1, 2, 4, 8]);
+        assert_eq!(passes(100, BATCH_PASS), [1, 1, 2, 4, 8, 16, 16, 16, 16, 16, 4]);
+        assert_eq!(passes(900, BATCH_PASS)[..8], [1, 1, 2, 4, 8, 16, 32, 64]);
+        assert_eq!(passes(4, BATCH_PASS), [1, 3]);
+        assert_eq!(passes(4, 1), [1, 1, 1, 1]);
+        assert_eq!(passes(50, BATCH_PASS), [1, 1, 2, 4, 8, 16, 15, 3]);
+        for spp in 1..300 {
+            for floor in [1, BATCH_PASS] {
+                let p = passes(spp, floor);
+                assert_eq!(p.iter().sum::<u32>(), spp);
+                assert!(p.iter().all(|&n| n >= 1 && n <= spp.div_ceil(8).max(floor)));
+                assert_eq!(p[0], 1);
+            }
+            // A plain render's last pass batches, unless the first pass left too few.
+            let last = *passes(spp, BATCH_PASS).last().unwrap();
+            assert!(last >= MIN_BATCH_RUN.min(spp - 1).max(1), "{spp}: {:?}", passes(spp, BATCH_PASS));
+        }
+    }
+}

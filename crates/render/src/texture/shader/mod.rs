@@ -1,0 +1,422 @@
+//! Shader texture maps: compiling the scene's scripts into one
+//! [`ShaderSet`], checking each map's decal mode against the entry points its
+//! script defines, and evaluating a map at a surface point.
+//!
+//! Which entry point a decal mode calls:
+//!
+//! | mode | calls | effect |
+//! |---|---|---|
+//! | `replace_kd`, `blend_kd`, `replace_ks` | `color` | as for any map |
+//! | `replace_all` | `color` | the point's colour, unlit |
+//! | `replace_km` | `reflect` | the mirror reflectance |
+//! | `bump_normal` | `height` | [`bump::height_bump`], scaled by `BumpFactor` |
+//! | `material` | every material output the script defines | [`apply_outputs`] |
+//!
+//! `replace_normal` and `replace_background` take no shader: a tangent-space
+//! normal is what `height` already expresses better, and the background has
+//! no surface point to give a script.
+
+use std::time::Duration;
+
+use super::{bump, Image, TexFrame, TextureMap, Textures};
+use crate::bsdf::Specular;
+use crate::bsdf::{Brdf, Microfacet};
+use crate::material::Material;
+use luster_core::math::{Vec2, Vec3};
+use luster_scene::description::{DecalMode, ImageDesc, TextureMapDesc, TextureSource};
+use luster_shading::shader::{
+    Entry, ImageSampler, MaterialOutputs, SampleFilter, ShadeInput, ShadePoint, ShaderError, ShaderImages,
+    ShaderSet, ShaderSource,
+};
+use std::sync::Arc;
+
+/// A shader map the scene cannot use: which map and why.
+#[derive(Debug)]
+pub struct MapError {
+    /// Index of the map in the description.
+    pub map: usize,
+    /// The reason, a sentence fragment.
+    pub message: String,
+}
+
+/// The entry point a decal mode calls, or `None` for modes shaders cannot drive.
+fn entry_for(decal: DecalMode) -> Option<&'static str> {
+    match decal {
+        DecalMode::ReplaceKd | DecalMode::BlendKd | DecalMode::ReplaceKs | DecalMode::ReplaceAll => {
+            Some("color")
+        }
+        DecalMode::ReplaceKm => Some("reflect"),
+        DecalMode::BumpNormal => Some("height"),
+        DecalMode::Material => Some("material"),
+        DecalMode::ReplaceNormal | DecalMode::ReplaceBackground => None,
+    }
+}
+
+/// The name errors give a shader: its script's file name without extension.
+pub(crate) fn shader_name(path: &std::path::Path) -> String {
+    path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned())
+}
+
+/// Compiles the scripts of every shader map (the k-th shader map becomes
+/// shader k of the set), or `None` when the scene has none. Every map gets
+/// its own source, so one script may serve several maps with different
+/// parameters.
+pub fn compile(
+    descs: &[TextureMapDesc],
+    timeout: Duration,
+    images: Option<ShaderImages>,
+) -> Result<Option<ShaderSet>, MapError> {
+    compile_with_modules(descs, timeout, images, Vec::new())
+}
+
+/// Like [`compile`], with the folders the scripts' `require` searches.
+pub fn compile_with_modules(
+    descs: &[TextureMapDesc],
+    timeout: Duration,
+    images: Option<ShaderImages>,
+    module_dirs: Vec<std::path::PathBuf>,
+) -> Result<Option<ShaderSet>, MapError> {
+    let mut maps = Vec::new();
+    let mut sources = Vec::new();
+    for (i, d) in descs.iter().enumerate() {
+        if let TextureSource::Shader { path, code, params } = &d.source {
+            let mut src = ShaderSource::new(shader_name(path), path.clone(), code.clone());
+            src.params = params.clone();
+            maps.push(i);
+            sources.push(src);
+        }
+    }
+    if sources.is_empty() {
+        return Ok(None);
+    }
+    let make = |sources: Vec<ShaderSource>| {
+        ShaderSet::with_modules(sources, timeout, images.clone(), module_dirs.clone())
+    };
+    let set = match make(sources.clone()) {
+        Ok(set) => set,
+        // The set reports the first script that fails; compile them one by
+        // one to find its map (a script used twice may fail with one map's
+        // parameters only). Only the error path pays for this.
+        Err(e) => {
+            let map = sources
+                .iter()
+                .zip(&maps)
+                .find(|(s, _)| make(vec![(*s).clone()]).is_err())
+                .map_or(maps[0], |(_, &m)| m);
+            return Err(MapError { map, message: e.to_string() });
+        }
+    };
+    for (id, &m) in maps.iter().enumerate() {
+        let decal = descs[m].decal;
+        let Some(entry) = entry_for(decal) else {
+            return Err(MapError {
+                map: m,
+                message: format!(
+                    "a shader cannot drive DecalMode {} (shaders take replace_kd, blend_kd, replace_ks, \
+                     replace_all, replace_km, bump_normal or material)",
+                    decal_name(decal)
+                ),
+            });
+        };
+        let has = match entry {
+            "color" => set.has_color(id),
+            "reflect" => set.has_reflect(id),
+            "material" => set.has_material(id),
+            _ => set.has_height(id),
+        };
+        if !has {
+            let name = set.name(id).unwrap_or("?");
+            let TextureSource::Shader { path, .. } = &descs[m].source else { continue };
+            if decal == DecalMode::Material {
+                return Err(MapError {
+                    map: m,
+                    message: format!(
+                        "shader '{name}': {} defines none of color, specular, roughness, metalness, \
+                         emission or reflect, one of which DecalMode material needs",
+                        path.display()
+                    ),
+                });
+            }
+            return Err(MapError {
+                map: m,
+                message: format!(
+                    "shader '{name}': {} defines no {entry}(s) function, which DecalMode {} calls",
+                    path.display(),
+                    decal_name(decal)
+                ),
+            });
+        }
+    }
+    Ok(Some(set))
+}
+
+fn decal_name(d: DecalMode) -> &'static str {
+    match d {
+        DecalMode::ReplaceKd => "replace_kd",
+        DecalMode::BlendKd => "blend_kd",
+        DecalMode::ReplaceKs => "replace_ks",
+        DecalMode::ReplaceAll => "replace_all",
+        DecalMode::ReplaceKm => "replace_km",
+        DecalMode::BumpNormal => "bump_normal",
+        DecalMode::Material => "material",
+        DecalMode::ReplaceNormal => "replace_normal",
+        DecalMode::ReplaceBackground => "replace_background",
+    }
+}
+
+/// The scene's images as `texture(name, u, v)` samples them: with the scene
+/// format's conventions (uv repeat; texel centres at integer multiples of
+/// 1/W, as the image maps use), values normalized like an image map's with
+/// the default `Normalizer`.
+pub struct SceneImages(pub Arc<[Image]>);
+
+impl ImageSampler for SceneImages {
+    fn sample(&self, index: usize, u: f32, v: f32, filter: SampleFilter) -> Option<[f32; 3]> {
+        let img = self.0.get(index)?;
+        let uv = Vec2::new(u, v);
+        let c = match filter {
+            SampleFilter::Nearest => img.nearest(uv),
+            SampleFilter::Bilinear => img.bilinear(uv),
+        };
+        let scale = if img.is_hdr() { 1.0 } else { 1.0 / 255.0 };
+        Some((c * scale).to_array())
+    }
+}
+
+/// The names scripts give the scene's images: each image's id and, where no
+/// other image shares it, its file name.
+pub fn image_names(descs: &[ImageDesc]) -> Vec<(String, usize)> {
+    let mut names: Vec<(String, usize)> = descs.iter().enumerate().map(|(i, d)| (d.id.clone(), i)).collect();
+    let file = |d: &ImageDesc| d.path.file_name().map(|f| f.to_string_lossy().into_owned());
+    for (i, d) in descs.iter().enumerate() {
+        let Some(f) = file(d) else { continue };
+        let shared = descs.iter().filter(|e| file(e).as_deref() == Some(f.as_str())).count() > 1;
+        if !shared && !names.iter().any(|(n, _)| *n == f) {
+            names.push((f, i));
+        }
+    }
+    names
+}
+
+/// The world point of object-space `p` near the hit of frame `f`.
+#[inline(always)]
+fn world_point(f: &TexFrame, p: Vec3) -> Vec3 {
+    if p == f.p_object {
+        return f.p_world;
+    }
+    match &f.to_world {
+        // The world point of an offset lies as far from the hit as its object point.
+        Some(xf) => f.p_world + xf.vector(p - f.p_object),
+        None => f.p_world + (p - f.p_object),
+    }
+}
+
+/// `base` (the shading point of frame `f`) moved to object-space `p` with
+/// texture coordinates `uv`: what [`input`] gives there, without computing
+/// again what the points share.
+#[inline(always)]
+fn moved(f: &TexFrame, base: &ShadeInput, p: Vec3, uv: Vec2) -> ShadeInput {
+    let pw = world_point(f, p);
+    ShadeInput {
+        p: p.to_array(),
+        pw: pw.to_array(),
+        pc: f.ctx.view.to_camera(pw).to_array(),
+        uv: uv.to_array(),
+        ..*base
+    }
+}
+
+/// [`input_at`], out of line: inlined into [`Textures::apply`], its
+/// arithmetic was hoisted in front of the map loop, where every hit paid
+/// for it whatever its maps' modes.
+#[inline(never)]
+fn input(f: &TexFrame, p: Vec3, uv: Vec2, n: Vec3) -> ShadeInput {
+    input_at(f, p, uv, n)
+}
+
+/// The shading point a script sees at object-space `p` with texture
+/// coordinates `uv`, in frame `f` whose world shading normal is now `n`.
+#[inline(always)]
+fn input_at(f: &TexFrame, p: Vec3, uv: Vec2, n: Vec3) -> ShadeInput {
+    let pw = world_point(f, p);
+    let c = &f.ctx;
+    let to_object = |v: Vec3| match &f.to_world {
+        Some(xf) => xf.inv_vector(v),
+        None => v,
+    };
+    let (dpdx, dpdy) = (to_object(c.dpdx), to_object(c.dpdy));
+    ShadeInput {
+        p: p.to_array(),
+        pw: pw.to_array(),
+        pc: c.view.to_camera(pw).to_array(),
+        n: n.to_array(),
+        ng: c.ng.to_array(),
+        i: c.incident.to_array(),
+        dpdu: f.dpdu.to_array(),
+        dpdv: f.dpdv.to_array(),
+        dpdx: dpdx.to_array(),
+        dpdy: dpdy.to_array(),
+        uv: uv.to_array(),
+        time: f.time,
+        filterwidth: dpdx.length().max(dpdy.length()),
+        object_id: c.object,
+        instance_id: c.instance,
+        depth: c.depth,
+        pixel: c.pixel,
+    }
+}
+
+/// The shading point of frame `f` with world shading normal `n`, as the
+/// shader runtime takes it: [`input`] runs where the record Lua reads is
+/// written.
+struct Hit<'a> {
+    f: &'a TexFrame,
+    n: Vec3,
+}
+
+impl ShadePoint for Hit<'_> {
+    #[inline(always)]
+    fn input(&self) -> ShadeInput {
+        input_at(self.f, self.f.p_object, self.f.uv, self.n)
+    }
+
+    #[inline(always)]
+    fn instance_id(&self) -> u32 {
+        self.f.ctx.instance
+    }
+}
+
+/// Writes the colour `entry` of shader `id` gives at `hit` into `out`
+/// (in place: a returned colour came back through the stack).
+#[inline(never)]
+fn rgb(
+    set: &ShaderSet,
+    id: usize,
+    entry: Entry,
+    hit: &Hit<'_>,
+    out: &mut Vec3,
+) -> Result<(), Box<ShaderError>> {
+    let mut c = [0.0; 3];
+    let code = set.call_point(id, entry, hit, &mut c);
+    if code != 0 {
+        c = set.call_slow(id, entry, hit, code)?;
+    }
+    *out = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
+    Ok(())
+}
+
+impl Textures {
+    /// Applies shader map `map` (shader `id`) at `f`: like the other maps, it
+    /// may change `m` and the world normal `n`, or make the point unlit.
+    pub(super) fn apply_shader(
+        &self,
+        id: u32,
+        map: &TextureMap,
+        f: &TexFrame,
+        m: &mut Material,
+        n: &mut Vec3,
+    ) -> Result<Option<Vec3>, Box<ShaderError>> {
+        let Some(set) = &self.shaders else { return Ok(None) };
+        let id = id as usize;
+        let hit = Hit { f, n: *n };
+        match map.decal {
+            DecalMode::ReplaceKd => rgb(set, id, Entry::Color, &hit, &mut m.diffuse)?,
+            DecalMode::BlendKd => {
+                let mut c = Vec3::ZERO;
+                rgb(set, id, Entry::Color, &hit, &mut c)?;
+                m.diffuse = (m.diffuse + c) * 0.5;
+            }
+            DecalMode::ReplaceKs => rgb(set, id, Entry::Color, &hit, &mut m.specular)?,
+            DecalMode::ReplaceAll => {
+                let mut c = Vec3::ZERO;
+                rgb(set, id, Entry::Color, &hit, &mut c)?;
+                return Ok(Some(c));
+            }
+            DecalMode::ReplaceKm => {
+                rgb(set, id, Entry::Reflect, &hit, &mut m.mirror)?;
+                if m.kind == Specular::None {
+                    m.kind = Specular::Mirror;
+                }
+            }
+            DecalMode::BumpNormal => {
+                if map.bump_factor != 0.0 {
+                    *n = shader_bump(set, id, map.bump_factor, f, *n)?;
+                }
+            }
+            DecalMode::Material => apply_outputs(&set.material(id, &input(f, f.p_object, f.uv, *n))?, m),
+            DecalMode::ReplaceNormal | DecalMode::ReplaceBackground => {}
+        }
+        Ok(None)
+    }
+}
+
+/// The world normal `n` bumped by shader `id`'s `height` with factor `k`.
+///
+/// Out of line on purpose: inlined into [`Textures::apply`], LLVM hoisted the
+/// bump's set-up (tangent lengths, step, the three points) out of the map
+/// loop, so every hit with any shader map paid for it, about 480
+/// instructions a call; on the POV-Ray scene's floor (a colour map only) that
+/// was wasted work.
+#[inline(never)]
+fn shader_bump(set: &ShaderSet, id: usize, k: f32, f: &TexFrame, n: Vec3) -> Result<Vec3, Box<ShaderError>> {
+    // The three points are built in place: `pts.map(input)` built them
+    // elsewhere and copied 468 bytes (a `memmove` call) per hit.
+    let local = bump::height_bump(f, k, bump::bump_step(f), |pts| {
+        let [(p0, uv0), (pa, uva), (pb, uvb)] = pts;
+        let base = input(f, p0, uv0, n);
+        let three = [base, moved(f, &base, pa, uva), moved(f, &base, pb, uvb)];
+        set.heights3(id, &three).map_err(Box::new)
+    })?;
+    // No slope: the normal stays exactly as the renderer had it.
+    Ok(match local {
+        Some(local) => f.normal_to_world(local),
+        None => n,
+    })
+}
+
+/// What a `DecalMode material` shader's outputs do to the point's material
+/// (the table in `docs/shaders.md`, "Material outputs"):
+///
+/// * `color` is the base colour (`kd`), `specular` the specular colour
+///   (`ks`), `reflect` the mirror reflectance (a non-mirror becomes a mirror,
+///   as with `replace_km`), `emission` the emitted radiance;
+/// * `roughness` or `metalness` switch the point to the GGX microfacet BRDF
+///   ([`Microfacet`]) whatever the material's own model: `α = roughness²`,
+///   or without a `roughness` the width matching the material's exponent;
+///   metalness `μ` turns the diffuse part off and tints the specular colour
+///   by the base: `kd ← (1 - μ) kd`, `ks ← (1 - μ) ks + μ kd`.
+pub fn apply_outputs(o: &MaterialOutputs, m: &mut Material) {
+    if let Some(c) = o.color {
+        m.diffuse = Vec3::from_array(c);
+    }
+    if let Some(c) = o.specular {
+        m.specular = Vec3::from_array(c);
+    }
+    if let Some(c) = o.reflect {
+        m.mirror = Vec3::from_array(c);
+        if m.kind == Specular::None {
+            m.kind = Specular::Mirror;
+        }
+    }
+    if let Some(c) = o.emission {
+        m.emission = Vec3::from_array(c);
+    }
+    if o.roughness.is_none() && o.metalness.is_none() {
+        return;
+    }
+    let lobe = match (o.roughness, m.brdf) {
+        (Some(r), _) => Microfacet::from_roughness(r),
+        (None, Some(Brdf::Microfacet(mf))) => mf,
+        (None, Some(Brdf::Phong(p))) => Microfacet::from_exponent(p.exponent),
+        (None, Some(Brdf::TorranceSparrow(t))) => Microfacet::from_exponent(t.exponent),
+        (None, None) => Microfacet::from_exponent(m.phong),
+    };
+    if let Some(mu) = o.metalness {
+        m.specular = m.specular * (1.0 - mu) + m.diffuse * mu;
+        m.diffuse *= 1.0 - mu;
+    }
+    m.brdf = Some(Brdf::Microfacet(lobe));
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,205 @@
+//! Tests of shader texture maps (`shader.rs`): decal modes against entry
+//! points, evaluation at surface points, and material outputs.
+
+use super::*;
+use crate::texture::Texture;
+use luster_scene::Loc;
+use luster_shading::shader::ParamValue;
+
+fn map(code: &str, decal: DecalMode, params: &[(&str, f64)]) -> TextureMapDesc {
+    TextureMapDesc {
+        id: "m".into(),
+        source: TextureSource::Shader {
+            path: "dir/s.lua".into(),
+            code: code.into(),
+            params: params.iter().map(|(k, v)| (k.to_string(), ParamValue::Number(*v))).collect(),
+        },
+        decal,
+        bump_factor: 1.0,
+        loc: Loc::default(),
+    }
+}
+
+fn frame() -> TexFrame {
+    TexFrame {
+        uv: Vec2::new(0.25, 0.75),
+        p_object: Vec3::new(0.5, 0.0, 0.0),
+        p_world: Vec3::new(1.5, 0.0, 0.0),
+        time: 0.5,
+        p_rest: Vec3::new(1.5, 0.0, 0.0),
+        rest_in_object: false,
+        dpdu: Vec3::X,
+        dpdv: Vec3::Y,
+        n: Vec3::Z,
+        to_world: None,
+        footprint: 0.0,
+        ctx: Default::default(),
+    }
+}
+
+const GREY: &str = "local g = param.g\nassert(g < 1, 'g too big')\nfunction color(s) return g, g, g end";
+
+#[test]
+fn one_script_serves_maps_with_different_parameters() {
+    let descs =
+        [map(GREY, DecalMode::ReplaceKd, &[("g", 0.2)]), map(GREY, DecalMode::ReplaceKd, &[("g", 0.6)])];
+    let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
+    let lists = [tex.maps[0], tex.maps[1]];
+    let diffuse: Vec<Vec3> = lists
+        .iter()
+        .map(|m| {
+            let Texture::Shader { id } = m.texture else { panic!("a shader map") };
+            let mut mat = Material::default();
+            let mut n = Vec3::Z;
+            assert_eq!(tex.apply_shader(id, m, &frame(), &mut mat, &mut n).unwrap(), None);
+            mat.diffuse
+        })
+        .collect();
+    assert_eq!(diffuse, [Vec3::splat(0.2), Vec3::splat(0.6)]);
+}
+
+#[test]
+fn the_failing_map_is_found_even_when_its_script_is_shared() {
+    let descs =
+        [map(GREY, DecalMode::ReplaceKd, &[("g", 0.2)]), map(GREY, DecalMode::ReplaceKd, &[("g", 3.0)])];
+    let e = compile(&descs, DEFAULT, None).unwrap_err();
+    assert_eq!(e.map, 1);
+    assert!(e.message.contains("s.lua:2") && e.message.contains("g too big"), "{}", e.message);
+}
+
+#[test]
+fn decal_modes_need_their_entry_points() {
+    let bg = [map(GREY, DecalMode::ReplaceBackground, &[("g", 0.1)])];
+    assert!(compile(&bg, DEFAULT, None)
+        .unwrap_err()
+        .message
+        .contains("cannot drive DecalMode replace_background"));
+    let km = [map(GREY, DecalMode::ReplaceKm, &[("g", 0.1)])];
+    assert!(compile(&km, DEFAULT, None).unwrap_err().message.contains("no reflect(s)"));
+    assert!(compile(&[], DEFAULT, None).unwrap().is_none());
+}
+
+#[test]
+fn the_script_sees_the_frame_and_reflect_makes_a_mirror() {
+    let code = "function reflect(s) return s.P.x, s.Pw.x, s.uv.v + s.time end\n\
+                function color(s) return s.N.x, s.N.y, s.N.z end";
+    let descs = [map(code, DecalMode::ReplaceKm, &[]), map(code, DecalMode::ReplaceAll, &[])];
+    let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
+    let mut mat = Material::default();
+    let mut n = Vec3::Y;
+    assert_eq!(tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut n).unwrap(), None);
+    assert_eq!(mat.mirror, Vec3::new(0.5, 1.5, 1.25));
+    assert_eq!(mat.kind, Specular::Mirror);
+    assert_eq!(tex.apply_shader(1, &tex.maps[1], &frame(), &mut mat, &mut n).unwrap(), Some(Vec3::Y));
+}
+
+#[test]
+fn a_height_shader_bumps_and_its_errors_come_back() {
+    let code = "function height(s)\n  if s.P.y > 1 then error('bad') end\n  return 0.5 * s.P.x\nend";
+    let descs = [map(code, DecalMode::BumpNormal, &[])];
+    let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
+    let mut mat = Material::default();
+    let mut n = Vec3::Z;
+    tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut n).unwrap();
+    // Slope 0.5 along x tilts the normal towards -x: n ∝ (-0.5, 0, 1).
+    assert!((n - Vec3::new(-0.5, 0.0, 1.0).normalize()).length() < 1e-3, "{n}");
+    let high = TexFrame { p_object: Vec3::new(0.0, 2.0, 0.0), ..frame() };
+    let e = tex.apply_shader(0, &tex.maps[0], &high, &mut mat, &mut n).unwrap_err();
+    assert!(e.message.contains("s.lua:2: bad"), "{}", e.message);
+}
+
+#[test]
+fn material_outputs_set_the_material_and_switch_to_the_microfacet_model() {
+    let code = "function color(s) return 0.8, 0.4, 0.2 end\n\
+                function specular(s) return 0.04, 0.04, 0.04 end\n\
+                function roughness(s) return 0.5 end\n\
+                function metalness(s) return 0.25 end\n\
+                function emission(s) return 3, 2, 1 end";
+    let descs = [map(code, DecalMode::Material, &[])];
+    let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
+    let mut mat = Material { phong: 30.0, ..Material::default() };
+    let mut n = Vec3::Z;
+    assert_eq!(tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut n).unwrap(), None);
+    let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-6;
+    assert!(close(mat.diffuse, Vec3::new(0.6, 0.3, 0.15)), "{}", mat.diffuse);
+    assert!(close(mat.specular, Vec3::new(0.23, 0.13, 0.08)), "{}", mat.specular);
+    assert_eq!(mat.emission, Vec3::new(3.0, 2.0, 1.0));
+    assert_eq!(mat.brdf, Some(Brdf::Microfacet(Microfacet { alpha: 0.25 })));
+    assert_eq!(mat.kind, Specular::None);
+}
+
+#[test]
+fn material_mode_keeps_what_the_script_does_not_define() {
+    // Only emission: the material's own model, colours and exponent stay.
+    let descs = [map("function emission(s) return 0, 5, 0 end", DecalMode::Material, &[])];
+    let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
+    let before =
+        Material { diffuse: Vec3::splat(0.5), specular: Vec3::ONE, phong: 40.0, ..Material::default() };
+    let mut mat = before;
+    tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut Vec3::Z.clone()).unwrap();
+    assert_eq!(
+        (mat.diffuse, mat.specular, mat.phong, mat.brdf),
+        (before.diffuse, before.specular, 40.0, None)
+    );
+    assert_eq!(mat.emission, Vec3::new(0.0, 5.0, 0.0));
+    // Metalness without roughness keeps the exponent's highlight width.
+    let descs = [map("function metalness(s) return 1 end", DecalMode::Material, &[])];
+    let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
+    let mut mat = before;
+    tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut Vec3::Z.clone()).unwrap();
+    assert_eq!((mat.diffuse, mat.specular), (Vec3::ZERO, Vec3::splat(0.5)));
+    assert_eq!(mat.brdf, Some(Brdf::Microfacet(Microfacet::from_exponent(40.0))));
+}
+
+#[test]
+fn out_of_range_material_outputs_are_one_sentence_errors() {
+    for (code, what) in [
+        ("function roughness(s) return 1.5 end", "roughness() returned 1.5 (expected a number from 0 to 1)"),
+        ("function metalness(s) return -0.1 end", "metalness() returned -0.1"),
+        ("function roughness(s) return 0/0 end", "roughness() returned NaN"),
+        ("function color(s) return 1.2, 0, 0 end", "color() returned 1.2 as its red value (expected 0 to 1"),
+        ("function specular(s) return 0, 0, -1 end", "specular() returned -1 as its blue value"),
+        (
+            "function emission(s) return 0, -2, 0 end",
+            "emission() returned -2 as its green value (expected 0 or more",
+        ),
+        ("function emission(s) return 1/0, 0, 0 end", "emission() returned inf as its red value"),
+        ("function reflect(s) return 0.5 end", "reflect() returned nothing (nil) as its green value"),
+    ] {
+        let descs = [map(code, DecalMode::Material, &[])];
+        let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
+        let mut mat = Material::default();
+        let e = tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut Vec3::Z.clone()).unwrap_err();
+        assert_eq!(e.kind, luster_shading::shader::ShaderErrorKind::BadResult, "{code}: {e}");
+        let text = e.to_string();
+        assert!(text.contains(what) && !text.contains('\n'), "{code}: {text}");
+    }
+    // A script with no material output cannot drive the mode.
+    let descs = [map("function height(s) return 0 end", DecalMode::Material, &[])];
+    let e = compile(&descs, DEFAULT, None).unwrap_err();
+    assert!(e.message.contains("defines none of color, specular, roughness"), "{}", e.message);
+}
+
+#[test]
+fn a_moved_point_is_the_point_input_builds_there() {
+    let xf = luster_core::math::Transform::scaling(Vec3::new(2.0, 1.0, 0.5))
+        .and_then(|s| luster_core::math::Transform::rotation(30.0, Vec3::Y).map(|r| s.then(&r)))
+        .unwrap();
+    let mut f = frame();
+    f.to_world = Some(xf);
+    f.ctx.view =
+        crate::texture::View { eye: Vec3::new(0.0, 1.0, 5.0), right: Vec3::X, up: Vec3::Y, back: Vec3::Z };
+    f.ctx.incident = Vec3::new(0.0, -0.6, -0.8);
+    f.ctx.set_footprint(0.01);
+    let n = Vec3::new(0.0, 0.6, 0.8);
+    let base = input(&f, f.p_object, f.uv, n);
+    for (p, uv) in [
+        (f.p_object + Vec3::new(1e-3, 0.0, 0.0), f.uv + Vec2::new(1e-3, 0.0)),
+        (f.p_object + Vec3::new(0.0, -2e-3, 5e-4), f.uv + Vec2::new(0.0, 2e-3)),
+        (f.p_object, f.uv),
+    ] {
+        assert_eq!(moved(&f, &base, p, uv), input(&f, p, uv, n), "at {p}");
+    }
+}
+
+const DEFAULT: Duration = luster_shading::shader::DEFAULT_TIMEOUT;

@@ -1,0 +1,508 @@
+//! The LuaJIT FFI boundary: the `#[repr(C)]` records Rust and Lua share, and
+//! the table of built-in functions Lua calls through function pointers.
+//!
+//! # Why function pointers
+//!
+//! LuaJIT's `ffi.C.name` looks symbols up in the process's dynamic symbol
+//! table, and an executable does not export its Rust functions. Instead Rust
+//! fills one [`Builtins`] record with `extern "C"` function pointers, hands its
+//! address to the trusted prelude as a light userdata, and the prelude
+//! `ffi.cast`s it to the mirror C struct declared in `prelude.lua`. A call
+//! through such a pointer is compiled by the JIT into a direct native call, with
+//! no per-call marshalling.
+//!
+//! The C declarations in `prelude.lua` must match these records field for field;
+//! every new state compares the sizes Lua reports with these (`state.rs`).
+//!
+//! # Soundness
+//!
+//! This and `call.rs` (raw calls into Lua) are the modules of the shader
+//! runtime with `unsafe`:
+//!
+//! * [`IoBlock`] holds pointers to cdata that the prelude allocated with
+//!   `ffi.new` and keeps referenced for the life of its Lua state (the prelude's
+//!   entry wrappers close over them). LuaJIT never moves cdata, and the block is
+//!   owned by the same `ThreadState` as the `Lua` it points into, which is dropped
+//!   only with it. Rust touches the records only between Lua calls, on the thread
+//!   that owns the state, so there is no concurrent access.
+//! * `texture` receives the address of the state's image sampler, which the
+//!   state owns for as long as its Lua lives (`state.rs`).
+//! * The built-ins are called by LuaJIT with arguments the trusted prelude
+//!   passes; the only pointers they receive are scratch records the prelude
+//!   allocated (user scripts never see the raw function pointers). Each built-in
+//!   catches panics so none unwinds into C.
+
+use std::ffi::c_void;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::Arc;
+use std::sync::OnceLock;
+use std::time::Instant;
+
+use super::{ImageSampler, SampleFilter};
+use crate::noise::{course, fractal, perlin, simplex, voronoi};
+
+/// A 3-vector as Lua sees it (`luster_vec3`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Vec3 {
+    pub x: f64,
+    pub y: f64,
+    pub z: f64,
+}
+
+/// Texture coordinates as Lua sees them (`luster_vec2`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Vec2 {
+    pub u: f64,
+    pub v: f64,
+}
+
+/// The shading point, the `s` a script receives (`luster_shade`). Doubles,
+/// because Lua numbers are doubles: reading a field then converts nothing.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Shade {
+    pub p: Vec3,
+    pub pw: Vec3,
+    pub pc: Vec3,
+    pub n: Vec3,
+    pub ng: Vec3,
+    pub i: Vec3,
+    pub v: Vec3,
+    pub dpdu: Vec3,
+    pub dpdv: Vec3,
+    pub dpdx: Vec3,
+    pub dpdy: Vec3,
+    pub uv: Vec2,
+    pub time: f64,
+    pub filterwidth: f64,
+    pub random: f64,
+    pub object_id: i32,
+    pub instance_id: i32,
+    pub depth: i32,
+    pub pixel_x: i32,
+    pub pixel_y: i32,
+    pub pad: i32,
+}
+
+/// Where an entry wrapper writes its result (`luster_out`); a height uses `r`.
+/// `bad` is set when the wrapper rejected what the script returned, so Rust
+/// can tell that error from one the script raised itself.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Out {
+    pub r: f64,
+    pub g: f64,
+    pub b: f64,
+    pub bad: i32,
+}
+
+/// Where the `DecalMode material` wrapper writes every material output the
+/// script defines (`luster_material`); the others keep their defaults.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct MaterialOut {
+    pub color: [f64; 3],
+    pub specular: [f64; 3],
+    pub emission: [f64; 3],
+    pub reflect: [f64; 3],
+    pub roughness: f64,
+    pub metalness: f64,
+}
+
+/// The per-call deadline (`luster_clock`). `start_ns == 0` means "not started":
+/// the first check of a call starts it, so a call that never reaches a check
+/// never reads the clock.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Clock {
+    pub start_ns: u64,
+    pub timeout_ns: u64,
+    pub expired: i32,
+}
+
+/// The Voronoi scratch record (`luster_cell`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct CellOut {
+    pub f1: f64,
+    pub f2: f64,
+    pub px: f64,
+    pub py: f64,
+    pub pz: f64,
+    pub id: f64,
+}
+
+/// The built-ins, in the order of `luster_builtins` in `prelude.lua`.
+#[repr(C)]
+pub(crate) struct Builtins {
+    perlin1: extern "C" fn(f64) -> f64,
+    perlin2: extern "C" fn(f64, f64) -> f64,
+    perlin3: extern "C" fn(f64, f64, f64) -> f64,
+    perlin4: extern "C" fn(f64, f64, f64, f64) -> f64,
+    perlin3_grad: extern "C" fn(f64, f64, f64, *mut Vec3) -> f64,
+    pperlin3: extern "C" fn(f64, f64, f64, i32, i32, i32) -> f64,
+    simplex2: extern "C" fn(f64, f64) -> f64,
+    simplex3: extern "C" fn(f64, f64, f64) -> f64,
+    simplex4: extern "C" fn(f64, f64, f64, f64) -> f64,
+    simplex3_grad: extern "C" fn(f64, f64, f64, *mut Vec3) -> f64,
+    fbm: extern "C" fn(f64, f64, f64, i32, f64, f64) -> f64,
+    fbm_grad: extern "C" fn(f64, f64, f64, i32, f64, f64, *mut Vec3) -> f64,
+    turbulence: extern "C" fn(f64, f64, f64, i32, f64, f64) -> f64,
+    ridged: extern "C" fn(f64, f64, f64, i32, f64, f64, f64) -> f64,
+    voronoi3: extern "C" fn(f64, f64, f64, u32, f64, *mut CellOut),
+    voronoi2: extern "C" fn(f64, f64, u32, f64, *mut CellOut),
+    clock_check: extern "C" fn(*mut Clock) -> i32,
+    course_noise: extern "C" fn(f64, f64, f64) -> f64,
+    texture: extern "C" fn(*const c_void, i32, f64, f64, i32, *mut Vec3) -> i32,
+    course_perlin: extern "C" fn(f64, f64, f64, f64, i32, i32) -> f64,
+}
+
+// SAFETY: the record is immutable after construction and holds only function
+// pointers, which are fine to share between threads.
+unsafe impl Sync for Builtins {}
+
+/// The one process-wide built-in table; its address is handed to every state.
+pub(crate) static BUILTINS: Builtins = Builtins {
+    perlin1,
+    perlin2,
+    perlin3,
+    perlin4,
+    perlin3_grad,
+    pperlin3,
+    simplex2,
+    simplex3,
+    simplex4,
+    simplex3_grad,
+    fbm,
+    fbm_grad,
+    turbulence,
+    ridged,
+    voronoi3,
+    voronoi2,
+    clock_check,
+    course_noise,
+    texture,
+    course_perlin,
+};
+
+/// The address of [`BUILTINS`], as the prelude's light userdata wants it.
+pub(crate) fn builtins_address() -> *mut std::ffi::c_void {
+    std::ptr::addr_of!(BUILTINS) as *mut std::ffi::c_void
+}
+
+/// Octaves beyond this add nothing visible in f32 and would let one call run
+/// unboundedly long inside Rust, where the timeout cannot reach.
+const MAX_OCTAVES: i32 = 32;
+
+/// Runs `f`, turning a panic into NaN, which the entry wrapper then reports as
+/// a bad result: a panic must not unwind into LuaJIT's C frames.
+#[inline]
+fn guard(f: impl FnOnce() -> f32) -> f64 {
+    catch_unwind(AssertUnwindSafe(f)).map_or(f64::NAN, f64::from)
+}
+
+fn octaves(n: i32) -> u32 {
+    n.clamp(0, MAX_OCTAVES) as u32
+}
+
+/// Writes a gradient into the prelude's scratch vector.
+fn put_grad(out: *mut Vec3, g: [f32; 3]) {
+    if out.is_null() {
+        return;
+    }
+    // SAFETY: `out` is the prelude's `ffi.new("luster_vec3")` scratch record
+    // (see the module doc), alive and not aliased during this call.
+    unsafe { *out = Vec3 { x: g[0].into(), y: g[1].into(), z: g[2].into() } }
+}
+
+fn grad_call(out: *mut Vec3, f: impl FnOnce() -> (f32, [f32; 3])) -> f64 {
+    match catch_unwind(AssertUnwindSafe(f)) {
+        Ok((v, g)) => {
+            put_grad(out, g);
+            v.into()
+        }
+        Err(_) => f64::NAN,
+    }
+}
+
+extern "C" fn perlin1(x: f64) -> f64 {
+    guard(|| perlin::noise1(x as f32))
+}
+extern "C" fn perlin2(x: f64, y: f64) -> f64 {
+    guard(|| perlin::noise2(x as f32, y as f32))
+}
+extern "C" fn perlin3(x: f64, y: f64, z: f64) -> f64 {
+    guard(|| perlin::noise3(x as f32, y as f32, z as f32))
+}
+/// The CENG795 lecture's noise, so a script can reproduce the `perlin` texture.
+extern "C" fn course_noise(x: f64, y: f64, z: f64) -> f64 {
+    guard(|| course::noise(x as f32, y as f32, z as f32))
+}
+/// The course's `perlin` texture map, octaves and conversion included
+/// (`absval` non-zero: turbulence), computed as the built-in map does.
+extern "C" fn course_perlin(x: f64, y: f64, z: f64, scale: f64, oct: i32, absval: i32) -> f64 {
+    guard(|| course::texture_value([x as f32, y as f32, z as f32], scale as f32, octaves(oct), absval != 0))
+}
+extern "C" fn perlin4(x: f64, y: f64, z: f64, w: f64) -> f64 {
+    guard(|| perlin::noise4(x as f32, y as f32, z as f32, w as f32))
+}
+extern "C" fn perlin3_grad(x: f64, y: f64, z: f64, g: *mut Vec3) -> f64 {
+    grad_call(g, || perlin::noise3_grad(x as f32, y as f32, z as f32))
+}
+extern "C" fn pperlin3(x: f64, y: f64, z: f64, px: i32, py: i32, pz: i32) -> f64 {
+    // A period below 1 would divide by zero inside the noise.
+    guard(|| perlin::pnoise3(x as f32, y as f32, z as f32, px.max(1), py.max(1), pz.max(1)))
+}
+extern "C" fn simplex2(x: f64, y: f64) -> f64 {
+    guard(|| simplex::noise2(x as f32, y as f32))
+}
+extern "C" fn simplex3(x: f64, y: f64, z: f64) -> f64 {
+    guard(|| simplex::noise3(x as f32, y as f32, z as f32))
+}
+extern "C" fn simplex4(x: f64, y: f64, z: f64, w: f64) -> f64 {
+    guard(|| simplex::noise4(x as f32, y as f32, z as f32, w as f32))
+}
+extern "C" fn simplex3_grad(x: f64, y: f64, z: f64, g: *mut Vec3) -> f64 {
+    grad_call(g, || simplex::noise3_grad(x as f32, y as f32, z as f32))
+}
+extern "C" fn fbm(x: f64, y: f64, z: f64, oct: i32, lac: f64, gain: f64) -> f64 {
+    guard(|| fractal::fbm3(x as f32, y as f32, z as f32, octaves(oct), lac as f32, gain as f32))
+}
+extern "C" fn fbm_grad(x: f64, y: f64, z: f64, oct: i32, lac: f64, gain: f64, g: *mut Vec3) -> f64 {
+    grad_call(g, || fractal::fbm3_grad(x as f32, y as f32, z as f32, octaves(oct), lac as f32, gain as f32))
+}
+extern "C" fn turbulence(x: f64, y: f64, z: f64, oct: i32, lac: f64, gain: f64) -> f64 {
+    guard(|| fractal::turbulence3(x as f32, y as f32, z as f32, octaves(oct), lac as f32, gain as f32))
+}
+extern "C" fn ridged(x: f64, y: f64, z: f64, oct: i32, lac: f64, gain: f64, offset: f64) -> f64 {
+    guard(|| {
+        fractal::ridged3(x as f32, y as f32, z as f32, octaves(oct), lac as f32, gain as f32, offset as f32)
+    })
+}
+
+fn metric(m: u32) -> voronoi::Metric {
+    voronoi::Metric::from_u32(m).unwrap_or(voronoi::Metric::Euclidean)
+}
+
+fn put_cell(out: *mut CellOut, c: Option<voronoi::Cell>) {
+    if out.is_null() {
+        return;
+    }
+    let rec = match c {
+        Some(c) => CellOut {
+            f1: c.f1.into(),
+            f2: c.f2.into(),
+            px: c.p1[0].into(),
+            py: c.p1[1].into(),
+            pz: c.p1[2].into(),
+            id: c.id.into(),
+        },
+        None => CellOut { f1: f64::NAN, ..CellOut::default() },
+    };
+    // SAFETY: `out` is the prelude's `ffi.new("luster_cell")` scratch record.
+    unsafe { *out = rec }
+}
+
+extern "C" fn voronoi3(x: f64, y: f64, z: f64, m: u32, jitter: f64, out: *mut CellOut) {
+    let c = catch_unwind(|| voronoi::voronoi3(x as f32, y as f32, z as f32, metric(m), jitter as f32));
+    put_cell(out, c.ok());
+}
+extern "C" fn voronoi2(x: f64, y: f64, m: u32, jitter: f64, out: *mut CellOut) {
+    let c = catch_unwind(|| voronoi::voronoi2(x as f32, y as f32, metric(m), jitter as f32));
+    put_cell(out, c.ok());
+}
+
+/// `texture(name, u, v, filter)`: samples image `index` of the state's images
+/// into `out`. 0 on success; 1 when the state has no images or no such image
+/// (the prelude resolved the name, so that means a stale index), 2 on a panic.
+extern "C" fn texture(ctx: *const c_void, index: i32, u: f64, v: f64, filter: i32, out: *mut Vec3) -> i32 {
+    if ctx.is_null() || out.is_null() {
+        return 1;
+    }
+    // SAFETY: `ctx` is the address of the `Box<Arc<dyn ImageSampler>>` the
+    // state owns (`state.rs`), which lives as long as the Lua state that calls
+    // this; the prelude passes it unchanged and user code cannot reach it.
+    let sampler = unsafe { &*ctx.cast::<Arc<dyn ImageSampler>>() };
+    let filter = if filter == 0 { SampleFilter::Nearest } else { SampleFilter::Bilinear };
+    let Ok(index) = usize::try_from(index) else { return 1 };
+    match catch_unwind(AssertUnwindSafe(|| sampler.sample(index, u as f32, v as f32, filter))) {
+        Ok(Some(c)) => {
+            // SAFETY: `out` is the prelude's scratch `luster_vec3`.
+            unsafe { *out = Vec3 { x: c[0].into(), y: c[1].into(), z: c[2].into() } };
+            0
+        }
+        Ok(None) => 1,
+        Err(_) => 2,
+    }
+}
+
+/// Nanoseconds since the first call in this process, never 0 (0 is "unset").
+pub(crate) fn now_ns() -> u64 {
+    static EPOCH: OnceLock<Instant> = OnceLock::new();
+    let ns = EPOCH.get_or_init(Instant::now).elapsed().as_nanos();
+    u64::try_from(ns).unwrap_or(u64::MAX).max(1)
+}
+
+/// Called by the prelude's `tick` every few thousand loop iterations or
+/// function entries: 1 once the call has run past its timeout. Sticky until
+/// Rust resets the clock for the next call, so a script that catches the
+/// timeout error with `pcall` is stopped again at its next tick.
+extern "C" fn clock_check(c: *mut Clock) -> i32 {
+    if c.is_null() {
+        return 0;
+    }
+    // SAFETY: `c` is the state's `luster_clock` cdata (see the module doc).
+    let c = unsafe { &mut *c };
+    if c.expired != 0 {
+        return 1;
+    }
+    let now = now_ns();
+    if c.start_ns == 0 {
+        c.start_ns = now;
+    } else if now.saturating_sub(c.start_ns) > c.timeout_ns {
+        c.expired = 1;
+    }
+    c.expired
+}
+
+/// Rust's handle on one state's shared records (see the module doc for why the
+/// pointers stay valid).
+pub(crate) struct IoBlock {
+    shade: *mut Shade,
+    /// The three points of a bump evaluation: `shade`, `shade_b`, `shade_c`.
+    shade3: [*mut Shade; 3],
+    out: *mut Out,
+    material: *mut MaterialOut,
+    clock: *mut Clock,
+}
+
+impl IoBlock {
+    /// Takes the addresses the prelude reported. They are checked for null
+    /// and alignment; the prelude allocated them with `ffi.new` of the
+    /// matching C types.
+    pub(crate) fn new(
+        shade: usize,
+        shade_b: usize,
+        shade_c: usize,
+        out: usize,
+        material: usize,
+        clock: usize,
+        timeout_ns: u64,
+    ) -> Option<IoBlock> {
+        fn ok<T>(a: usize) -> bool {
+            a != 0 && a % std::mem::align_of::<T>() == 0
+        }
+        if !(ok::<Shade>(shade)
+            && ok::<Shade>(shade_b)
+            && ok::<Shade>(shade_c)
+            && ok::<Out>(out)
+            && ok::<MaterialOut>(material)
+            && ok::<Clock>(clock))
+        {
+            return None;
+        }
+        let block = IoBlock {
+            shade: shade as *mut Shade,
+            shade3: [shade as *mut Shade, shade_b as *mut Shade, shade_c as *mut Shade],
+            out: out as *mut Out,
+            material: material as *mut MaterialOut,
+            clock: clock as *mut Clock,
+        };
+        // SAFETY: see the module doc; no Lua code runs during this write.
+        unsafe { (*block.clock).timeout_ns = timeout_ns }
+        Some(block)
+    }
+
+    /// Writes the shading point (`fill` writes it in place, so the record
+    /// is never copied) and arms the clock for one call.
+    #[inline]
+    pub(crate) fn begin(&self, fill: impl FnOnce(&mut Shade)) {
+        // SAFETY: see the module doc; no Lua code runs during these writes,
+        // and no other reference to the record exists while `fill` runs.
+        unsafe {
+            fill(&mut *self.shade);
+            self.arm();
+        }
+    }
+
+    /// Clears the rejection flag and arms the clock for one call. The
+    /// channels need no clearing: a wrapper that returns normally has
+    /// written every one its entry point's caller reads.
+    ///
+    /// # Safety
+    ///
+    /// No Lua code runs (see the module doc).
+    #[inline]
+    unsafe fn arm(&self) {
+        (*self.out).bad = 0;
+        (*self.clock).start_ns = 0;
+        (*self.clock).expired = 0;
+    }
+
+    /// Writes the shading point, clears the material outputs and arms the
+    /// clock for one `DecalMode material` call.
+    #[inline]
+    pub(crate) fn begin_material(&self, fill: impl FnOnce(&mut Shade)) {
+        self.begin(fill);
+        // SAFETY: see the module doc; no Lua code runs during this write.
+        unsafe { *self.material = MaterialOut::default() }
+    }
+
+    /// The material outputs the wrapper wrote.
+    pub(crate) fn material(&self) -> MaterialOut {
+        // SAFETY: see the module doc; the Lua call has returned.
+        unsafe { *self.material }
+    }
+
+    /// Writes the three points of a bump evaluation and arms the clock: the
+    /// time limit covers the three `height` calls together.
+    #[inline]
+    pub(crate) fn begin3(&self, mut fill: impl FnMut(usize, &mut Shade)) {
+        // SAFETY: see the module doc; no Lua code runs during these writes,
+        // and no other reference to the records exists while `fill` runs
+        // (the three are distinct allocations).
+        unsafe {
+            for (k, &s) in self.shade3.iter().enumerate() {
+                fill(k, &mut *s);
+            }
+            self.arm();
+        }
+    }
+
+    /// The three channels the entry wrapper wrote, each read on its own:
+    /// LuaJIT stores them one double at a time, and a copy of the record
+    /// would read two of them in one 16-byte load, which no store can forward
+    /// to (the load would wait for both stores to reach the cache).
+    #[inline(always)]
+    pub(crate) fn channels(&self) -> [f64; 3] {
+        // SAFETY: see the module doc; the Lua call has returned. Volatile
+        // only so that the three loads are not merged into wider ones.
+        unsafe {
+            let o = self.out;
+            [
+                std::ptr::addr_of!((*o).r).read_volatile(),
+                std::ptr::addr_of!((*o).g).read_volatile(),
+                std::ptr::addr_of!((*o).b).read_volatile(),
+            ]
+        }
+    }
+
+    /// The result the entry wrapper wrote.
+    pub(crate) fn out(&self) -> Out {
+        // SAFETY: see the module doc; the Lua call has returned.
+        unsafe { *self.out }
+    }
+
+    /// Whether the last call failed because the wrapper rejected its result.
+    pub(crate) fn bad_result(&self) -> bool {
+        self.out().bad != 0
+    }
+
+    /// Whether the last call was stopped by its deadline.
+    pub(crate) fn timed_out(&self) -> bool {
+        // SAFETY: see the module doc; the Lua call has returned.
+        unsafe { (*self.clock).expired != 0 }
+    }
+}
