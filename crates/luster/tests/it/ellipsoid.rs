@@ -103,8 +103,8 @@ fn ellipsoids_render_like_transformed_spheres() {
     // pixel. The two scenes solve different (but equivalent) quadratics, so
     // float noise may flip a pixel where a ray grazes a silhouette or a uv
     // lands on a texel edge; everywhere else the images must agree to ±1.
-    // Threshold: at most 20 of the 9216 pixels off by more than 1 (none are,
-    // when this was written), and a mean difference under 0.1.
+    // Threshold: at most 20 of the 9216 pixels off by more than 1, and a
+    // mean difference under 0.1.
     let diff: Vec<u8> =
         a.iter().zip(&b).map(|(p, q)| (0..3).map(|c| p[c].abs_diff(q[c])).max().unwrap_or(0)).collect();
     let off = diff.iter().filter(|&&d| d > 1).count();

@@ -24,8 +24,8 @@
 //! * its power: our renders scaled by 1.03 — exactly a light 3% too bright,
 //!   as light transport is linear in the emitted radiance and each of these
 //!   scenes' lights is scaled alike — fail it;
-//! * the course's variance per sample relative to ours is printed (the old
-//!   rule assumed 4).
+//! * the course's variance per sample relative to ours is printed, beside
+//!   what the 4× rule (that ratio taken as 4) makes of the same renders.
 //!
 //! The course's Russian-roulette images are left out: they are brighter than
 //! any unbiased estimate of their scene (see docs/path-tracing.md).
@@ -125,7 +125,7 @@ fn hw7_images_match_the_course_within_their_noise() {
         row("our seed 0 against seed 1", &ours);
         row("ours ×1.03 against the course", &bright);
         if course.is_some() {
-            // For comparison only: what the 4× rule made of the same renders.
+            // For comparison only: what the 4× rule makes of the same renders.
             let old = |a: &Rgb32Image, b: &Rgb32Image| block_z(a, b, &reference, &model).expect("one size");
             row("  (4× rule) ours", &old(&a, &b));
             row("  (4× rule) ours ×1.03", &old(&scaled(&a, 1.03), &scaled(&b, 1.03)));

@@ -108,8 +108,8 @@ fn hostile_inputs_are_refused_cleanly() {
     );
 }
 
-/// Huge but finite coordinates are legitimate: they render (the BVH builder
-/// once panicked on them with an out-of-range leaf index).
+/// Huge but finite coordinates are legitimate: they render (and must not
+/// push the BVH builder's leaf indices out of range).
 #[test]
 fn huge_but_finite_coordinates_render() {
     let far_mesh = xml("<Mesh id=\"1\"><Material>1</Material><Faces>1 2 3 1 2 4</Faces></Mesh>", "")

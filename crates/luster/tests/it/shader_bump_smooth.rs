@@ -1,8 +1,8 @@
 //! A bump shader whose `height` is flat must leave every surface exactly as
 //! it is without the map: on a sphere, a smooth-shaded mesh, an OBJ mesh with
-//! its own normals and an instance of the smooth mesh. Before the fix the
-//! meshes turned faceted, because the bumped normal was built from the flat
-//! triangle's tangents instead of the interpolated normal.
+//! its own normals and an instance of the smooth mesh. A bumped normal built
+//! from the flat triangle's tangents instead of the interpolated normal would
+//! turn the meshes faceted.
 
 use crate::common;
 use common::folder;

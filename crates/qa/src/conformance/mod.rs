@@ -222,132 +222,161 @@ fn run_case_into(
     result.setup_seconds = t0.elapsed().as_secs_f64();
     let stem = case.label().replace(['/', '.'], "_");
     for (i, cam) in scene.cameras.iter().enumerate() {
-        let t = Instant::now();
-        let capped;
-        let opts = match (max_spp, opts.spp) {
-            (Some(m), None) if cam.num_samples > m => {
-                capped = RenderOptions { spp: Some(m.max(1)), ..*opts };
-                &capped
-            }
-            _ => opts,
-        };
-        // A shader that fails makes the scene an error row, not a black image.
-        let img = match render::try_render_with(&scene, i, opts, &|_| {}) {
-            Ok(img) => img,
+        match camera_result(case, &scene, i, cam, outdir, &stem, opts, max_spp) {
+            Ok(r) => result.images.push(r),
             Err(e) => {
-                result.error = Some(format!("{}: {e}", case.scene.display()));
+                result.error = Some(e);
                 return;
             }
+        }
+    }
+}
+
+/// Renders camera `i` of a case's scene, writes the image and judges it
+/// against the course's; `Err` is a shader failure, which ends the case.
+#[allow(clippy::too_many_arguments)]
+fn camera_result(
+    case: &Case,
+    scene: &Scene,
+    i: usize,
+    cam: &luster_render::render::camera::Camera,
+    outdir: &Path,
+    stem: &str,
+    opts: &RenderOptions,
+    max_spp: Option<u32>,
+) -> Result<ImageResult, String> {
+    let t = Instant::now();
+    let capped;
+    let opts = match (max_spp, opts.spp) {
+        (Some(m), None) if cam.num_samples > m => {
+            capped = RenderOptions { spp: Some(m.max(1)), ..*opts };
+            &capped
+        }
+        _ => opts,
+    };
+    // A shader that fails makes the scene an error row, not a black image.
+    let img = render::try_render_with(scene, i, opts, &|_| {})
+        .map_err(|e| format!("{}: {e}", case.scene.display()))?;
+    // An .exr camera is judged by its tone-mapped .png, as the course's is.
+    let (ldr, ldr_name) =
+        match luster_core::image::outputs::first_ldr(&cam.image_name, &cam.tonemaps, cam.display) {
+            Some(o) => (o.kind, o.name.display().to_string()),
+            None => (luster_core::image::outputs::OutputKind::Course, cam.image_name.clone()),
         };
-        // An .exr camera is judged by its tone-mapped .png, as the course's is.
-        let (ldr, ldr_name) =
-            match luster_core::image::outputs::first_ldr(&cam.image_name, &cam.tonemaps, cam.display) {
-                Some(o) => (o.kind, o.name.display().to_string()),
-                None => (luster_core::image::outputs::OutputKind::Course, cam.image_name.clone()),
-            };
-        let threshold = threshold(case, &ldr_name, cam.num_samples);
-        let expected = case.expected_image(&ldr_name);
-        let expected_hdr = case.expected_hdr(&cam.image_name);
-        // The second render is only worth its time when there is a
-        // reference to judge.
-        let second = (threshold.needs_pair() && expected.is_some()).then(|| {
-            let next = RenderOptions { seed: opts.seed.wrapping_add(1), ..*opts };
-            render::render_with(&scene, i, &next, &|_| {}).film
-        });
-        let seconds = t.elapsed().as_secs_f64();
-        let png = outdir.join(format!("{stem}__{}", sanitize(&cam.image_name))).with_extension("png");
-        let mut r = ImageResult {
-            image_name: cam.image_name.clone(),
-            render: png.clone(),
-            expected: expected.clone(),
-            heatmap: None,
-            comparison: None,
-            threshold,
-            bar: threshold.bar(),
-            pair: None,
-            coarse_psnr: None,
-            stats: None,
-            block_z: None,
-            hdr: None,
-            scene_spp: cam.num_samples.max(1),
-            quirk: thresholds::known_quirk(case, &cam.image_name),
-            spp: opts.spp.unwrap_or(cam.num_samples).max(1),
-            seconds,
-            pass: false,
-            error: None,
-        };
-        let rgb = luster_render::film::write::rgb8(&img.film, &ldr).unwrap_or_default();
-        if let Err(e) = luster_core::image::output::write_rgb8(&png, img.width, img.height, &rgb) {
+    let threshold = threshold(case, &ldr_name, cam.num_samples);
+    let expected = case.expected_image(&ldr_name);
+    let expected_hdr = case.expected_hdr(&cam.image_name);
+    // The second render is only worth its time when there is a
+    // reference to judge.
+    let second = (threshold.needs_pair() && expected.is_some()).then(|| {
+        let next = RenderOptions { seed: opts.seed.wrapping_add(1), ..*opts };
+        render::render_with(scene, i, &next, &|_| {}).film
+    });
+    let seconds = t.elapsed().as_secs_f64();
+    let png = outdir.join(format!("{stem}__{}", sanitize(&cam.image_name))).with_extension("png");
+    let mut r = ImageResult {
+        image_name: cam.image_name.clone(),
+        render: png.clone(),
+        expected: expected.clone(),
+        heatmap: None,
+        comparison: None,
+        threshold,
+        bar: threshold.bar(),
+        pair: None,
+        coarse_psnr: None,
+        stats: None,
+        block_z: None,
+        hdr: None,
+        scene_spp: cam.num_samples.max(1),
+        quirk: thresholds::known_quirk(case, &cam.image_name),
+        spp: opts.spp.unwrap_or(cam.num_samples).max(1),
+        seconds,
+        pass: false,
+        error: None,
+    };
+    let rgb = luster_render::film::write::rgb8(&img.film, &ldr).unwrap_or_default();
+    if let Err(e) = luster_core::image::output::write_rgb8(&png, img.width, img.height, &rgb) {
+        r.error = Some(e.to_string());
+        return Ok(r);
+    }
+    let second_rgb = second.as_ref().map(|f| luster_render::film::write::rgb8(f, &ldr).unwrap_or_default());
+    if let Some(second_rgb) = &second_rgb {
+        match compare_rgb8(img.width, img.height, second_rgb, &rgb) {
+            Ok(p) => r.pair = Some(p),
+            Err(e) => r.error = Some(e),
+        }
+        let pair_png =
+            png.with_file_name(format!("{}__seed{}.png", file_stem(&png), opts.seed.wrapping_add(1)));
+        // Kept for looking at; judging does not need the file.
+        let _ = luster_core::image::output::write_rgb8(&pair_png, img.width, img.height, second_rgb);
+    }
+    let hdr_reference = match expected_hdr.as_deref().map(Rgb32Image::load) {
+        Some(Ok(reference)) => Some(reference),
+        Some(Err(e)) => {
             r.error = Some(e.to_string());
-            result.images.push(r);
-            continue;
+            None
         }
-        let second_rgb =
-            second.as_ref().map(|f| luster_render::film::write::rgb8(f, &ldr).unwrap_or_default());
-        if let Some(second_rgb) = &second_rgb {
-            match compare_rgb8(img.width, img.height, second_rgb, &rgb) {
-                Ok(p) => r.pair = Some(p),
-                Err(e) => r.error = Some(e),
-            }
-            let pair_png =
-                png.with_file_name(format!("{}__seed{}.png", file_stem(&png), opts.seed.wrapping_add(1)));
-            // Kept for looking at; judging does not need the file.
-            let _ = luster_core::image::output::write_rgb8(&pair_png, img.width, img.height, second_rgb);
+        None => None,
+    };
+    if let (Some(reference), Some(path)) = (&hdr_reference, &expected_hdr) {
+        let exr = png.with_extension("exr");
+        match hdr_result(&img.film, reference, &exr, path) {
+            Ok(h) => r.hdr = Some(h),
+            Err(e) => r.error = Some(e),
         }
-        let hdr_reference = match expected_hdr.as_deref().map(Rgb32Image::load) {
-            Some(Ok(reference)) => Some(reference),
-            Some(Err(e)) => {
-                r.error = Some(e.to_string());
-                None
+    }
+    // An unreadable other year only costs the measured noise.
+    let other_year = expected_hdr
+        .as_deref()
+        .filter(|_| second.is_some())
+        .and_then(Case::other_year)
+        .and_then(|p| Rgb32Image::load(p).ok());
+    if let Some(exp) = expected {
+        let judged = second.as_ref().map(|s| Judged {
+            second_film: s,
+            second_rgb: second_rgb.as_deref().unwrap_or_default(),
+            film: &img.film,
+            hdr_reference: hdr_reference.as_ref(),
+            other_year: other_year.as_ref(),
+            spp: r.spp,
+            ref_spp: r.scene_spp,
+        });
+        judge(&mut r, &exp, img.width, img.height, &rgb, judged, &png);
+    }
+    Ok(r)
+}
+
+/// Compares the written 8-bit image `rgb` with the course's `expected` by the
+/// camera's bar (noise-aware where `judged` holds a second render), writes
+/// the FLIP heatmap beside `png`, and records the verdict in `r`.
+fn judge(
+    r: &mut ImageResult,
+    expected: &Path,
+    width: u32,
+    height: u32,
+    rgb: &[u8],
+    judged: Option<Judged>,
+    png: &Path,
+) {
+    match compare_with(expected, width, height, rgb, r.bar.tests_stats(), judged) {
+        Ok((c, coarse, stats, block_z)) => {
+            r.coarse_psnr = coarse;
+            r.stats = stats;
+            if let Some(z) = &block_z {
+                r.bar = r.threshold.bar_in(z.space);
             }
-            None => None,
-        };
-        if let (Some(reference), Some(path)) = (&hdr_reference, &expected_hdr) {
-            let exr = png.with_extension("exr");
-            match hdr_result(&img.film, reference, &exr, path) {
-                Ok(h) => r.hdr = Some(h),
-                Err(e) => r.error = Some(e),
-            }
-        }
-        // An unreadable other year only costs the measured noise.
-        let other_year = expected_hdr
-            .as_deref()
-            .filter(|_| second.is_some())
-            .and_then(Case::other_year)
-            .and_then(|p| Rgb32Image::load(p).ok());
-        if let Some(exp) = expected {
-            let judged = second.as_ref().map(|s| Judged {
-                second_film: s,
-                second_rgb: second_rgb.as_deref().unwrap_or_default(),
-                film: &img.film,
-                hdr_reference: hdr_reference.as_ref(),
-                other_year: other_year.as_ref(),
-                spp: r.spp,
-                ref_spp: r.scene_spp,
-            });
-            match compare_with(&exp, img.width, img.height, &rgb, r.bar.tests_stats(), judged) {
-                Ok((c, coarse, stats, block_z)) => {
-                    r.coarse_psnr = coarse;
-                    r.stats = stats;
-                    if let Some(z) = &block_z {
-                        r.bar = r.threshold.bar_in(z.space);
-                    }
-                    r.block_z = block_z;
-                    let heat = png.with_file_name(format!("{}__heatmap.png", file_stem(&png)));
-                    if let Ok(h) = crate::metrics::comparison_heatmap(&c, crate::metrics::HeatmapSource::Flip)
-                    {
-                        if crate::metrics::write_heatmap(&h, &heat).is_ok() {
-                            r.heatmap = Some(heat);
-                        }
-                    }
-                    r.pass = r.error.is_none()
-                        && r.bar.accepts(&c, r.coarse_psnr, r.stats.as_ref(), r.block_z.as_ref());
-                    r.comparison = Some(c);
+            r.block_z = block_z;
+            let heat = png.with_file_name(format!("{}__heatmap.png", file_stem(png)));
+            if let Ok(h) = crate::metrics::comparison_heatmap(&c, crate::metrics::HeatmapSource::Flip) {
+                if crate::metrics::write_heatmap(&h, &heat).is_ok() {
+                    r.heatmap = Some(heat);
                 }
-                Err(e) => r.error = Some(e),
             }
+            r.pass =
+                r.error.is_none() && r.bar.accepts(&c, r.coarse_psnr, r.stats.as_ref(), r.block_z.as_ref());
+            r.comparison = Some(c);
         }
-        result.images.push(r);
+        Err(e) => r.error = Some(e),
     }
 }
 

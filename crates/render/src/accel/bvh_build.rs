@@ -12,44 +12,27 @@
 //! positions depend only on the input, never on scheduling: the tree is the
 //! same whatever the thread count. Subtrees under `PAR_MIN` primitives are
 //! built on one thread with their nodes packed at the start of their region,
-//! and the array is allocated zeroed, so the holes are pages never touched:
-//! on the 1.31M-triangle bumpy sphere the reserved 80 MiB costs about a
-//! quarter of that in resident memory. The tree is then collapsed into
-//! 4-wide nodes and dropped.
+//! and the array is allocated zeroed, so the holes are pages never touched
+//! and the worst-case reservation costs little resident memory. The tree is
+//! then collapsed into wide nodes and dropped.
 //!
 //! Primitives with empty or non-finite boxes are left out; coincident
 //! centroids fall back to a median split; below [`SAH_MAX_DEPTH`] median
 //! splits take over, so no input can make the tree deeper than
 //! `SAH_MAX_DEPTH + 32`, which the traversal stack is sized for.
 //!
-//! Tried for build speed and not kept (1.31M-triangle bumpy sphere, 2 cores
-//! shared with another build, so absolute times ran ~1.5 s instead of the
-//! quiet ~0.85 s; before/after interleaved, same tree in every case):
-//! - Fusing binning into the partition (per-bin centroid boxes for nodes of
-//!   at least 2^15 references give the children's centroid boxes, so the
-//!   partition can bin each reference for its child and the children skip
-//!   their sweep): build 2.2-2.5 s against 1.5-1.6 s, +0.75 s CPU per build,
-//!   with `memcpy` rising from 5% to 15% of samples; not understood in the
-//!   time available (the larger `split` frame and by-value bin arrays are
-//!   the suspects).
-//! - Bin arrays sized 4/8/16 by node size, plus filling the node region in
-//!   parallel: no gain (1.59-1.73 s against 1.52-1.54 s).
-//!
 //! Binning alternates two sets of bins (merged at the end, bit for bit the
 //! same bins): neighbouring references fall in the same bins, and with one
-//! set each update waited for the previous one's store.
-//!
-//! Profile before session 9: `split` and `bin_refs` about 40% of samples
-//! each, stalled just after loading a reference. The stall was not memory
-//! but denormal arithmetic on the index lane (see `PrimRef::min`); with
-//! that lane cleared the build takes about a third of the CPU time.
+//! set each update would wait for the previous one's store. The index lane
+//! of a reference's box is cleared before any arithmetic on it (see
+//! `PrimRef::min`), so the build never computes on denormals.
 
 use glam::{Vec3, Vec3A, Vec4};
 
 use luster_core::math::Aabb;
 
-/// Number of centroid bins per axis. 16 is within a percent or two of 32 in
-/// SAH cost on the meshes we measured and halves the binning sweep.
+/// Number of centroid bins per axis. 16 gives trees of nearly the SAH cost
+/// that 32 does and halves the binning sweep.
 pub const BINS: usize = 16;
 /// Most primitives in one leaf; more are always split.
 pub const MAX_LEAF: usize = 8;
@@ -177,9 +160,9 @@ struct PrimRef {
 impl PrimRef {
     /// The lower corner, with the index lane cleared: SSE arithmetic works
     /// on all four lanes, and the index's bits read as a float are a
-    /// denormal for every index below 2^23. Each multiply or add on one
-    /// took a microcode assist (on the order of a hundred cycles), several
-    /// per reference per pass: that, not memory, was most of the build.
+    /// denormal for every index below 2^23, and each multiply or add on a
+    /// denormal takes a slow microcode assist, several per reference per
+    /// pass.
     #[inline]
     fn min(&self) -> Vec3A {
         Vec3A::from_vec4(self.lo.with_w(0.0))
@@ -193,7 +176,7 @@ impl PrimRef {
         self.lo.w.to_bits()
     }
     /// The centroid, halved before the sum so that boxes near ±f32::MAX do
-    /// not overflow to infinity (halving is exact, so bins are as before).
+    /// not overflow to infinity (halving is exact, so no bin changes).
     #[inline]
     fn centroid(&self) -> Vec3A {
         self.min() * 0.5 + self.max() * 0.5

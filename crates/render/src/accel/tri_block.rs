@@ -6,7 +6,7 @@
 //! order (no fused multiply-add, a true division for `1 / det`), and a lane
 //! whose edge function is exactly zero is redone by the scalar test with its
 //! `f64` fallback. So a block finds the same hits, bit for bit, as testing
-//! its triangles one by one; it only does so about four times faster. Unused
+//! its triangles one by one; it only tests them four at a time. Unused
 //! lanes hold NaN vertices, which fail every comparison.
 
 use glam::Vec4;
@@ -92,7 +92,7 @@ impl TriBlock {
         let inside = !(neg & pos);
         if inside.bitmask() == 0 {
             // Most blocks a ray reaches miss on the edge test: skip the
-            // division. Lanes that pass are computed as before.
+            // division. Lanes that pass are computed in full.
             return BlockHit { mask: 0, t: [0.0; 4], uv: [[0.0; 2]; 4] };
         }
         let det = e0 + e1 + e2;
@@ -125,9 +125,9 @@ pub struct PairHit {
     pub t: [f32; 8],
     /// Barycentrics of vertices 1 and 2 per lane, side by side: a hit's
     /// pair is copied as one 8-byte word into [`TriHit`](super::mesh_accel::TriHit),
-    /// whose readers load it whole. From two arrays it was written as two
-    /// 4-byte stores, which an 8-byte load cannot be forwarded from: it
-    /// waited for them to retire, at every closest hit.
+    /// whose readers load it whole. From two arrays it would be written as
+    /// two 4-byte stores, which an 8-byte load cannot be forwarded from: it
+    /// would wait for them to retire, at every closest hit.
     pub uv: [[f32; 2]; 8],
 }
 

@@ -80,10 +80,9 @@ impl WatertightRay {
     /// [`WatertightRay::new`] with `kx` and `ky` looked up rather than
     /// worked out (the same values, so the same bits), for the scene's
     /// queries: there the arithmetic and the indexing of `d` by each
-    /// compiled to some 60 instructions of compares and conditional moves
-    /// per ray. Not used by [`super::MeshAccel`]'s own queries, whose
-    /// benchmark (a 1.3M-triangle mesh) ran 5% slower with it (as in
-    /// session 16; see `docs/performance.md`).
+    /// compile to a long run of compares and conditional moves per ray.
+    /// Not used by [`super::MeshAccel`]'s own queries, where the table
+    /// lookup does not pay.
     #[inline]
     pub(crate) fn new_lookup(ray: &Ray) -> WatertightRay {
         let d = ray.d;
@@ -141,7 +140,7 @@ impl WatertightRay {
 
 impl Triangle {
     /// The (unnormalized) normal of the winding: `(v1 - v0) × (v2 - v0)`.
-    /// Written out: `self.v.map(..)` was left out of line, a call per
+    /// Written out: `self.v.map(..)` can be left out of line, a call per
     /// back-face check of a camera ray's hits.
     #[inline(always)]
     pub fn normal(&self) -> luster_core::math::Vec3 {

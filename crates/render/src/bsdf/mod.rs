@@ -17,13 +17,17 @@
 //! |---|---|
 //! | [`Bsdf::flags`] | which lobes exist ([`Flags`]: diffuse, glossy, specular; reflection, transmission) |
 //! | [`Bsdf::f_cos`] | `f(wi, wo) cos θi`, the light sent to the viewer per unit irradiance from `wi` |
-//! | [`Bsdf::eval_pdf`] | `f cos` and the density with which [`Bsdf::sample`] draws `wi` |
 //! | [`Bsdf::sample`] | a direction drawn by a [`Strategy`], its density and `f cos` |
+//! | [`Bsdf::pdf`] | the density with which [`Bsdf::sample`] draws `wi` |
+//! | [`Bsdf::eval_pdf`] | `f cos` and, where MIS weighs it, the density, in one pass |
 //! | [`Bsdf::specular`] | the delta lobes, which the integrators follow as rays |
 //!
 //! The models are checked against their own definitions (`tests.rs`): each
 //! sampler against its pdf by a chi-square test, energy by quadrature and a
-//! white-furnace albedo, reciprocity where the model is reciprocal.
+//! white-furnace albedo, reciprocity where the model is reciprocal; and the
+//! interface against itself (`interface_tests.rs`): what `sample` returns is
+//! what `pdf` and `f_cos` say of the same direction, for every strategy and
+//! kind of material, and the density integrates to one.
 
 pub mod blinn_phong;
 pub mod brdf;
@@ -35,6 +39,8 @@ pub mod sampling;
 pub mod specular;
 pub mod torrance_sparrow;
 
+#[cfg(test)]
+mod interface_tests;
 #[cfg(test)]
 mod tests;
 
@@ -251,6 +257,23 @@ impl<'a> Bsdf<'a> {
                 let e = if strategy == Strategy::Uniform { 0.0 } else { 1.0 };
                 (blinn_phong(m, self.n, wi, self.d, cos), power_cosine_pdf(e, cos))
             }
+        }
+    }
+
+    /// The density with which [`sample`](Self::sample) draws the world
+    /// direction `wi` (`cos = n·wi`) under `strategy`; zero below the surface.
+    #[inline]
+    pub fn pdf(&self, wi: Vec3, cos: f32, strategy: Strategy) -> f32 {
+        let m = self.m;
+        match (&m.brdf, strategy) {
+            (Some(b), Strategy::Brdf) => {
+                if let (true, Some(_)) = (m.traits.diffuse_only, self.f) {
+                    return diffuse_pdf(self.wo.z, cos);
+                }
+                b.pdf(m.diffuse, m.specular, self.wo_full(), self.frame.to_local(wi))
+            }
+            (_, Strategy::Uniform) => power_cosine_pdf(0.0, cos),
+            _ => power_cosine_pdf(1.0, cos),
         }
     }
 

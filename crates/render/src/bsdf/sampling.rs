@@ -12,8 +12,8 @@ pub fn power_cosine(e: f32, u: (f32, f32)) -> Vec3 {
 }
 
 /// [`power_cosine`] at `e = 1`: a cosine-weighted direction, always
-/// inlined. Every diffuse bounce under MIS draws one; the call LLVM left
-/// to [`power_cosine`] there was 3% of the MIS Cornell box's time.
+/// inlined. Every diffuse bounce under MIS draws one, where LLVM would
+/// otherwise leave a call to [`power_cosine`].
 #[inline(always)]
 pub fn cosine_weighted(u: (f32, f32)) -> Vec3 {
     power_cosine_inline(1.0, u)
@@ -24,7 +24,7 @@ pub fn cosine_weighted(u: (f32, f32)) -> Vec3 {
 fn power_cosine_inline(e: f32, (u1, u2): (f32, f32)) -> Vec3 {
     // Uniform and cosine-weighted bounces, the path tracer's every bounce,
     // without a libm `powf` call (`sqrt` is one instruction; it and
-    // `powf(u, ½)` differ in the last bit for 0.06% of the floats).
+    // `powf(u, ½)` differ in the last bit for a few floats).
     let cos = match e {
         0.0 => u1,
         1.0 => u1.sqrt(),

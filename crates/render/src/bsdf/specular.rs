@@ -74,9 +74,9 @@ pub fn glossy(dir: Vec3, roughness: f32, sampler: &mut PixelSampler) -> Vec3 {
 /// component of smallest magnitude set to 1 (the first such when two tie),
 /// `u = normalize(r × r')` and `v = r × u`. Only the frame's turn about `r`
 /// matters (the offsets are symmetric), and this rule fixes it: another
-/// orthonormal pair (Duff et al.'s, say) turns the square of offsets and left
-/// the upper right of hw3 `cornellbox_brushed_metal`'s copper sphere 4–5
-/// levels brighter than the course's image over 50×50 pixels.
+/// orthonormal pair (Duff et al.'s, say) turns the square of offsets, and
+/// hw3 `cornellbox_brushed_metal`'s copper sphere then no longer matches the
+/// course's image.
 #[inline]
 pub fn glossy_frame(r: Vec3) -> (Vec3, Vec3) {
     let a = r.abs();

@@ -65,9 +65,9 @@ impl<'a> Tile<'a> {
     /// [`reserve`]; [`Tile::clear`] zeroes a tile before its first sample
     /// either way). One allocation for all the tiles, zeroed by the
     /// allocator: fresh pages that the worker rendering a tile faults in.
-    /// Two small vectors per tile, zeroed as they were made, grew the
-    /// workers' malloc arenas a page at a time: ~2500 `mprotect` calls for
-    /// an 800×800 film, the two workers queueing for the kernel's lock.
+    /// Two small vectors per tile, zeroed as they were made, would grow the
+    /// workers' malloc arenas a page at a time, an `mprotect` call each, the
+    /// workers queueing for the kernel's lock.
     pub fn all_in(
         store: &'a mut Vec<[f32; 4]>,
         rects: &[(u32, u32, u32, u32)],
@@ -91,8 +91,7 @@ impl<'a> Tile<'a> {
     /// Forgets its samples. Called on a tile fresh from [`Tile::all_in`]
     /// before its first sample, it makes the store's pages be written before
     /// they are read: a fresh page read first is mapped to the shared zero
-    /// page and faults again when written (5000 faults, not 2500, for an
-    /// 800×800 film).
+    /// page and faults again when written.
     pub fn clear(&mut self) {
         self.acc.fill([0.0; 4]);
     }

@@ -4,11 +4,11 @@
 //! A render writes two buffers as large as its image: the tiles'
 //! accumulators (16 bytes a pixel) and the film (12). Fresh from the
 //! allocator their pages are not mapped yet, and the first write to each
-//! faults: about 4,300 faults for an 800×800 image, taken by the render's
-//! workers or, for the film, after the render. Before the render, while the
-//! scene loads, one worker often idles: hw4 brickwall decodes a 350×350 PNG
-//! on one worker and a 1024×1024 JPEG (about 6 ms, in one piece: the file
-//! has no restart markers) on the other. [`FilmReserve::start`] gives such a
+//! faults, in the render's workers or, for the film, after the render.
+//! Before the render, while the scene loads, one worker often idles: hw4
+//! brickwall decodes a 350×350 PNG on one worker and a 1024×1024 JPEG (in
+//! one piece: the file has no restart markers) on the other.
+//! [`FilmReserve::start`] gives such a
 //! worker the first camera's buffers to write; the render takes them as they
 //! are when it starts: each buffer the worker finished (one it did not is
 //! dropped, and the render allocates its own as it would have). On one

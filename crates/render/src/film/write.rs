@@ -24,8 +24,8 @@ pub fn rgb8(film: &Film, kind: &OutputKind) -> Option<Vec<u8>> {
 /// 8-bit ones are tone-mapped and encoded on rayon's pool. An HDR writer
 /// spends most of its time in the kernel, copying 12 bytes a pixel into
 /// the page cache. When the rename replaces an older image, the file system
-/// frees that image's blocks (several milliseconds on ext4 mounted with
-/// `discard`, with no CPU used) when its last handle closes, which
+/// frees that image's blocks (slowly on ext4 mounted with `discard`, with
+/// no CPU used) when its last handle closes, which
 /// [`write_atomic`](luster_core::image::output) leaves to a thread of its own.
 pub fn write_outputs(film: &Film, outdir: &Path, outputs: &[Output]) -> Result<Vec<PathBuf>, WriteError> {
     use rayon::prelude::*;

@@ -125,7 +125,7 @@ impl Mesh {
     /// Geometric normal (from the winding, unnormalized) and shading normal
     /// (interpolated if smooth, else the geometric one), in object space.
     /// Always inlined: called out of line from the AVX2 intersection, its
-    /// two vectors came back through memory and were read back in wider
+    /// two vectors would come back through memory and be read back in wider
     /// loads than they were stored with.
     #[inline(always)]
     pub fn normals_at(&self, hit: &TriHit) -> (Vec3, Vec3) {

@@ -47,8 +47,8 @@ impl Sphere {
 
     /// The nearest `t` in `(t_min, t_max)` where the ray meets the sphere.
     /// Always inlined: its callers are the scene's AVX2 traversals, where
-    /// an out-of-line call (about 0.9 M per 410 k paths of the hw7 Cornell
-    /// box) also spilled and reloaded the traversal's vector registers.
+    /// an out-of-line call would also spill and reload the traversal's
+    /// vector registers.
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
         if t_min >= 0.0 && self.surely_missed(ray) {

@@ -55,7 +55,7 @@ pub const MIN_TRANSMITTANCE: f32 = 1e-4;
 pub fn trace(scene: &Scene, ray: &Ray, cull_back_faces: bool, st: &mut PathState) -> Option<Hit> {
     if scene.volumes.surfaces.is_empty() {
         // Straight into the caller's slot: a hit kept in a local and copied
-        // out was read back in wide loads before the narrow stores that
+        // out would be read back in wide loads before the narrow stores that
         // wrote it had landed.
         return scene.intersect(ray, st.time, cull_back_faces);
     }

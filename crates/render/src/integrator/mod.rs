@@ -63,8 +63,8 @@ impl Integrator {
 
     /// Whether [`Integrator::radiance_pair`] gains on two calls of
     /// [`Integrator::radiance`]: the path tracer's (see there). The
-    /// recursive tracer's pair is two calls, and its render loop is left
-    /// as it was.
+    /// recursive tracer's pair is two calls, so its render loop takes one
+    /// sample at a time.
     #[inline]
     pub fn pairs(&self) -> bool {
         matches!(self, Integrator::Path(_))
@@ -103,8 +103,8 @@ pub(crate) enum Surface<'a> {
 
 /// Applies the hit object's texture maps to its material (see [`Surface`]).
 /// Inlined is only the test for maps and the borrowed material of a hit
-/// without any, the common case: called, it cost the path tracer ~35
-/// instructions a vertex.
+/// without any, the common case, so that such a hit costs the path tracer
+/// no call.
 #[inline(always)]
 pub(crate) fn surface_at<'a>(
     scene: &'a Scene,
@@ -131,9 +131,9 @@ fn textured<'a>(scene: &'a Scene, ray: &Ray, hit: &Hit, depth: u32, st: &mut Pat
     let mut frame = scene.tex_frame(hit, ray, st.time, footprint);
     let (object, instance) = scene.object_ids(hit);
     let (incident, ng, pixel, view) = (ray.d.normalize(), hit.ng, st.pixel, st.view);
-    // Built apart and stored whole: the footprint read the camera axes back
-    // from the frame just after they were stored there, narrower than
-    // written, a load that waited for the stores to reach the cache.
+    // Built apart and stored whole: otherwise the footprint reads the camera
+    // axes back from the frame just after they were stored there, narrower
+    // than written, a load that waits for the stores to reach the cache.
     let mut ctx = ShadeCtx { incident, ng, object, instance, depth, pixel, view, ..ShadeCtx::default() };
     ctx.set_footprint(st.spread * st.travelled);
     frame.ctx = ctx;
@@ -160,8 +160,8 @@ fn textured<'a>(scene: &'a Scene, ray: &Ray, hit: &Hit, depth: u32, st: &mut Pat
 /// shadow ray. `None` when the light is behind the surface, black or blocked.
 /// Always inlined into its callers (the path tracer's light samples, the
 /// recursive tracer's per-light term): its result returned through memory
-/// was read back in wider loads than it was stored with, a stall per light
-/// sample.
+/// would be read back in wider loads than it was stored with, a stall per
+/// light sample.
 #[inline(always)]
 pub(crate) fn light_reaching_inline(
     scene: &Scene,

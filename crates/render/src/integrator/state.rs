@@ -67,7 +67,7 @@ impl PathState {
     /// position `screen` of pixel `pixel`, with its shutter `time`: what
     /// [`new`](Self::new) and [`for_pixel`](Self::for_pixel) give, keeping
     /// the counts, the spread and the view, without building the whole state
-    /// again (its copies cost the render loop ~30 instructions a sample). The
+    /// again (copies the render loop would pay for at every sample). The
     /// sampler is set by the caller, which draws the camera's dimensions
     /// from it first.
     #[inline]

@@ -49,8 +49,8 @@ pub struct LightMesh {
     total: f32,
     /// For a light of at most [`SCAN_TRIANGLES`], the spans' ends in blocks of four,
     /// the last padded with `+∞`: counted a block at a time in vector lanes
-    /// (one element at a time, ten triangles cost ~60 instructions a light
-    /// sample). A pad counts only for an infinite `target`, where the count
+    /// rather than one element at a time. A pad counts only for an infinite
+    /// `target`, where the count
     /// is clamped to the last triangle anyway.
     scan: Vec<[f32; 4]>,
     /// RGB radiance.
@@ -156,8 +156,8 @@ impl LightMesh {
 }
 
 /// How many of the blocks' values are at most `target`: a compare and a
-/// subtraction a block in SSE2 lanes (LLVM kept the scalar count's lanes
-/// apart, some 24 instructions a block).
+/// subtraction a block in SSE2 lanes (LLVM keeps a scalar count's lanes
+/// apart).
 #[inline(always)]
 fn count_at_most(blocks: &[[f32; 4]], target: f32) -> usize {
     #[cfg(target_arch = "x86_64")]

@@ -188,8 +188,8 @@ impl Light {
     /// sampled where it is then). Area and environment lights draw one 2D sample from
     /// `sampler`; the others draw none, so adding them changes no other
     /// light's samples. `None` when no light arrives. Always inlined: a
-    /// sample returned through memory was read back in wide loads before
-    /// its narrow stores had landed (a stall in every caller's profile).
+    /// sample returned through memory would be read back in wide loads
+    /// before its narrow stores had landed, a stall in every caller.
     #[inline(always)]
     pub fn sample(
         &self,
@@ -204,9 +204,8 @@ impl Light {
 
     /// [`sample`](Self::sample) at a surface point of normal `n`. The
     /// `Some(n)` that only the environment reads is made in its arm: made by
-    /// the caller, it was stored to memory before every light's match (the
-    /// environment's sampler takes it by reference), ~6 instructions a light
-    /// sample.
+    /// the caller, it would be stored to memory before every light's match
+    /// (the environment's sampler takes it by reference).
     #[inline(always)]
     pub fn sample_at(
         &self,

@@ -213,7 +213,6 @@ fn render_tiles(
     let spread = camera.pixel_spread();
     let view = camera.view();
     let uses_time = scene.uses_shutter_time();
-    let pairs = integrator.pairs();
     let mut origins = tile_origins(w, h);
     if let Some(sel) = opts.tiles {
         origins = origins
@@ -239,64 +238,23 @@ fn render_tiles(
                 break;
             }
         }
-        let samples = taken..taken + n;
         // One tile per rayon job: with rayon's default splitting a worker
         // runs a run of hundreds of neighbouring tiles as one job, and on a
         // scene whose cost sits in a few rows (one object in the middle of
-        // the frame) the other worker idles through that job's tail: 77% of
-        // the samples on one of two threads for hw4 sphere_perlin_bump.
+        // the frame, as in hw4 sphere_perlin_bump) the other worker would
+        // idle through that job's tail.
+        let pass = Pass {
+            scene,
+            integrator,
+            look: Look { camera, spp, uses_time, w, h },
+            seed: opts.seed,
+            spread,
+            view,
+            samples: taken..taken + n,
+            failed,
+        };
         tiles.par_iter_mut().with_max_len(1).for_each(|(tile, stats)| {
-            if taken == 0 {
-                // Written first: see `Tile::clear`.
-                tile.clear();
-            }
-            let (x0, y0, x1, y1) = tile.bounds();
-            // One state for the tile, readied per sample: the view, spread
-            // and counts carry over.
-            let first = PixelSampler::new(opts.seed, x0, y0, 0, spp);
-            let mut st = PathState::new(*stats, 0.0, first).for_pixel(Vec2::ZERO, spread);
-            st.view = view;
-            // The second of two samples traced together (see
-            // `Integrator::radiance_pair`); its counts join the tile's.
-            let mut st2 = PathState::new(RayStats::default(), 0.0, first).for_pixel(Vec2::ZERO, spread);
-            st2.view = view;
-            let look = Look { camera, spp, uses_time, w, h };
-            'rows: for y in y0..y1 {
-                if stop() {
-                    break;
-                }
-                for x in x0..x1 {
-                    st.sampler = PixelSampler::new(opts.seed, x, y, 0, spp).batched(samples.clone());
-                    st2.sampler = st.sampler;
-                    let mut s = samples.start;
-                    // Two samples at a time where the integrator follows
-                    // two paths in step, added in their order.
-                    while pairs && s + 1 < samples.end {
-                        let (ra, jxa, jya) = look.sample(&mut st, x, y, s);
-                        let (rb, jxb, jyb) = look.sample(&mut st2, x, y, s + 1);
-                        let [la, lb] = integrator.radiance_pair(scene, [&ra, &rb], &mut st, &mut st2);
-                        tile.add_sample(x, y, jxa, jya, la);
-                        tile.add_sample(x, y, jxb, jyb, lb);
-                        if let Some(e) = st.error.take().or_else(|| st2.error.take()) {
-                            let _ = failed.set(e);
-                            break 'rows;
-                        }
-                        s += 2;
-                    }
-                    while s < samples.end {
-                        let (ray, jx, jy) = look.sample(&mut st, x, y, s);
-                        s += 1;
-                        let l = integrator.radiance(scene, &ray, &mut st);
-                        tile.add_sample(x, y, jx, jy, l);
-                        if let Some(e) = st.error.take() {
-                            let _ = failed.set(e);
-                            break 'rows;
-                        }
-                    }
-                }
-            }
-            st.stats.add(&st2.stats);
-            *stats = st.stats;
+            pass.tile(tile, stats, &stop);
             on_tile(tile.len() as u64 * u64::from(n));
         });
         taken += n;
@@ -310,14 +268,88 @@ fn render_tiles(
     }
     let film = merged(w, h, &tiles, pixels);
     drop(tiles);
-    // Unmapping the accumulators' ~10 MB (an 800×800 film) took ~1 ms on the
-    // thread that goes on to encode the image: a free worker does it. On
+    // Unmapping the accumulators would hold up the thread that goes on to
+    // encode the image: a free worker does it. On
     // one thread it would wait for the end of the command, every camera's
     // store held till then.
     if rayon::current_num_threads() > 1 {
         rayon::spawn(move || drop(store));
     }
     RenderedImage { film, stats, spp: taken }
+}
+
+/// What the tiles of one pass share: the scene, the integrator, the camera
+/// and the range of samples this pass takes of every pixel.
+struct Pass<'a> {
+    scene: &'a Scene,
+    integrator: Integrator,
+    look: Look<'a>,
+    seed: u32,
+    spread: f32,
+    view: crate::texture::View,
+    samples: std::ops::Range<u32>,
+    /// The first shader failure of the render (see [`render_tiles`]).
+    failed: &'a OnceLock<Box<ShaderError>>,
+}
+
+impl Pass<'_> {
+    /// Takes this pass's samples of every pixel of `tile`, adding the rays
+    /// traced to `stats`; between rows, stops once `stop` says so.
+    fn tile(&self, tile: &mut Tile, stats: &mut RayStats, stop: &impl Fn() -> bool) {
+        let (scene, integrator, look, samples) = (self.scene, self.integrator, &self.look, &self.samples);
+        let (seed, spp) = (self.seed, look.spp);
+        if samples.start == 0 {
+            // Written first: see `Tile::clear`.
+            tile.clear();
+        }
+        let (x0, y0, x1, y1) = tile.bounds();
+        // One state for the tile, readied per sample: the view, spread
+        // and counts carry over.
+        let first = PixelSampler::new(seed, x0, y0, 0, spp);
+        let mut st = PathState::new(*stats, 0.0, first).for_pixel(Vec2::ZERO, self.spread);
+        st.view = self.view;
+        // The second of two samples traced together (see
+        // `Integrator::radiance_pair`); its counts join the tile's.
+        let mut st2 = PathState::new(RayStats::default(), 0.0, first).for_pixel(Vec2::ZERO, self.spread);
+        st2.view = self.view;
+        let pairs = integrator.pairs();
+        'rows: for y in y0..y1 {
+            if stop() {
+                break;
+            }
+            for x in x0..x1 {
+                st.sampler = PixelSampler::new(seed, x, y, 0, spp).batched(samples.clone());
+                st2.sampler = st.sampler;
+                let mut s = samples.start;
+                // Two samples at a time where the integrator follows
+                // two paths in step, added in their order.
+                while pairs && s + 1 < samples.end {
+                    let (ra, jxa, jya) = look.sample(&mut st, x, y, s);
+                    let (rb, jxb, jyb) = look.sample(&mut st2, x, y, s + 1);
+                    let [la, lb] = integrator.radiance_pair(scene, [&ra, &rb], &mut st, &mut st2);
+                    tile.add_sample(x, y, jxa, jya, la);
+                    tile.add_sample(x, y, jxb, jyb, lb);
+                    if let Some(e) = st.error.take().or_else(|| st2.error.take()) {
+                        let _ = self.failed.set(e);
+                        break 'rows;
+                    }
+                    s += 2;
+                }
+                while s < samples.end {
+                    let (ray, jx, jy) = look.sample(&mut st, x, y, s);
+                    s += 1;
+                    let l = integrator.radiance(scene, &ray, &mut st);
+                    tile.add_sample(x, y, jx, jy, l);
+                    if let Some(e) = st.error.take() {
+                        let _ = self.failed.set(e);
+                        break 'rows;
+                    }
+                }
+            }
+        }
+        st.stats.add(&st2.stats);
+        *stats = st.stats;
+    }
 }
 
 /// What a camera sample needs of the camera being rendered.
@@ -332,8 +364,8 @@ struct Look<'a> {
 impl Look<'_> {
     /// Draws the camera's dimensions of sample `s` of pixel `(x, y)` and
     /// readies `st` for it: the camera ray and the pixel jitter. Inlined
-    /// into the render loop: called, it cost the recursive tracer's hw4
-    /// scenes ~12% (their samples are cheap).
+    /// into the render loop: a call would weigh on scenes whose samples are
+    /// cheap (the recursive tracer's hw4 scenes).
     #[inline(always)]
     fn sample(&self, st: &mut PathState, x: u32, y: u32, s: u32) -> (Ray, f32, f32) {
         st.sampler.restart(s);
@@ -343,7 +375,7 @@ impl Look<'_> {
         // dimension for nothing.
         let lens = if self.camera.has_lens() { sampler.next_2d() } else { (0.5, 0.5) };
         // A scene where the time changes nothing skips its draw; the later
-        // draws stay where they were.
+        // draws keep their dimensions.
         let time = if self.uses_time {
             sampler.next_1d()
         } else {
@@ -360,9 +392,9 @@ impl Look<'_> {
 
 /// The `w`×`h` film of `tiles`, which are in the row-major order of
 /// [`tile_origins`]. Filled in parallel, a band of tile rows per job: done
-/// serially, zeroing an 800×800 film (faulting its pages in) and copying the
-/// tiles into it took ~10 ms on one thread after the render had ended, the
-/// largest serial part of a small render. Each pixel is written by its one
+/// serially, zeroing the film (faulting its pages in) and copying the tiles
+/// into it after the render had ended would be the largest serial part of
+/// a small render. Each pixel is written by its one
 /// tile, so the bytes are those of a serial merge. `zeroed`, of the film's
 /// size, is used instead of a new buffer (memory written ahead,
 /// [`FilmReserve`]).
@@ -388,9 +420,7 @@ fn merged(w: u32, h: u32, tiles: &[(Tile, RayStats)], zeroed: Option<Vec<Vec3>>)
 /// at most an eighth of `spp` (or `floor`, where that is more), never past
 /// it. A plain render (`floor` above 1) leaves no last pass too short for
 /// the sampler to batch ([`MIN_BATCH_RUN`]) after its first: 4 samples
-/// were passes of 1, 1 and 2, none batched, so every camera sample of a
-/// 4-sample render (the shader benches) drew its pixel position and
-/// shutter time alone; they are now passes of 1 and 3.
+/// make passes of 1 and 3, not 1, 1 and 2, none of which would be batched.
 fn pass_size(taken: u32, spp: u32, floor: u32) -> u32 {
     let cap = spp.div_ceil(8).max(floor);
     let n = taken.max(1).min(cap).min(spp - taken);
@@ -409,7 +439,7 @@ fn pass_size(taken: u32, spp: u32, floor: u32) -> u32 {
 /// How long a pass may always grow when nobody watches the passes (only
 /// `--time` and the ETA use them): a pixel's samples of one pass are what
 /// the sampler batches (sixteen lanes, runs of three or more), and an
-/// eighth of 16 or 100 samples (passes of 2 or 13) left its lanes idle. A
+/// eighth of 16 or 100 samples (passes of 2 or 13) would leave its lanes idle. A
 /// preview (`luster watch`) keeps its finer steps.
 const BATCH_PASS: u32 = 16;
 

@@ -115,7 +115,7 @@ pub struct TexFrame {
     /// Whether [`p_rest`](Self::p_rest) is in object space (meshes) rather
     /// than world space: a Perlin bump then tilts the object-space normal,
     /// and an image bump displaces the object-space surface (otherwise the
-    /// world-space one, see `bump.rs`).
+    /// world-space one, see `bump/mod.rs`).
     pub rest_in_object: bool,
     /// Object-space ∂p/∂u.
     pub dpdu: Vec3,
@@ -301,8 +301,7 @@ impl Textures {
     /// or checkerboard colour. The references pin down where each pattern
     /// lives: Perlin noise at the position at rest (hw4 `ellipsoids_texture`:
     /// the noise on a squashed sphere is not squashed), the checkerboard in
-    /// object space (hw4 `VeachAjar`, whose floor is scaled by 1.8 along x:
-    /// 41.6 dB this way, 16.4 dB in world space).
+    /// object space (hw4 `VeachAjar`, whose floor is scaled by 1.8 along x).
     pub fn at(&self, texture: &Texture, f: &TexFrame, lod: f32) -> Vec3 {
         let p = match texture {
             Texture::Checkerboard(_) => f.p_object,
@@ -389,10 +388,10 @@ impl Textures {
     /// [`Textures::apply`] for one map that is not a shader: `Some` colour
     /// for `replace_all`.
     ///
-    /// Out of line on purpose: inlined into the loop of `apply`, LLVM hoisted
+    /// Out of line on purpose: inlined into the loop of `apply`, LLVM hoists
     /// this arm's set-up (the mipmap level's `|∂p/∂u × ∂p/∂v|` and its square
     /// root, the frame's fields) in front of the loop, so a point with only
-    /// shader maps paid for it too, about 75 instructions a hit.
+    /// shader maps would pay for it too.
     #[inline(never)]
     fn apply_map(&self, map: &TextureMap, f: &TexFrame, m: &mut Material, n: &mut Vec3) -> Option<Vec3> {
         let lod = self.lod(&map.texture, f);

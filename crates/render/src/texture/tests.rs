@@ -165,7 +165,7 @@ fn zero_bump_factor_leaves_the_normal_unchanged() {
 
 /// An image bump under a non-uniform, mirroring scale: spheres displace
 /// their world-space surface, meshes their object-space one (as the course's
-/// hw4 `bump_mapping_transformed` shows; see `bump.rs`).
+/// hw4 `bump_mapping_transformed` shows; see `bump/mod.rs`).
 #[test]
 fn image_bumps_displace_spheres_in_world_space_and_meshes_in_object_space() {
     let img = Image::from_rgb8(2, 2, vec![[0, 0, 0], [255, 255, 255], [90, 10, 30], [7, 200, 100]]).unwrap();

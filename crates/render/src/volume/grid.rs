@@ -1,7 +1,7 @@
 //! A script's density (or emission) baked on a regular grid over the bound's
 //! box, looked up trilinearly: the option `GridResolution` trades detail
-//! finer than a cell and the bake for a lookup that costs a few nanoseconds
-//! instead of a Lua call and the noise behind it.
+//! finer than a cell and the bake for a cheap lookup instead of a Lua call
+//! and the noise behind it.
 //!
 //! Samples sit on the `n × n × n` lattice of points spanning the box,
 //! corners included, so a field that is linear across a cell is reproduced

@@ -257,30 +257,7 @@ impl Volumes {
         baking: &Baking,
     ) -> Result<Volumes, SceneError> {
         let err = |v: &VolumeDesc, msg: String| SceneError::at(&desc.file, &v.loc, msg);
-        // Script k of the set belongs to the k-th volume with a script.
-        let mut sources = Vec::new();
-        // (volume index, shader name) of each source.
-        let mut owners = Vec::new();
-        for (i, v) in desc.volumes.iter().enumerate() {
-            if let Some(s) = &v.script {
-                let name = shader_name(&s.path);
-                owners.push((i, name.clone()));
-                let mut src = ShaderSource::new(name, s.path.clone(), s.code.clone());
-                src.params = s.params.clone();
-                sources.push(src);
-            }
-        }
-        let shaders = if sources.is_empty() {
-            None
-        } else {
-            Some(ShaderSet::with_modules(sources, timeout, images, desc.module_search_path()).map_err(
-                |e| {
-                    // The set names the failing shader; find its volume for the location.
-                    let at = owners.iter().find(|(_, n)| *n == e.shader).map_or(owners[0].0, |o| o.0);
-                    err(&desc.volumes[at], e.to_string())
-                },
-            )?)
-        };
+        let shaders = compile_scripts(desc, images, timeout)?;
         let mut out = Volumes { media: Vec::new(), surfaces: Vec::new(), shaders: None };
         let mut next_script = 0;
         for (index, v) in desc.volumes.iter().enumerate() {
@@ -306,28 +283,7 @@ impl Volumes {
                     ));
                 }
             }
-            let per_bound =
-                if matches!(v.kind, VolumeKind::Surface { .. }) { SURFACE_STEPS } else { MEDIUM_STEPS };
-            if !bound.diagonal().is_finite() || bound.diagonal() > MAX_EXTENT {
-                return Err(err(
-                    v,
-                    format!(
-                        "its box is {:.3e} across; at most {MAX_EXTENT:e} is supported (f32 positions that far out cannot be marched)",
-                        bound.diagonal()
-                    ),
-                ));
-            }
-            let step = v.step.unwrap_or(bound.diagonal() / per_bound);
-            let count = bound.diagonal() / step;
-            if count.is_nan() || count > MAX_STEPS {
-                return Err(err(
-                    v,
-                    format!(
-                        "<StepSize> {step} would take more than {MAX_STEPS} steps across the volume (its box is {:.3} across)",
-                        bound.diagonal()
-                    ),
-                ));
-            }
+            let step = march_step(v, &bound).map_err(|m| err(v, m))?;
             let kind = match &v.kind {
                 VolumeKind::Medium { absorption, scattering, emission, anisotropy, octaves } => {
                     let glow = match (script, &shaders) {
@@ -384,6 +340,60 @@ impl Volumes {
         out.shaders = shaders;
         Ok(out)
     }
+}
+
+/// The volumes' density scripts as one set (script k is the k-th volume
+/// with a script), or `None` when no volume has one.
+fn compile_scripts(
+    desc: &Description,
+    images: Option<ShaderImages>,
+    timeout: Duration,
+) -> Result<Option<ShaderSet>, SceneError> {
+    let err = |v: &VolumeDesc, msg: String| SceneError::at(&desc.file, &v.loc, msg);
+    // Script k of the set belongs to the k-th volume with a script.
+    let mut sources = Vec::new();
+    // (volume index, shader name) of each source.
+    let mut owners = Vec::new();
+    for (i, v) in desc.volumes.iter().enumerate() {
+        if let Some(s) = &v.script {
+            let name = shader_name(&s.path);
+            owners.push((i, name.clone()));
+            let mut src = ShaderSource::new(name, s.path.clone(), s.code.clone());
+            src.params = s.params.clone();
+            sources.push(src);
+        }
+    }
+    Ok(if sources.is_empty() {
+        None
+    } else {
+        Some(ShaderSet::with_modules(sources, timeout, images, desc.module_search_path()).map_err(|e| {
+            // The set names the failing shader; find its volume for the location.
+            let at = owners.iter().find(|(_, n)| *n == e.shader).map_or(owners[0].0, |o| o.0);
+            err(&desc.volumes[at], e.to_string())
+        })?)
+    })
+}
+
+/// The marching step of `v` (its `StepSize`, or a fraction of its box's
+/// diagonal), refused where its box is too large to march in `f32` or the
+/// step would need too many steps to cross it.
+fn march_step(v: &VolumeDesc, bound: &Bound) -> Result<f32, String> {
+    let per_bound = if matches!(v.kind, VolumeKind::Surface { .. }) { SURFACE_STEPS } else { MEDIUM_STEPS };
+    if !bound.diagonal().is_finite() || bound.diagonal() > MAX_EXTENT {
+        return Err(format!(
+            "its box is {:.3e} across; at most {MAX_EXTENT:e} is supported (f32 positions that far out cannot be marched)",
+            bound.diagonal()
+        ));
+    }
+    let step = v.step.unwrap_or(bound.diagonal() / per_bound);
+    let count = bound.diagonal() / step;
+    if count.is_nan() || count > MAX_STEPS {
+        return Err(format!(
+            "<StepSize> {step} would take more than {MAX_STEPS} steps across the volume (its box is {:.3} across)",
+            bound.diagonal()
+        ));
+    }
+    Ok(step)
 }
 
 impl Volume {

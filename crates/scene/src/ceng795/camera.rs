@@ -27,7 +27,7 @@ use crate::description::{CameraDesc, LightSamples, PathParamsDesc, Projection, R
 use crate::element::{Element, Reader};
 use crate::error::SceneError;
 use luster_core::image::outputs::{file_key, plan_outputs};
-use luster_core::math::Transform;
+use luster_core::math::{Transform, Vec3};
 use std::path::{Component, Path};
 
 /// Largest accepted image side, and pixel count: a scene asking for more is a
@@ -109,7 +109,54 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
     if up.length_squared() == 0.0 {
         return Err(r.err(c, "the camera's <Up> vector is zero"));
     }
-    let projection = if look_at {
+    let projection = projection(r, c, position, look_at, w)?;
+    let nd = r.required(c, "NearDistance")?;
+    let near_distance = r.float(nd)?;
+    if near_distance <= 0.0 {
+        return Err(r.err(nd, format!("<NearDistance> must be positive, found {near_distance}")));
+    }
+    let resolution = resolution(r, c)?;
+    let name_el = r.required(c, "ImageName")?;
+    let image_name = name_el.text.trim().to_string();
+    check_image_name(r, name_el, &image_name)?;
+    let num_samples = match c.child("NumSamples") {
+        Some(ns) => {
+            let n = r.uint(ns)?;
+            if n == 0 || n > 1 << 20 {
+                return Err(r.err(ns, format!("<NumSamples> must be between 1 and {}, found {n}", 1 << 20)));
+            }
+            n
+        }
+        None => 1,
+    };
+    let (aperture_size, focus_distance) = lens(r, c, near_distance)?;
+    Ok(CameraDesc {
+        id: c.attr("id").unwrap_or("").to_string(),
+        position,
+        up,
+        projection,
+        near_distance,
+        resolution,
+        image_name,
+        tonemaps: super::tonemap::read_all(r, c, w)?,
+        num_samples,
+        aperture_size,
+        focus_distance,
+        renderer: renderer(r, c)?,
+        loc: c.loc.clone(),
+    })
+}
+
+/// The camera's view: a look-at camera's `GazePoint` (or `Gaze`) and `FovY`,
+/// or a simple camera's `Gaze` and `NearPlane`.
+fn projection(
+    r: &Reader,
+    c: &Element,
+    position: Vec3,
+    look_at: bool,
+    w: &mut Warnings,
+) -> Result<Projection, SceneError> {
+    Ok(if look_at {
         // The 2022 course files give look-at cameras a <Gaze> direction
         // instead of a <GazePoint>; both name the same view.
         let gaze_point = match (c.child("GazePoint"), c.child("Gaze")) {
@@ -152,12 +199,11 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
             return Err(r.err(np, "<NearPlane> has zero width or height"));
         }
         Projection::Plane { gaze, near_plane: [v[0], v[1], v[2], v[3]] }
-    };
-    let nd = r.required(c, "NearDistance")?;
-    let near_distance = r.float(nd)?;
-    if near_distance <= 0.0 {
-        return Err(r.err(nd, format!("<NearDistance> must be positive, found {near_distance}")));
-    }
+    })
+}
+
+/// `ImageResolution`: two positive integers within the supported size.
+fn resolution(r: &Reader, c: &Element) -> Result<(u32, u32), SceneError> {
     let res_el = r.required(c, "ImageResolution")?;
     let res = r.floats_n(res_el, 2)?;
     let (wpx, hpx) = (res[0], res[1]);
@@ -172,19 +218,12 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
             format!("<ImageResolution> {wpx}x{hpx} is beyond the supported {MAX_SIDE} pixels a side and {MAX_PIXELS} pixels in all"),
         ));
     }
-    let name_el = r.required(c, "ImageName")?;
-    let image_name = name_el.text.trim().to_string();
-    check_image_name(r, name_el, &image_name)?;
-    let num_samples = match c.child("NumSamples") {
-        Some(ns) => {
-            let n = r.uint(ns)?;
-            if n == 0 || n > 1 << 20 {
-                return Err(r.err(ns, format!("<NumSamples> must be between 1 and {}, found {n}", 1 << 20)));
-            }
-            n
-        }
-        None => 1,
-    };
+    Ok((wpx as u32, hpx as u32))
+}
+
+/// `ApertureSize` (0: a pinhole) and `FocusDistance` (needed with an
+/// aperture; the near distance otherwise).
+fn lens(r: &Reader, c: &Element, near_distance: f32) -> Result<(f32, f32), SceneError> {
     let aperture_size = r.float_or(c, "ApertureSize", 0.0)?;
     if aperture_size < 0.0 {
         return Err(r.err(c, format!("<ApertureSize> must not be negative, found {aperture_size}")));
@@ -200,21 +239,7 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
         None if aperture_size > 0.0 => return Err(r.err(c, "<ApertureSize> needs a <FocusDistance>")),
         None => near_distance,
     };
-    Ok(CameraDesc {
-        id: c.attr("id").unwrap_or("").to_string(),
-        position,
-        up,
-        projection,
-        near_distance,
-        resolution: (wpx as u32, hpx as u32),
-        image_name,
-        tonemaps: super::tonemap::read_all(r, c, w)?,
-        num_samples,
-        aperture_size,
-        focus_distance,
-        renderer: renderer(r, c)?,
-        loc: c.loc.clone(),
-    })
+    Ok((aperture_size, focus_distance))
 }
 
 /// Moves every camera of `cams` (read by [`read_all`], in the same order) by

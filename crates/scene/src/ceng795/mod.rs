@@ -38,7 +38,7 @@ use super::element::{Element, Reader};
 use super::error::{SceneError, Warning};
 use luster_core::math::Vec3;
 use std::collections::HashMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Deepest recursion accepted. The integrator recurses once per bounce, so a
 /// depth in the thousands overflows a worker's stack between two mirrors; the
@@ -93,40 +93,9 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
             "Display",
         ],
     );
-    let display = match root.child("Display") {
-        Some(el) => luster_core::tonemap::Display::parse(&el.text).ok_or_else(|| {
-            r.err(
-                el,
-                format!(
-                    "<Display> names a display transform luster does not know (expected {})",
-                    luster_core::tonemap::Display::NAMES
-                ),
-            )
-        })?,
-        None => luster_core::tonemap::Display::Course,
-    };
-    let max_recursion_depth = match root.child("MaxRecursionDepth") {
-        Some(el) => {
-            let d = r.uint(el)?;
-            if d > MAX_RECURSION_DEPTH {
-                return Err(r.err(
-                    el,
-                    format!("<MaxRecursionDepth> {d} is more than the {MAX_RECURSION_DEPTH} supported"),
-                ));
-            }
-            d
-        }
-        None => 6,
-    };
-    let shadow_ray_epsilon = r.float_or(root, "ShadowRayEpsilon", 1e-3)?;
-    let intersection_test_epsilon = r.float_or(root, "IntersectionTestEpsilon", 1e-6)?;
-    for (name, v) in
-        [("ShadowRayEpsilon", shadow_ray_epsilon), ("IntersectionTestEpsilon", intersection_test_epsilon)]
-    {
-        if v < 0.0 {
-            return Err(r.err(root.child(name).unwrap_or(root), format!("<{name}> must not be negative")));
-        }
-    }
+    let display = display(&r, root)?;
+    let max_recursion_depth = max_recursion_depth(&r, root)?;
+    let (shadow_ray_epsilon, intersection_test_epsilon) = epsilons(&r, root)?;
 
     let mut cameras = match root.child("Cameras") {
         Some(c) => camera::read_all(&r, c, &mut w)?,
@@ -161,14 +130,7 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
         None => Vec::new(),
     };
     let base_dir = file.parent().map(Path::to_path_buf).unwrap_or_default();
-    let mut shader_libraries = Vec::new();
-    for lib in root.children_named("ShaderLibrary") {
-        let rel = lib.text.trim();
-        if rel.is_empty() {
-            return Err(r.err(lib, "<ShaderLibrary> names no folder"));
-        }
-        shader_libraries.push(base_dir.join(rel));
-    }
+    let shader_libraries = shader_libraries(&r, root, &base_dir)?;
     let (mut images, mut texture_maps) = match root.child("Textures") {
         Some(t) => textures::read_all(&r, t, &base_dir, &mut w)?,
         None => (Vec::new(), Vec::new()),
@@ -247,4 +209,64 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
         display,
         warnings: w.0,
     })
+}
+
+/// `<Display>`: the display transform of the 8-bit images (`course` when absent).
+fn display(r: &Reader, root: &Element) -> Result<luster_core::tonemap::Display, SceneError> {
+    Ok(match root.child("Display") {
+        Some(el) => luster_core::tonemap::Display::parse(&el.text).ok_or_else(|| {
+            r.err(
+                el,
+                format!(
+                    "<Display> names a display transform luster does not know (expected {})",
+                    luster_core::tonemap::Display::NAMES
+                ),
+            )
+        })?,
+        None => luster_core::tonemap::Display::Course,
+    })
+}
+
+/// `<MaxRecursionDepth>` (6 when absent), within [`MAX_RECURSION_DEPTH`].
+fn max_recursion_depth(r: &Reader, root: &Element) -> Result<u32, SceneError> {
+    Ok(match root.child("MaxRecursionDepth") {
+        Some(el) => {
+            let d = r.uint(el)?;
+            if d > MAX_RECURSION_DEPTH {
+                return Err(r.err(
+                    el,
+                    format!("<MaxRecursionDepth> {d} is more than the {MAX_RECURSION_DEPTH} supported"),
+                ));
+            }
+            d
+        }
+        None => 6,
+    })
+}
+
+/// `<ShadowRayEpsilon>` and `<IntersectionTestEpsilon>`, neither negative.
+fn epsilons(r: &Reader, root: &Element) -> Result<(f32, f32), SceneError> {
+    let shadow_ray_epsilon = r.float_or(root, "ShadowRayEpsilon", 1e-3)?;
+    let intersection_test_epsilon = r.float_or(root, "IntersectionTestEpsilon", 1e-6)?;
+    for (name, v) in
+        [("ShadowRayEpsilon", shadow_ray_epsilon), ("IntersectionTestEpsilon", intersection_test_epsilon)]
+    {
+        if v < 0.0 {
+            return Err(r.err(root.child(name).unwrap_or(root), format!("<{name}> must not be negative")));
+        }
+    }
+    Ok((shadow_ray_epsilon, intersection_test_epsilon))
+}
+
+/// `<ShaderLibrary>` folders, relative to the scene file's folder.
+fn shader_libraries(r: &Reader, root: &Element, base_dir: &Path) -> Result<Vec<PathBuf>, SceneError> {
+    let mut shader_libraries = Vec::new();
+    for lib in root.children_named("ShaderLibrary") {
+        let rel = lib.text.trim();
+        if rel.is_empty() {
+            return Err(r.err(lib, "<ShaderLibrary> names no folder"));
+        }
+        shader_libraries.push(base_dir.join(rel));
+    }
+    Ok(shader_libraries)
 }

@@ -69,7 +69,7 @@ local cell = ffi.new("luster_cell")
 ---------------------------------------------------------------------------
 -- The deadline. Instrumented user code calls tick() in every loop body and
 -- function entry (see instrument.rs); the clock is read every TICKS ticks.
--- A clock read costs about 25 ns, so 256 ticks make it ~0.1 ns per tick,
+-- A clock read is far dearer than a tick: spread over TICKS ticks it is cheap,
 -- while a loop whose body makes slow library calls (string.rep of megabytes)
 -- still overshoots the deadline by well under a second.
 ---------------------------------------------------------------------------
@@ -930,7 +930,7 @@ end
 -- leaving it stores the closure back into its frame slot as two 32-bit
 -- halves, which the interpreter then reads as one 64-bit value: a load the
 -- store buffer cannot forward, so it waits for every pending store (the
--- shading point Rust just wrote among them) to reach the cache, about 3 ns
+-- shading point Rust just wrote among them) to reach the cache: most of the time
 -- of an empty call. The trampoline reaches the wrapper through a table,
 -- which LuaJIT never makes a constant, so its own slot is left alone; a
 -- chunk of its own gives each wrapper its own prototype, hence its own

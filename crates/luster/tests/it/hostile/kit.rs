@@ -1,4 +1,4 @@
-//! The case language of the hostile-input corpus (`tests/hostile.rs`): a case
+//! The case language of the hostile-input corpus (`hostile.rs`): a case
 //! is a few files written into a fresh folder (text, bytes, FIFOs, links to
 //! devices, sparse files of absurd size), the command line to run there, and
 //! what the one-line error must say.

@@ -124,6 +124,19 @@ fn thumb(h: &mut String, full: Option<&str>, thumb: Option<&str>, alt: &str, mis
 }
 
 fn image_cells(h: &mut String, scene: &SceneEntry, img: &ImageEntry) {
+    thumb_cells(h, img);
+    metric_cells(h, img);
+    let _ = write!(
+        h,
+        "<td class=\"num\" title=\"load and build {}\">{}</td>",
+        seconds(scene.setup_seconds),
+        seconds(img.seconds)
+    );
+    threshold_cell(h, img);
+}
+
+/// Our render, the expected image (with their HDR previews) and the heatmap.
+fn thumb_cells(h: &mut String, img: &ImageEntry) {
     let hdr = img.hdr.as_ref();
     let hdr_thumbs = hdr.and_then(|x| x.thumbs.as_ref());
     thumb(h, img.render.as_deref(), img.thumbs.render.as_deref(), "our render", "not rendered");
@@ -140,6 +153,11 @@ fn image_cells(h: &mut String, scene: &SceneEntry, img: &ImageEntry) {
         hdr_thumb(h, exp, theirs);
     }
     thumb(h, img.heatmap.as_deref(), img.thumbs.heatmap.as_deref(), "LDR-FLIP heatmap", "no heatmap");
+}
+
+/// PSNR, SSIM, FLIP and the differing pixels, or why nothing was compared.
+fn metric_cells(h: &mut String, img: &ImageEntry) {
+    let hdr = img.hdr.as_ref();
     match &img.metrics {
         Some(m) => {
             let psnr = match m.psnr {
@@ -190,12 +208,10 @@ fn image_cells(h: &mut String, scene: &SceneEntry, img: &ImageEntry) {
             let _ = write!(h, "<td colspan=\"4\">{text}</td>");
         }
     }
-    let _ = write!(
-        h,
-        "<td class=\"num\" title=\"load and build {}\">{}</td>",
-        seconds(scene.setup_seconds),
-        seconds(img.seconds)
-    );
+}
+
+/// The bar the image was judged by, with the numbers it was judged on.
+fn threshold_cell(h: &mut String, img: &ImageEntry) {
     let t = &img.threshold;
     // A noise-aware bar is judged against our own pair of renders: show the
     // pair's numbers under it, so the noise can be seen beside the bar.

@@ -63,7 +63,7 @@ const STACK: usize = (WIDTH - 1) * (SAH_MAX_DEPTH + 33) + 1;
 /// can mark its body `#[inline(always)]`: a closure's body is its own
 /// function, compiled for the CPU features of the function it is written
 /// in, and once LLVM stops inlining it into a bigger AVX2 caller its SIMD
-/// code stays out of line (see `docs/performance.md`, session 11).
+/// code stays out of line.
 pub(crate) trait ClosestLeaf {
     /// Tests one leaf.
     fn test(&mut self, range: Range<usize>, t_max: &mut f32) -> bool;
@@ -82,7 +82,7 @@ pub(crate) trait AnyLeaf {
 /// that needs no transform) prepares them once for all of them: the same
 /// values, so the same boxes entered. Kept small (four vectors and a few
 /// bits): each traversal broadcasts what its node test needs into its own
-/// registers, where a prepared copy of the broadcasts went through the
+/// registers, where a prepared copy of the broadcasts would go through the
 /// stack at every query.
 #[derive(Clone, Copy)]
 pub(crate) struct Traversal {
@@ -214,8 +214,8 @@ impl Bvh {
     /// objects: a mesh's own traversal or an analytic shape costs several
     /// node visits, so the SAH splits down to small leaves and a ray tests
     /// only the objects whose boxes it crosses. (Priced like a triangle, the
-    /// eight objects of a Cornell box made one leaf, and every ray tested
-    /// all of them.)
+    /// eight objects of a Cornell box would make one leaf, and every ray
+    /// would test all of them.)
     pub fn build_objects(prim_bounds: &[Aabb]) -> Bvh {
         Bvh::build_costed(prim_bounds.len(), &|i| prim_bounds[i], 1, OBJECT_COST)
     }

@@ -95,8 +95,7 @@ pub(super) struct SignedRoot {
     rows: [[[f32; WIDTH]; 6]; 8],
     /// The root's children ([`Node8::child`]), copied (and copied again where
     /// the leaves are renumbered) so that the walk reads this one block
-    /// and tests no node count: reading `nodes[0]` as well gave back most
-    /// of the gain.
+    /// and tests no node count, without reading `nodes[0]` as well.
     pub(super) child: [u32; WIDTH],
 }
 
@@ -139,8 +138,8 @@ pub(super) fn decode(r: u32) -> Child {
 
 /// Ray data the node test needs, computed once per traversal. Kept as
 /// vectors, not arrays: the traversals broadcast them from registers, where
-/// arrays went through the stack and their reloads, wider than the stores
-/// that wrote them, waited for those stores to retire.
+/// arrays would go through the stack and their reloads, wider than the
+/// stores that wrote them, would wait for those stores to retire.
 #[derive(Clone, Copy)]
 pub(super) struct RayPre {
     o: Vec3A,
@@ -175,10 +174,10 @@ impl RayPre {
         // large next to the result. A margin of two ulps, taken outwards,
         // covers it and the rounding of the margin itself; the relative
         // errors left are the ones `SLAB_EXPAND` already covers.
-        // Read a lane at a time: `Vec3A::from` loaded `o` and `d.x` as one
-        // 16-byte word, and the callers write a ray field by field (`x, y`,
-        // then `z`, then the direction), so that load waited for those
-        // stores to retire: 10% of a shadow ray's time on the hw7 box.
+        // Read a lane at a time: `Vec3A::from` would load `o` and `d.x` as
+        // one 16-byte word, and the callers write a ray field by field (`x, y`,
+        // then `z`, then the direction), so that load would wait for those
+        // stores to retire.
         // SAFETY: reads of the fields of `ray`.
         let lane = |x: &f32| unsafe { std::ptr::read_volatile(x) };
         let o = Vec3A::new(lane(&ray.o.x), lane(&ray.o.y), lane(&ray.o.z));
@@ -329,9 +328,8 @@ impl NodeTest {
 
 /// The fused test's per-ray constants, broadcast to eight lanes once per
 /// traversal rather than at every node, with the near and far rows as
-/// offsets into a node. Before, each node test re-broadcast them from the
-/// [`RayPre`] and bounds-checked the six row indices: about half the node
-/// test's instructions.
+/// offsets into a node, so that a node test neither re-broadcasts them from
+/// the [`RayPre`] nor bounds-checks six row indices.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy)]
 pub(super) struct FusedRay {
@@ -371,11 +369,10 @@ impl FusedRay {
     #[inline(always)]
     unsafe fn new(r: &RayPre) -> FusedRay {
         use std::arch::x86_64::_mm256_set1_ps;
-        // One lane at a time: left free, LLVM loaded `c_far`'s y and z as
-        // one 8-byte word from the middle of the 16 bytes `RayPre::new` had
-        // just stored, which the store buffer cannot forward. The load then
-        // waited for the store to retire: 10–13% of the time of every scene
-        // query on the hw7 box (perf, at the broadcast after that load).
+        // One lane at a time: left free, LLVM loads `c_far`'s y and z as
+        // one 8-byte word from the middle of the 16 bytes `RayPre::new` has
+        // just stored, which the store buffer cannot forward, and the load
+        // then waits for the store to retire.
         // SAFETY: a read of a field of `r`.
         let s = |x: &f32| _mm256_set1_ps(unsafe { std::ptr::read_volatile(x) });
         let (inv, cn, cf) = (&r.inv, &r.c_near, &r.c_far);

@@ -258,8 +258,8 @@ fn sah_beats_one_leaf_per_primitive() {
     assert!(leaves < 4096 && leaves > 4096 / MAX_LEAF, "{leaves} leaves");
     assert!(bvh.binary_depth() < 40, "depth {}", bvh.binary_depth());
     // The collapse fills nodes; only nodes whose binary descendants run
-    // out of inner nodes stay narrow (this input uses about 61% of the
-    // eight slots; a collapse that stopped at two children would use 25%).
+    // out of inner nodes stay narrow (a collapse that stopped at two
+    // children would use a quarter of the eight slots).
     let slots = bvh.node_count() * WIDTH;
     let used = leaves + bvh.node_count() - 1;
     assert!(used as f32 > 0.55 * slots as f32, "{used} of {slots} child slots used");
@@ -267,8 +267,8 @@ fn sah_beats_one_leaf_per_primitive() {
 
 #[test]
 fn huge_coordinates_and_nan_rays_stay_in_range() {
-    // Boxes at up to ±f32::MAX: centroid sums once overflowed to infinity,
-    // which emptied a child and made a leaf of no primitives.
+    // Boxes at up to ±f32::MAX: an unhalved centroid sum overflows to
+    // infinity, which empties a child and makes a leaf of no primitives.
     let m = f32::MAX;
     let mut boxes: Vec<Aabb> = (0..9)
         .map(|i| {

@@ -7,8 +7,8 @@
 //! scene inlines the head only (`*_split`) and runs the stack walk
 //! (`*_walk`) in a function of its own: in a small scene (a Cornell box) every query ends in
 //! the head, and the stack walk's frame (several kilobytes of stack, probed
-//! page by page at every call) and its register pressure, which made the
-//! head keep its per-ray constants on the stack, stay out of that path.
+//! page by page at every call) and its register pressure, which would make
+//! the head keep its per-ray constants on the stack, stay out of that path.
 //! The same steps in the same order either way, so the same hits.
 
 use std::mem::MaybeUninit;

@@ -123,7 +123,7 @@ pub(super) fn leaf_any<const AVX: bool>(
         }
         rest = pairs.remainder();
     }
-    // A loop, not `Iterator::any`: its closure was left out of line.
+    // A loop, not `Iterator::any`: its closure can be left out of line.
     for b in rest {
         if b.intersect(wr, t_min, t_max).mask != 0 {
             return true;

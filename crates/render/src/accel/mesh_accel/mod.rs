@@ -31,9 +31,10 @@ mod leaf;
 ///
 /// `u` and `v` first, side by side: a hit is written field by field during
 /// traversal and copied soon after, `t` from a register and the rest from
-/// memory, and a copy's 8-byte load of `prim` with `u` spanned two 4-byte
-/// stores, which it cannot be forwarded from (it waited for them to
-/// retire). Now that load is `u, v`, stored as one word ([`PairHit::uv`](super::tri_block::PairHit::uv)).
+/// memory. A copy's 8-byte load of `prim` with `u` would span two 4-byte
+/// stores, which it cannot be forwarded from (it would wait for them to
+/// retire); this way that load is `u, v`, stored as one word
+/// ([`PairHit::uv`](super::tri_block::PairHit::uv)).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C)]
 pub struct TriHit {
@@ -61,9 +62,9 @@ pub struct MeshAccel {
 }
 
 /// The most blocks (two 8-lane pairs, 16 triangles) an any-hit query tests
-/// without the mesh's tree: the hw7 Cornell box's light (10 triangles, two
-/// leaves) cost a call, a node test and its set-up (about 310 instructions)
-/// per shadow ray, against about 130 for its three blocks. The leaf boxes
+/// without the mesh's tree: for a light like the hw7 Cornell box's (10
+/// triangles, two leaves), a call, a node test and its set-up per shadow ray
+/// cost more than testing its three blocks outright. The leaf boxes
 /// are conservative (a triangle the ray hits lies in a box it enters), so
 /// the blocks tested alone block the same rays.
 const FLAT_ANY_BLOCKS: usize = 4;
@@ -193,9 +194,9 @@ impl MeshAccel {
             }
             None => {
                 let leaf = Closest::<AVX> { blocks, ray, wr, t_min, cull, best: &mut best };
-                // One walk for both: two inlined copies doubled the frame
-                // (two traversal stacks) and the code of the out-of-line
-                // callers (`tree_closest_*`).
+                // One walk for both: two inlined copies would double the
+                // frame (two traversal stacks) and the code of the
+                // out-of-line callers (`tree_closest_*`).
                 let own;
                 let tr = match pre {
                     Some(tr) => tr,

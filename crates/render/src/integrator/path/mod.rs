@@ -95,8 +95,8 @@ pub fn radiance(scene: &Scene, ray: &Ray, p: &PathParams, st: &mut PathState) ->
 /// recursing: its colour, weight and `q` wait in the [`Walk`], and once the
 /// path ends they are folded back deepest first as `c + w · L / q`, the
 /// recursion's operations in its order, so the same bits. A recursive call
-/// cost each vertex a prologue, an epilogue and its arguments through the
-/// stack. Other vertices, and a path longer than [`DEFERRED`], recurse.
+/// would cost each vertex a prologue, an epilogue and its arguments through
+/// the stack. Other vertices, and a path longer than [`DEFERRED`], recurse.
 fn li<const V: u8>(
     scene: &Scene,
     ray: &Ray,
@@ -120,8 +120,8 @@ fn li<const V: u8>(
 /// from its own sampler and does exactly what [`radiance`] does for it, so
 /// the two answers are [`radiance`]'s, bit for bit. They come back as
 /// `Vec3A`, each written and read in one 16-byte move: as `Vec3`s the
-/// render loop read the first with the second's `x` in one load, which
-/// waited for the narrower stores that wrote them.
+/// render loop could read the first with the second's `x` in one load,
+/// which would wait for the narrower stores that wrote them.
 pub fn radiance_pair(
     scene: &Scene,
     rays: [&Ray; 2],
@@ -217,13 +217,12 @@ impl Walk {
         p: PathParams,
         st: &mut PathState,
     ) -> Option<Vec3> {
-        // The ray, like the hit, is read where it lies: a copy was written
-        // in a 16- and an 8-byte store, and the direction read back across
-        // both, a load the store buffer cannot forward (~1.5% of pg1's time
-        // stalled on it).
+        // The ray, like the hit, is read where it lies: a copy would be
+        // written in a 16- and an 8-byte store, and the direction read back
+        // across both, a load the store buffer cannot forward.
         let depth = self.depth;
         // Borrowed in place: moving the hit out of the slot `trace` filled
-        // copied it in wide loads that waited on its narrow stores.
+        // would copy it in wide loads that wait on its narrow stores.
         let (t, color) = match hit {
             Some(hit) => {
                 let before = st.travelled;
@@ -236,7 +235,7 @@ impl Walk {
                     }
                     Shaded::Bounce(c, b) => {
                         // The next vertex sees this one's distance added,
-                        // as the recursive call did.
+                        // as a recursive call would.
                         self.pending[self.n].write(Pending { color: c, weight: b.weight, q: b.q });
                         self.n += 1;
                         (self.ray, self.depth, self.beta, self.came) = (b.ray, depth + 1, b.next, b.came);
@@ -312,9 +311,9 @@ enum Shaded {
 /// The point on a light that a vertex's light samples take first, drawn
 /// at the top of [`shade`]. A vertex samples its lights as soon as its hit
 /// is known; drawing the point on a light mesh there (a count over the
-/// triangles, a division, a square root) put that chain between the hit
-/// and the shadow ray. Drawn earlier, it is worked out while the vertex's
-/// frame and emission are.
+/// triangles, a division, a square root) would put that chain between the
+/// hit and the shadow ray. Drawn earlier, it is worked out while the
+/// vertex's frame and emission are.
 #[derive(Clone, Copy)]
 struct LightAhead {
     /// The light (an index into the scene's lights): the first that draws.
@@ -380,7 +379,7 @@ fn past_limit(scene: &Scene, depth: u32, p: PathParams) -> bool {
 /// What a ray that leaves the scene brings: the environment (weighed against
 /// its light samples) or the background. Past the depth limit (`past`) a
 /// ray looks for lights alone ([`past_limit`]), and the background is none:
-/// counted there, it came only with the rays that pass an emitter's box,
+/// counted there, it would come only with the rays that pass an emitter's box,
 /// the others being skipped untraced ([`Scene::may_find_emission`]).
 fn escaped(scene: &Scene, ray: &Ray, came: Came, past: bool, p: PathParams, st: &PathState) -> Vec3 {
     let Some(env) = &scene.environment else {
@@ -405,7 +404,7 @@ fn escaped(scene: &Scene, ray: &Ray, came: Came, past: bool, p: PathParams, st: 
 }
 
 /// The light a vertex adds. Inlined into [`li`]'s loop: out of line, its
-/// answer (a [`Shaded`], ray and all) went through memory.
+/// answer (a [`Shaded`], ray and all) would go through memory.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn shade<const V: u8>(
@@ -480,7 +479,7 @@ fn shade<const V: u8>(
                 // Nothing follows the bounce at this vertex (see [`li`]).
                 Some(b) if defer && matches!(m.kind, Specular::None) => return Shaded::Bounce(color, b),
                 Some(b) => color += b.weight * li::<V>(scene, &b.ray, depth + 1, b.next, b.came, p, st) / b.q,
-                // Adding zero as the recursion did: it turns a -0.0 channel
+                // Adding zero as the recursion does: it turns a -0.0 channel
                 // into +0.0, so the output keeps its bits.
                 None => color += Vec3::ZERO,
             }

@@ -99,9 +99,9 @@ pub(super) use by_variant;
 /// at every hit ([`LightSamples::Auto`]); with more, one is chosen by power.
 /// One light sample per hit leaves the noise of the choice: on the Cornell
 /// box of `tools/mitsuba_cornell_check.py` (a point light and a light box)
-/// sampling both removes 57% of the variance for 20% more time (docs/path-tracing.md,
-/// "Lights per hit"). Each light adds a shadow ray to every hit, so the
-/// count is kept small.
+/// sampling both removes most of the variance for little more time
+/// (docs/path-tracing.md, "Lights per hit"). Each light adds a shadow ray to
+/// every hit, so the count is kept small.
 const EVERY_LIGHT_UP_TO: usize = 4;
 
 /// Whether MIS samples every light at a hit rather than one chosen by power.

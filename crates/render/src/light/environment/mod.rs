@@ -256,7 +256,7 @@ fn jacobian(mapping: EnvMapping, uv: Vec2) -> f32 {
 /// Jacobian over a 4×4 grid in the texel, and at least a small floor for
 /// any texel that reaches into the circle: a texel straddling the rim must
 /// keep a non-zero density, or the light it holds would never be sampled
-/// (a bias of about 2% for a 16×8 probe under a constant sky).
+/// (a visible bias for a small probe under a constant sky).
 fn texel_solid_angle(mapping: EnvMapping, x: usize, y: usize, w: usize, h: usize) -> f32 {
     let (w, h) = (w as f32, h as f32);
     match mapping {

@@ -4,8 +4,8 @@
 //! The course's mesh lights are small boxes (`LightMesh`, hw7) that emit from
 //! both faces of every triangle, since their winding is not consistent. A
 //! point drawn by area on the box's far side, seen from outside, is always
-//! behind the box's near side: its shadow ray is traced only to be blocked.
-//! On the hw7 Cornell boxes that was a third of the next-event shadow rays.
+//! behind the box's near side: its shadow ray is traced only to be blocked,
+//! and on the hw7 Cornell boxes many next-event shadow rays are such.
 //!
 //! A [`Shell`] is what the mesh must be for that to be certain: every
 //! triangle lies on one of a few planes with every vertex of the mesh on one

@@ -1,3 +1,7 @@
+//! Tests of the convex-shell test of light meshes against the mesh's own
+//! shadow rays: the course's open box, closed boxes, meshes that are no
+//! shell, and a moving light.
+
 use super::*;
 use crate::accel::MeshAccel;
 use crate::light::test_rng::Rng;

@@ -15,12 +15,11 @@
 //! A CMJ point costs three hashed permutations (cycle-walked into range)
 //! and a jitter. The permutation hash has half of Kensler's
 //! multiplications: any bijection keeps the pattern's stratification, and
-//! the shorter one was measured to integrate edges and discs as well
-//! (session 11, docs/performance.md). One hash jitters both axes (16 bits each, inside a
-//! cell of `1/n`), and the cells are sized by multiplying by reciprocals.
-//! A Sobol sequence with hashed Owen scrambling (Burley 2020) was tried and
-//! costs less again, but for 2D edges it left 1.2–1.6× the squared error of
-//! CMJ at 16–900 samples, and more noise than it saved time.
+//! the shorter one integrates edges and discs as well. One hash jitters both
+//! axes (16 bits each, inside a cell of `1/n`), and the cells are sized by
+//! multiplying by reciprocals. CMJ rather than a Sobol sequence with hashed
+//! Owen scrambling (Burley 2020): that is cheaper to draw, but integrates
+//! 2D edges with more error at the course's sample counts.
 //!
 //! A path tracer draws a few dimensions per bounce, and stratifying the deep
 //! ones gains little (the paths through them already differ).
@@ -29,12 +28,13 @@
 //! hash of (seed, pixel, sample, call) each.
 //!
 //! The render loop's runs of samples ([`PixelSampler::batched`]) draw their
-//! stratified calls from a per-thread memo (`sampler_batch.rs`) filled
-//! sixteen samples at a time in AVX2 lanes (`sampler_lanes.rs`), with the
+//! stratified calls from a per-thread memo (`batch`) filled
+//! sixteen samples at a time in AVX2 lanes (`batch/lanes.rs`), with the
 //! same values bit for bit.
 //!
-//! A single-sample image has nothing to stratify: its draws are the earlier
-//! sampler's hashed values, bit for bit, so 1-spp images keep their bytes.
+//! A single-sample image has nothing to stratify: its draws are plain hashes
+//! of the pixel and the dimension, fixed so that 1-spp images keep their
+//! bytes.
 
 /// The samples of one pixel: pattern seeds come from the pixel, sample
 /// `index` of `count` is drawn, and each call moves to the next dimension.
@@ -146,8 +146,8 @@ impl PixelSampler {
 
     /// The next 2D dimension: a point of `[0, 1)²`. Inlined are a batched
     /// run's memo hit and an independent draw past the stratified calls,
-    /// the common cases (a path's deep bounces draw the latter: called, its
-    /// few instructions came with as many again); the rest is out of line.
+    /// the common cases (a path's deep bounces draw the latter, whose little
+    /// work a call would double); the rest is out of line.
     #[inline]
     pub fn next_2d(&mut self) -> (f32, f32) {
         let dim = self.dim;
@@ -240,7 +240,7 @@ impl PixelSampler {
     }
 }
 
-/// The 2D draw of a single-sample pixel (the earlier sampler's values).
+/// The 2D draw of a single-sample pixel (fixed hashes: see the module doc).
 #[inline]
 fn single_2d(pixel_hash: u32, index: u32, dim: u32, independent: bool) -> (f32, f32) {
     if independent {
@@ -251,7 +251,7 @@ fn single_2d(pixel_hash: u32, index: u32, dim: u32, independent: bool) -> (f32, 
     (rand_float(0, p.wrapping_mul(0x967a_889b)), rand_float(0, p.wrapping_mul(0x368c_c8b7)))
 }
 
-/// The 1D draw of a single-sample pixel (the earlier sampler's values).
+/// The 1D draw of a single-sample pixel (fixed hashes: see the module doc).
 #[inline]
 fn single_1d(pixel_hash: u32, index: u32, dim: u32, independent: bool) -> f32 {
     if independent {

@@ -1,5 +1,5 @@
 //! Tests of the sampler: stratification, independence between dimensions
-//! and pixels, repeatability, and the single-sample draws' earlier values.
+//! and pixels, repeatability, and the single-sample draws' fixed values.
 
 use super::*;
 
@@ -209,7 +209,7 @@ fn dimensions_and_neighbouring_pixels_are_independent() {
 
 #[test]
 fn single_sample_draws_keep_their_earlier_values() {
-    // Values of the sampler before session 11, so 1-spp images keep their
+    // The single-sample draws' fixed values, so 1-spp images keep their
     // bytes.
     let mut s = PixelSampler::new(0, 3, 4, 0, 1);
     assert_eq!(s.next_2d(), (OLD[0], OLD[1]));

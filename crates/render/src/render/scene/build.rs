@@ -8,7 +8,7 @@ use crate::geometry::{Ellipsoid, Mesh, Plane, Sphere};
 use crate::light::{AreaLight, Environment, Light, LightMesh, LightPick, LightSphere, PointLight, SpotLight};
 use crate::material::Material;
 use crate::render::camera::Camera;
-use crate::texture::{shader, Image, Textures};
+use crate::texture::{shader, Image, TexList, Textures};
 use crate::volume::{Baking, Volumes};
 use luster_core::math::{Aabb, Vec2, Vec3};
 use luster_scene::description::{Description, MeshSource, Shape};
@@ -52,96 +52,18 @@ impl Scene {
         opts: &BuildOptions,
         baking: &Baking,
     ) -> Result<Scene, SceneError> {
-        // Meshes: one per Mesh or Triangle object; instances share their base's.
-        let mesh_objects: Vec<usize> = desc
-            .objects
-            .iter()
-            .enumerate()
-            .filter(|(_, o)| matches!(o.shape, Shape::Mesh { .. } | Shape::Triangle { .. }))
-            .map(|(i, _)| i)
-            .collect();
-        let built: Vec<Result<(Mesh, Option<Warning>), SceneError>> =
-            mesh_objects.par_iter().map(|&i| build_mesh(desc, i)).collect();
-        let mut meshes = Vec::with_capacity(built.len());
-        let mut warnings = Vec::new();
-        let mut mesh_of_object = HashMap::new();
-        for (&obj, b) in mesh_objects.iter().zip(built) {
-            let (m, w) = b?;
-            warnings.extend(w);
-            mesh_of_object.insert(obj, meshes.len() as u32);
-            meshes.push(m);
-        }
-
+        let (meshes, mesh_of_object, warnings) = build_meshes(desc)?;
         let mut textures = build_textures(desc, opts)?;
         let environment = build_environment(desc, &textures)?;
         let mut lights = build_lights(desc);
         let first_emitter = lights.len();
-        let mut light_of_object = HashMap::new();
-        for e in &desc.emitters {
-            let o = &desc.objects[e.object];
-            let light = match &o.shape {
-                Shape::Sphere { center, radius } => Light::Sphere(LightSphere {
-                    motion: o.motion,
-                    ..LightSphere::new(*center, *radius, &o.transform, e.radiance)
-                }),
-                Shape::Mesh { .. } => {
-                    let m = &meshes[mesh_of_object[&e.object] as usize];
-                    match LightMesh::new(m.corners(), &o.transform, e.radiance) {
-                        Some(mut l) => {
-                            l.motion = o.motion;
-                            Light::Mesh(Arc::new(l))
-                        }
-                        None => continue,
-                    }
-                }
-                _ => return Err(SceneError::at(&desc.file, &e.loc, "internal error: not an emitter shape")),
-            };
-            light_of_object.insert(e.object, lights.len() as u32);
-            lights.push(light);
-        }
+        let light_of_object = add_emitters(desc, &meshes, &mesh_of_object, &mut lights)?;
         let emitters = lights.len() - first_emitter;
         lights.extend(environment.as_ref().map(|e| Light::Environment(Arc::clone(e))));
         let images = shader_images(desc, &textures.images);
         let volumes = Volumes::build_baking(desc, &mut textures, Some(images), opts.shader_timeout, baking)?;
-        let mut prims = Vec::new();
-        let mut planes = Vec::new();
-        let mut ellipsoids = Vec::new();
-        for (i, o) in desc.objects.iter().enumerate() {
-            let xf = (!o.transform.is_identity()).then(|| Box::new(o.transform));
-            let material = o.material as u32;
-            let tex = textures.add_list(&o.textures);
-            let geom = match &o.shape {
-                Shape::Mesh { .. } | Shape::Triangle { .. } => Geom::Mesh(mesh_of_object[&i]),
-                Shape::Instance { mesh } => match mesh_of_object.get(mesh) {
-                    Some(&m) => Geom::Mesh(m),
-                    None => {
-                        return Err(SceneError::at(&desc.file, &o.loc, "the instance's base is not a mesh"))
-                    }
-                },
-                Shape::Sphere { center, radius } => Geom::Sphere(Sphere { center: *center, radius: *radius }),
-                Shape::Ellipsoid { center, radii, rotation } => {
-                    ellipsoids.push(Ellipsoid::new(*center, *radii, *rotation));
-                    Geom::Ellipsoid(ellipsoids.len() as u32 - 1)
-                }
-                Shape::Plane { point, normal } => {
-                    let p = Plane {
-                        point: o.transform.point(*point),
-                        normal: o.transform.normal_to_world(*normal).normalize(),
-                    };
-                    planes.push((p, material, tex, i as u32));
-                    continue;
-                }
-            };
-            if let Geom::Mesh(m) = geom {
-                if meshes[m as usize].triangle_count() == 0 {
-                    continue;
-                }
-            }
-            let light = light_of_object.get(&i).copied().unwrap_or(super::NO_LIGHT);
-            let world = xf.is_none() && o.motion == Vec3::ZERO;
-            let (motion, object) = (o.motion, i as u32);
-            prims.push(Prim { geom, material, motion, xf, textures: tex, object, light, world });
-        }
+        let (prims, planes, ellipsoids) =
+            build_prims(desc, &meshes, &mesh_of_object, &light_of_object, &mut textures)?;
         let bounds: Vec<Aabb> = prims.iter().map(|p| prim_bounds(p, &meshes, &ellipsoids)).collect();
         // Finite input can still overflow f32 once transformed (3e38 under a
         // scaling); such an object could never be hit, so say so instead.
@@ -212,6 +134,117 @@ impl Scene {
     }
 }
 
+/// Every Mesh and Triangle object's mesh, built in parallel (instances share
+/// their base's), the index of each object's mesh, and the build's warnings.
+#[allow(clippy::type_complexity)]
+fn build_meshes(desc: &Description) -> Result<(Vec<Mesh>, HashMap<usize, u32>, Vec<Warning>), SceneError> {
+    // Meshes: one per Mesh or Triangle object; instances share their base's.
+    let mesh_objects: Vec<usize> = desc
+        .objects
+        .iter()
+        .enumerate()
+        .filter(|(_, o)| matches!(o.shape, Shape::Mesh { .. } | Shape::Triangle { .. }))
+        .map(|(i, _)| i)
+        .collect();
+    let built: Vec<Result<(Mesh, Option<Warning>), SceneError>> =
+        mesh_objects.par_iter().map(|&i| build_mesh(desc, i)).collect();
+    let mut meshes = Vec::with_capacity(built.len());
+    let mut warnings = Vec::new();
+    let mut mesh_of_object = HashMap::new();
+    for (&obj, b) in mesh_objects.iter().zip(built) {
+        let (m, w) = b?;
+        warnings.extend(w);
+        mesh_of_object.insert(obj, meshes.len() as u32);
+        meshes.push(m);
+    }
+    Ok((meshes, mesh_of_object, warnings))
+}
+
+/// The object lights (`LightSphere`, `LightMesh`) appended to `lights`, and
+/// the light index of each emitting object.
+fn add_emitters(
+    desc: &Description,
+    meshes: &[Mesh],
+    mesh_of_object: &HashMap<usize, u32>,
+    lights: &mut Vec<Light>,
+) -> Result<HashMap<usize, u32>, SceneError> {
+    let mut light_of_object = HashMap::new();
+    for e in &desc.emitters {
+        let o = &desc.objects[e.object];
+        let light = match &o.shape {
+            Shape::Sphere { center, radius } => Light::Sphere(LightSphere {
+                motion: o.motion,
+                ..LightSphere::new(*center, *radius, &o.transform, e.radiance)
+            }),
+            Shape::Mesh { .. } => {
+                let m = &meshes[mesh_of_object[&e.object] as usize];
+                match LightMesh::new(m.corners(), &o.transform, e.radiance) {
+                    Some(mut l) => {
+                        l.motion = o.motion;
+                        Light::Mesh(Arc::new(l))
+                    }
+                    None => continue,
+                }
+            }
+            _ => return Err(SceneError::at(&desc.file, &e.loc, "internal error: not an emitter shape")),
+        };
+        light_of_object.insert(e.object, lights.len() as u32);
+        lights.push(light);
+    }
+    Ok(light_of_object)
+}
+
+/// The primitives of the top-level BVH (meshes, spheres, ellipsoids, each
+/// with its transform, material, maps and light), the planes (outside the
+/// BVH: they are unbounded) and the ellipsoids' shapes.
+#[allow(clippy::type_complexity)]
+fn build_prims(
+    desc: &Description,
+    meshes: &[Mesh],
+    mesh_of_object: &HashMap<usize, u32>,
+    light_of_object: &HashMap<usize, u32>,
+    textures: &mut Textures,
+) -> Result<(Vec<Prim>, Vec<(Plane, u32, TexList, u32)>, Vec<Ellipsoid>), SceneError> {
+    let mut prims = Vec::new();
+    let mut planes = Vec::new();
+    let mut ellipsoids = Vec::new();
+    for (i, o) in desc.objects.iter().enumerate() {
+        let xf = (!o.transform.is_identity()).then(|| Box::new(o.transform));
+        let material = o.material as u32;
+        let tex = textures.add_list(&o.textures);
+        let geom = match &o.shape {
+            Shape::Mesh { .. } | Shape::Triangle { .. } => Geom::Mesh(mesh_of_object[&i]),
+            Shape::Instance { mesh } => match mesh_of_object.get(mesh) {
+                Some(&m) => Geom::Mesh(m),
+                None => return Err(SceneError::at(&desc.file, &o.loc, "the instance's base is not a mesh")),
+            },
+            Shape::Sphere { center, radius } => Geom::Sphere(Sphere { center: *center, radius: *radius }),
+            Shape::Ellipsoid { center, radii, rotation } => {
+                ellipsoids.push(Ellipsoid::new(*center, *radii, *rotation));
+                Geom::Ellipsoid(ellipsoids.len() as u32 - 1)
+            }
+            Shape::Plane { point, normal } => {
+                let p = Plane {
+                    point: o.transform.point(*point),
+                    normal: o.transform.normal_to_world(*normal).normalize(),
+                };
+                planes.push((p, material, tex, i as u32));
+                continue;
+            }
+        };
+        if let Geom::Mesh(m) = geom {
+            if meshes[m as usize].triangle_count() == 0 {
+                continue;
+            }
+        }
+        let light = light_of_object.get(&i).copied().unwrap_or(super::NO_LIGHT);
+        let world = xf.is_none() && o.motion == Vec3::ZERO;
+        let (motion, object) = (o.motion, i as u32);
+        prims.push(Prim { geom, material, motion, xf, textures: tex, object, light, world });
+    }
+    Ok((prims, planes, ellipsoids))
+}
+
 /// The environment light's map, checked and with its sampling distribution.
 fn build_environment(
     desc: &Description,
@@ -227,8 +260,8 @@ fn build_environment(
 
 /// The lights in the order the integrator visits them: point lights,
 /// directional and spot lights (which draw no samples), area lights; the
-/// caller adds the emitting objects, then the environment, so scenes without
-/// the hw5 and hw7 lights sample exactly as before.
+/// caller adds the emitting objects, then the environment, so that in scenes
+/// without the hw5 and hw7 lights the others draw the same dimensions.
 fn build_lights(desc: &Description) -> Vec<Light> {
     let mut lights: Vec<Light> = desc
         .point_lights

@@ -71,10 +71,9 @@ impl Prim {
     /// (`ray`'s), shared, where [`Prim::in_world`], made in `world` on first
     /// use (a shadow ray that meets no mesh never needs it); else made in
     /// `own`. The axes are looked up (`by_table`: [`Scene::axes_by_table`])
-    /// or worked out, the same values either way: the lookup is some 60
-    /// instructions fewer a ray, but a scene whose meshes have trees of
-    /// their own (the wine glass: 3850 triangles) rendered 2% slower with it,
-    /// as MeshAccel's benchmark did (5%).
+    /// or worked out, the same values either way: the lookup saves work per
+    /// ray, but does not pay in a scene whose meshes have trees of their own
+    /// (the wine glass), as in MeshAccel's own queries.
     #[inline(always)]
     fn watertight<'a>(
         &self,
@@ -206,8 +205,8 @@ pub struct Scene {
     /// ([`Scene::only_emitters_shine`]).
     emitters_alone: bool,
     /// Whether the CPU has AVX2 and FMA, detected once at build: every
-    /// query asks, and the detection's cached answer took two loads and
-    /// two branches each time.
+    /// query asks, and the detection's cached answer would take two loads
+    /// and two branches each time.
     simd: bool,
     /// Whether queries make their watertight rays with
     /// [`WatertightRay::new_lookup`] (no mesh walks more than one node) or
@@ -332,9 +331,9 @@ impl Scene {
 
     /// [`Scene::intersect`] compiled for AVX2 and FMA, the hit's normals
     /// worked out in the same function as the traversal: returned from a
-    /// function of their own, the traversal's results went through memory
-    /// and were read back in wider loads than they were written with, which
-    /// waited for the stores. The same operations, so the same bits.
+    /// function of their own, the traversal's results would go through
+    /// memory and be read back in wider loads than they were written with,
+    /// waiting for the stores. The same operations, so the same bits.
     ///
     /// # Safety
     /// The CPU must have AVX2 and FMA.

@@ -9,7 +9,7 @@
 //! emission at any of them is left out, so a zero-emission shader costs
 //! nothing beyond the path tracer's `emission != 0` check at hits. Emission
 //! too fine for the probes to see then reaches the image through bounces
-//! alone, at full weight as before: unbiased either way, only noisier.
+//! alone, at full weight: unbiased either way, only noisier.
 
 use super::{Geom, Prim, Scene, NO_LIGHT};
 use crate::integrator::{surface_at, PathState, RayStats, Surface};
@@ -27,7 +27,8 @@ pub const PROBES: u32 = 256;
 
 impl Scene {
     /// Adds every object whose shader emits somewhere the probes find, after
-    /// every other light (so scenes without one sample exactly as before).
+    /// every other light (so that in scenes without one the others draw the
+    /// same dimensions).
     pub(super) fn add_shaded_lights(&mut self) {
         let Some(shaders) = &self.textures.shaders else { return };
         let mut found = Vec::new();

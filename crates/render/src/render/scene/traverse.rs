@@ -75,8 +75,8 @@ impl Scene {
             // Nothing tested yet: the walk starts afresh from the root.
             #[cfg(target_arch = "x86_64")]
             if AVX {
-                // Called through an opaque pointer: LLVM inlined it despite
-                // `#[inline(never)]` when called directly.
+                // Called through an opaque pointer: called directly, LLVM
+                // may inline it despite `#[inline(never)]`.
                 let deep: unsafe fn(&Self, &Ray, &Traversal, f32, f32, &mut f32, &mut Option<Closest>) =
                     std::hint::black_box(Self::closest_deep_avx2);
                 // SAFETY: `AVX` callers run only where the CPU has AVX2 and FMA.

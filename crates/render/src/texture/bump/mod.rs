@@ -13,25 +13,24 @@
 //!   `h` is the mean channel of the texel containing the point, in 8-bit
 //!   units (0–255, whatever the `Normalizer`), and `∂h/∂u`, `∂h/∂v` are
 //!   forward differences to the next texel right and down — per texel, not
-//!   per unit of `u` — whatever the map's `Interpolation`. Against hw4
-//!   `wood_box_all` this scores 39.3 dB; bilinear heights 26.4 dB, central
-//!   differences 27.8 dB, derivatives per unit of `u` 30 dB or less.
+//!   per unit of `u` — whatever the map's `Interpolation`. hw4 `wood_box_all`
+//!   matches this, and none of bilinear heights, central differences or
+//!   derivatives per unit of `u`.
 //!   The space the surface is displaced in is the one the course's references
 //!   show per kind of object, as for Perlin noise: object space on meshes,
 //!   world space (tangents `M ∂p/∂u`, normal `M⁻ᵀ n`) on spheres and
 //!   ellipsoids. They differ under a non-uniform scale, where a height step
-//!   tilts the normal less along a stretched tangent. On hw4
+//!   tilts the normal less along a stretched tangent. hw4
 //!   `bump_mapping_transformed` (an ellipsoid scaled by (-2, 1, 1) over a
-//!   plane scaled by 0.05) this scores 44.5 dB; object space everywhere
-//!   34.5 dB (bumps too strong at the ellipsoid's stretched ends), world space
-//!   everywhere 21.0 dB (the plane's bumps 20 times too strong).
+//!   plane scaled by 0.05) shows it: object space everywhere makes the bumps
+//!   too strong at the ellipsoid's stretched ends, world space everywhere the
+//!   plane's bumps 20 times too strong.
 //! - For Perlin noise, `h` is a function of the position at rest (see
 //!   [`TexFrame::p_rest`]), so its gradient `g` is used directly: the
 //!   component of `g` along the surface tilts the normal,
 //!   `n' = normalize(n − k (g − (g·n) n))`, in the space the noise lives in
-//!   (object space on meshes: on hw4 `cube_perlin_bump`, scaled by 0.8, the
-//!   references' per-face contrast is within 9% of this on average, 16%
-//!   of the world-space gradient `M⁻ᵀ g`'s).
+//!   (object space on meshes: hw4 `cube_perlin_bump`, scaled by 0.8, matches
+//!   this rather than the world-space gradient `M⁻ᵀ g`).
 //! - For a shader's `height(s)`, see [`height_bump`]: forward differences
 //!   along the surface's own tangents, three calls per point.
 
@@ -116,15 +115,14 @@ pub fn bump(tex: &Textures, map: &TextureMap, f: &TexFrame) -> Vec3 {
 /// of Blinn's displaced tangents `a + Δa n`, `b + Δb n`; on a smooth-shaded
 /// mesh, whose `n` is interpolated while `a` and `b` lie in the flat
 /// triangle, it tilts the interpolated normal rather than rebuilding the
-/// triangle's (which turned such meshes faceted).
+/// triangle's (which would turn such meshes faceted).
 ///
 /// Three calls of `height`, against the six of the central differences along
 /// x, y, z that the shading-language papers use, or four for tetrahedral
 /// differences; only the tangential part of the gradient tilts the normal,
 /// so the two tangent directions suffice. The error is first order,
-/// `|Δg| ≈ ε/2 · |h''|`: for `h = 0.05 sin(8x) sin(8y) + …` and `ε = 10⁻³`
-/// the normal differs from the central-difference one by at most 0.11° where
-/// the bump tilts it by up to 23° (`bump_tests.rs` measures it). Where the
+/// `|Δg| ≈ ε/2 · |h''|`, small next to the tilt the bump itself gives
+/// (`bump/tests.rs` checks it against central differences). Where the
 /// parameterization degenerates (a sphere's poles) any orthonormal frame
 /// around `n` is used, with `uv` fixed.
 ///

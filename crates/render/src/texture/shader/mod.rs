@@ -227,8 +227,8 @@ fn moved(f: &TexFrame, base: &ShadeInput, p: Vec3, uv: Vec2) -> ShadeInput {
 }
 
 /// [`input_at`], out of line: inlined into [`Textures::apply`], its
-/// arithmetic was hoisted in front of the map loop, where every hit paid
-/// for it whatever its maps' modes.
+/// arithmetic would be hoisted in front of the map loop, where every hit
+/// would pay for it whatever its maps' modes.
 #[inline(never)]
 fn input(f: &TexFrame, p: Vec3, uv: Vec2, n: Vec3) -> ShadeInput {
     input_at(f, p, uv, n)
@@ -287,7 +287,7 @@ impl ShadePoint for Hit<'_> {
 }
 
 /// Writes the colour `entry` of shader `id` gives at `hit` into `out`
-/// (in place: a returned colour came back through the stack).
+/// (in place: a returned colour would come back through the stack).
 #[inline(never)]
 fn rgb(
     set: &ShaderSet,
@@ -352,15 +352,14 @@ impl Textures {
 
 /// The world normal `n` bumped by shader `id`'s `height` with factor `k`.
 ///
-/// Out of line on purpose: inlined into [`Textures::apply`], LLVM hoisted the
+/// Out of line on purpose: inlined into [`Textures::apply`], LLVM hoists the
 /// bump's set-up (tangent lengths, step, the three points) out of the map
-/// loop, so every hit with any shader map paid for it, about 480
-/// instructions a call; on the POV-Ray scene's floor (a colour map only) that
-/// was wasted work.
+/// loop, so every hit with any shader map would pay for it, even one with a
+/// colour map only.
 #[inline(never)]
 fn shader_bump(set: &ShaderSet, id: usize, k: f32, f: &TexFrame, n: Vec3) -> Result<Vec3, Box<ShaderError>> {
-    // The three points are built in place: `pts.map(input)` built them
-    // elsewhere and copied 468 bytes (a `memmove` call) per hit.
+    // The three points are built in place: `pts.map(input)` would build them
+    // elsewhere and copy them (a `memmove` call) per hit.
     let local = bump::height_bump(f, k, bump::bump_step(f), |pts| {
         let [(p0, uv0), (pa, uva), (pb, uvb)] = pts;
         let base = input(f, p0, uv0, n);

@@ -1,4 +1,4 @@
-//! Tests of shader texture maps (`shader.rs`): decal modes against entry
+//! Tests of shader texture maps (`shader/mod.rs`): decal modes against entry
 //! points, evaluation at surface points, and material outputs.
 
 use super::*;

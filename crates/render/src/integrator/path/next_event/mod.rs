@@ -16,14 +16,13 @@ use luster_core::math::{Ray, Vec3, Vec3A};
 
 /// One sample of every light, shadowed; with MIS each weighed against the
 /// chance that the BSDF would have drawn its direction. Only picks the
-/// version: both take its arguments as they are, so each is a jump (the
-/// choice made in `li` instead cost pd5, which samples no light, ~19
-/// instructions a path in `li`'s code).
+/// version: both take its arguments as they are, so each is a jump (made
+/// in `li` instead, the choice would cost every path there, even in a
+/// variant that samples no light).
 ///
 /// The sum comes back as a `Vec3A`: returned through memory either way, a
-/// `Vec3` was written as `x` alone and `y, z` together, and `li` read `x, y`
-/// together at once, a load the store buffer cannot forward (8.9% of `li`'s
-/// time on the hw7 box stalled there).
+/// `Vec3` would be written as `x` alone and `y, z` together, and `li` reads
+/// `x, y` together at once, a load the store buffer cannot forward.
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
 pub(super) fn next_event(
@@ -103,9 +102,9 @@ fn next_event_any(
 /// power heuristic against the cosine-weighted bounce's density; the
 /// shadow ray's transmittance is exactly 1, and so are the other factors
 /// [`next_event_any`] multiplies by (dropping them keeps the bits).
-/// Apart, because LLVM hoisted the set-up of every case of [`Bsdf::eval_pdf`]
-/// (the frame's rows, the whole view direction) out of [`next_event_any`]'s
-/// light loop, ~160 instructions a call that this vertex never uses.
+/// Apart, so that LLVM cannot hoist the set-up of every case of
+/// [`Bsdf::eval_pdf`] (the frame's rows, the whole view direction) out of
+/// [`next_event_any`]'s light loop, work this vertex never uses.
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
 fn next_event_diffuse<const MIS: bool>(

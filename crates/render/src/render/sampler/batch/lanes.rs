@@ -78,7 +78,7 @@ fn walk(x: V, w: V, p: u32) -> V {
 /// with the same values as one at a time.
 ///
 /// Always inlined, so not itself compiled for AVX2 (`#[target_feature]`
-/// forbids `#[inline(always)]`): called, its groups went through memory.
+/// forbids `#[inline(always)]`): called, its groups would go through memory.
 ///
 /// # Safety
 /// The processor must have AVX2; only called from code compiled for it.
@@ -97,7 +97,7 @@ unsafe fn permute<const N: usize, const K: usize>(
         // A walk over at most sixteen values (the grid's axes at the
         // course's counts) looks its steps up in a table of the step
         // function, two vectors made by two steps' work: a lookup
-        // costs a few cycles where a step costs a chain of five
+        // is far shorter than a step's chain of five
         // multiplications. The same function, so the same values.
         let mut table = [[zero; 2]; K];
         let mut small = [false; K];

@@ -3,9 +3,9 @@
 //! The render loop takes a pixel's samples of one pass one after another on
 //! one thread, and every sample draws the same first dimensions. Drawn one
 //! at a time, a CMJ point's three cycle-walked permutations cost a branch
-//! that mispredicts about a third of the time (the walk rejects 22–37% of
-//! its candidates at the course's counts) and latency-bound chains of
-//! multiplications. Here the second sample of a pass to draw a dimension
+//! that mispredicts often (the walk rejects 22–37% of its candidates at the
+//! course's counts) and latency-bound chains of multiplications. Here the
+//! second sample of a pass to draw a dimension
 //! computes that dimension for the next [`LANES`] samples at once, in AVX2
 //! lanes that walk together until every lane is in range, into a small
 //! per-thread memo that the following samples read.
@@ -26,8 +26,7 @@
 //! pixel's first batch, two at a time in one loop ([`fill_hot`]): the
 //! course's path-traced boxes batch three 2D dimensions a pixel. A walk over
 //! at most sixteen values (a grid axis at the course's counts) looks its
-//! steps up in a table instead. With both, the sampler's share of pd1's
-//! profile went from 10.6% to 6.9%.
+//! steps up in a table instead.
 
 use super::PixelSampler;
 use std::cell::UnsafeCell;
@@ -84,8 +83,7 @@ thread_local! {
 }
 
 /// Shortest run of samples batched: a run of two costs as much either way,
-/// and drawing alone skips the memo's bookkeeping (2% of the MIS Cornell
-/// box at 16 samples, whose passes are of two).
+/// and drawing alone skips the memo's bookkeeping.
 pub(super) const MIN_RUN: u32 = 3;
 
 /// This thread's memo, for a pixel of `count` samples, where it may be
@@ -198,7 +196,7 @@ fn fill_hot(memo: &mut Memo, slot: usize, key: u32, s: &PixelSampler, len: u32) 
     keys[0] = key;
     let mut n = 1;
     // The candidates as a mask first, eight entries to a word: a loop
-    // testing each tag cost a tenth of the fills it saved.
+    // testing each tag would eat into the fills it saves.
     let (hot, used) = (memo.hot.map(u8::from), memo.used.map(u8::from));
     let mut cand = 0u64;
     for (c, (h, u)) in hot.chunks_exact(8).zip(used.chunks_exact(8)).enumerate() {
@@ -240,9 +238,8 @@ fn fill_hot(memo: &mut Memo, slot: usize, key: u32, s: &PixelSampler, len: u32) 
 
 /// Dimensions filled at once by [`fill_hot`]. The course's path-traced
 /// boxes batch three 2D dimensions (the pixel position, the light sample,
-/// the bounce): filled two at a time, the sampler's share of pd1's profile
-/// went from 10.6% to 8.3%; three at a time (their twelve walks spill
-/// registers) gained nothing more.
+/// the bounce): two at a time overlap their walks, where three at a time
+/// (twelve walks) would spill registers.
 const GROUP: usize = 2;
 
 /// A memo entry's values.
