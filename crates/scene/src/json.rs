@@ -9,7 +9,7 @@
 //! the line and column from the parser.
 //!
 //! Two things JSON allows are refused: a key given twice in one object (the
-//! file is read into [`Json`], which keeps every key, and the second one is
+//! file is read into `Json`, which keeps every key, and the second one is
 //! an error with its line instead of silently replacing the first), and
 //! `null` for an element that is always an object ([`OBJECT_ELEMENTS`]).
 //! Nesting deeper than serde_json's limit of 128 is an error, never a stack

@@ -191,7 +191,7 @@ impl Tonemap {
     /// [`Tonemap::apply`] into `out` (`3 · pixels.len()` bytes). Two passes
     /// over the pixels, each on every core: the statistics (log-average and,
     /// for a burn-out, a luminance histogram and the luminances for the
-    /// percentile's selection: see [`super::stats`]), then the mapping
+    /// percentile's selection: see `stats`), then the mapping
     /// straight into the 8-bit buffer. The mapping recomputes luminance
     /// rather than reading it back: that is cheaper than keeping it for
     /// every image.

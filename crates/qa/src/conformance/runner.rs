@@ -1,6 +1,6 @@
 //! Running many cases: `jobs` scenes at a time, each on its own rayon pool.
 //!
-//! Every case goes through [`run_case_guarded`](super::run_case_guarded), so a
+//! Every case goes through [`super::run_case_guarded`], so a
 //! scene that fails to load, or even panics, becomes a failed result and the
 //! others still run. The per-pixel maps of each comparison are dropped once
 //! its heatmap is on disk, so a long suite keeps only the numbers in memory.

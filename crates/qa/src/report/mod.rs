@@ -4,7 +4,7 @@
 //! [`Report::build`] turns the [`CaseResult`]s of
 //! [`conformance`](crate::conformance) into a plain, serialisable summary and
 //! makes the output folder self-contained (expected images copied, browser
-//! previews of EXR/HDR images, thumbnails); [`write`] then writes
+//! previews of EXR/HDR images, thumbnails); [`write`](fn@write) then writes
 //!
 //! | file | contents |
 //! |---|---|

@@ -12,6 +12,9 @@ pub struct Frame {
 }
 
 impl Frame {
+    /// The world's axes.
+    pub const AXES: Frame = Frame { t: Vec3::X, b: Vec3::Y, n: Vec3::Z };
+
     /// The frame whose `+z` is the unit normal `n`.
     #[inline]
     pub fn new(n: Vec3) -> Frame {

@@ -5,7 +5,7 @@
 //! - a diffuse and glossy part: a hw6 BRDF ([`brdf`]: the Phong family,
 //!   Torrance–Sparrow, and GGX microfacets for shader materials) or, where the
 //!   material names none, the course's Blinn-Phong reflectance
-//!   ([`blinn_phong`]);
+//!   ([`blinn_phong`](mod@blinn_phong));
 //! - a perfectly specular part ([`specular`]): a mirror, a conductor or a
 //!   dielectric, each with the course's glossy roughness.
 //!
@@ -147,8 +147,9 @@ pub struct BsdfSample {
 }
 
 /// A material's scattering at one shading point: the facing shading normal
-/// `n`, the frame around it, the direction to the viewer in that frame and
-/// the incoming ray's direction `d`. For a Phong-family BRDF without
+/// `n`, the incoming ray's direction `d` and, for a material with a BRDF,
+/// the frame around `n` and the direction to the viewer in it (the course's
+/// Blinn-Phong needs neither). For a Phong-family BRDF without
 /// specular colour (every wall of the course's Cornell boxes) `f` holds its
 /// value for directions above the surface (zero where the viewer is below
 /// it), the same for every light sample and bounce; then `wo` holds only its
@@ -159,9 +160,11 @@ pub struct Bsdf<'a> {
     m: &'a Material,
     /// The unit shading normal, on the side the directions are reflected to.
     pub n: Vec3,
-    /// The frame around `n`.
-    pub frame: Frame,
-    /// The direction to the viewer in `frame` (only its `z` where `f` is set).
+    /// The frame around `n` where the material has a BRDF (the world's axes
+    /// otherwise, which nothing reads).
+    frame: Frame,
+    /// The direction to the viewer in `frame` (only its `z` where `f` is
+    /// set; zero without a BRDF).
     pub wo: Vec3,
     /// The incoming ray's direction, world space.
     pub d: Vec3,
@@ -176,6 +179,9 @@ impl<'a> Bsdf<'a> {
     /// the ray direction `d`.
     #[inline(always)]
     pub fn new(m: &'a Material, n: Vec3, d: Vec3) -> Bsdf<'a> {
+        if m.brdf.is_none() {
+            return Bsdf { m, n, frame: Frame::AXES, wo: Vec3::ZERO, d, f: None };
+        }
         let frame = Frame::new(n);
         // [`PhongFamily::eval_diffuse`]'s test of the viewer's cosine. The
         // local `z` of `-d` is `-d·n`, as [`Frame::to_local`] works it out.
@@ -283,7 +289,7 @@ impl<'a> Bsdf<'a> {
     /// density).
     #[inline(always)]
     pub fn sample(&self, strategy: Strategy, choice: f32, u: (f32, f32)) -> Option<BsdfSample> {
-        let (m, n, frame) = (self.m, self.n, &self.frame);
+        let (m, n) = (self.m, self.n);
         // Each arm tests the direction (`n·wi > 0`, `p > 0`) before its
         // `f cos`: the same tests as one after the match, without carrying an
         // optional value out of it.
@@ -299,7 +305,7 @@ impl<'a> Bsdf<'a> {
                 };
                 let s = s?;
                 // The BRDF's sample carries its value: no second evaluation.
-                let wi = frame.to_world(s.wi);
+                let wi = self.frame.to_world(s.wi);
                 let cos = n.dot(wi);
                 if cos <= 0.0 || s.pdf <= 0.0 {
                     return None;
@@ -315,7 +321,10 @@ impl<'a> Bsdf<'a> {
                     let local = power_cosine(1.0, u);
                     (local, power_cosine_pdf(1.0, local.z))
                 };
-                let wi = frame.to_world(local);
+                let wi = match b {
+                    Some(_) => self.frame.to_world(local),
+                    None => Frame::new(n).to_world(local),
+                };
                 let cos = n.dot(wi);
                 if cos <= 0.0 || pdf <= 0.0 {
                     return None;

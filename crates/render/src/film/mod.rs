@@ -6,7 +6,7 @@
 //!   and are merged when done, so the render loop never sees 8 bits.
 //! - [`reserve`]: the first camera's film memory, written ahead by a worker
 //!   that would otherwise wait while the scene loads.
-//! - [`write`]: writing the files a camera's `ImageName` and `Tonemap`s ask
+//! - [`write`](mod@write): writing the files a camera's `ImageName` and `Tonemap`s ask
 //!   for (planned by `luster_core::image::outputs`, tone-mapped by
 //!   `luster_core::tonemap`).
 //!

@@ -15,7 +15,7 @@
 //! with normals flipped to face the viewer it no longer matches the reference.
 //!
 //! Distribution effects (hw3): each camera sample carries a shutter time and
-//! a [`PixelSampler`] that supplies one decorrelated 2D dimension per area
+//! a [`PixelSampler`](crate::render::sampler::PixelSampler) that supplies one decorrelated 2D dimension per area
 //! light sample and per glossy bounce. An area light contributes, per sample,
 //! `L · A · |n_l · ω| / d²` as the irradiance of one point drawn uniformly on
 //! its square (hw3 spec eq. 1), shadowed by one ray to that point. Roughness
@@ -213,13 +213,12 @@ pub(crate) fn direct(
     // light's draw, so that later draws and the image are those of the full
     // computation, and traces no shadow ray for it.
     let reflects = m.brdf.is_some() || m.diffuse != Vec3::ZERO || m.specular != Vec3::ZERO;
-    let bsdf = Bsdf::new(m, n, ray.d);
     for light in &scene.lights {
         if !reflects {
             light.skip_sample(&mut st.sampler);
             continue;
         }
-        color = light_term(scene, light, &bsdf, origin, hit.p, st, color);
+        color = light_term(scene, light, m, origin, hit.p, n, ray.d, st, color);
     }
     color
 }
@@ -230,17 +229,21 @@ pub(crate) fn direct(
 /// would double its code and stack frame. One call per light keeps its sum in
 /// registers.
 #[inline(never)]
+#[allow(clippy::too_many_arguments)]
 fn light_term(
     scene: &Scene,
     light: &crate::light::Light,
-    bsdf: &Bsdf,
+    m: &Material,
     origin: Vec3,
     p: Vec3,
+    n: Vec3,
+    d: Vec3,
     st: &mut PathState,
     color: Vec3,
 ) -> Vec3 {
-    match light_reaching_inline(scene, light, origin, p, bsdf.n, st) {
-        Some((ls, cos, tr)) => color + bsdf.f_cos(ls.wi, cos) * (tr * ls.e),
+    match light_reaching_inline(scene, light, origin, p, n, st) {
+        // The BSDF only where the light arrives: its frame is built then.
+        Some((ls, cos, tr)) => color + Bsdf::new(m, n, d).f_cos(ls.wi, cos) * (tr * ls.e),
         None => color,
     }
 }

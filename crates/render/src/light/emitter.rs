@@ -132,7 +132,7 @@ impl LightMesh {
     /// Whether the mesh itself certainly blocks the segment from `o` to `q`,
     /// a point from [`point`](Self::point) with its normal `n`, at shutter
     /// `time` (`q` already moved): `q` is on the far side of a convex shell
-    /// ([`Shell::hides`]). A shadow ray towards it need not be traced.
+    /// (`Shell::hides`). A shadow ray towards it need not be traced.
     #[inline(always)]
     pub fn hides(&self, o: Vec3, q: Vec3, n: Vec3, time: f32) -> bool {
         self.shell.as_ref().is_some_and(|s| {

@@ -42,7 +42,7 @@
 //!
 //! Elements are read one at a time with ply-rs-bw's typed per-element API
 //! ([`Parser::read_ascii_element`], [`Parser::read_little_endian_element`], ...)
-//! into small structs implementing [`PropertyAccess`], so a face goes straight
+//! into small structs implementing `PropertyAccess`, so a face goes straight
 //! into the triangle list without a map or a payload vector in between.
 
 use std::io::{BufReader, Seek};

@@ -11,7 +11,7 @@
 //!
 //! Everything that comes from a scene, a file name or an error message goes
 //! through [`escape`]; paths go through [`url`] as well. The rows are
-//! [`rows`]; the style sheet and the script, [`style`].
+//! `rows`; the style sheet and the script, `style`.
 
 mod rows;
 mod style;

@@ -27,7 +27,7 @@
 //!   being fetched.
 //! - **AVX2 and FMA**: where the CPU has them (detected at run time, SSE
 //!   otherwise), the whole traversal, leaf test included, is compiled for
-//!   them with the fused node test of [`node`]. The leaf test is the same
+//!   them with the fused node test of `node`. The leaf test is the same
 //!   code (Rust never fuses on its own), so hits are bit for bit those of
 //!   the SSE path.
 //! - **Limits**: leaves hold at most [`MAX_LEAF`] primitives and a tree at

@@ -93,7 +93,7 @@ impl PixelSampler {
 
     /// This pixel's sampler for a run of samples that one thread draws in
     /// order, one after another: their stratified calls are computed
-    /// several samples at a time ([`batch`]), with the same values.
+    /// several samples at a time (`batch`), with the same values.
     #[inline]
     pub fn batched(self, run: std::ops::Range<u32>) -> Self {
         let end = run.end.min(self.n.len);

@@ -96,7 +96,7 @@ impl Scene {
     }
 
     /// Whether `ray` could meet an emitting surface: false only when every
-    /// such surface is bounded ([`Scene::emitting_boxes`]) and the ray
+    /// such surface is bounded (`Scene::emitting_boxes`) and the ray
     /// misses all their boxes. The MIS path tracer's bounce past the depth
     /// limit looks for nothing else, so it skips its trace then. (A ray in
     /// a slab's plane gives NaN there, which the slab test's min/max drop:
@@ -125,7 +125,7 @@ impl Scene {
     /// Whether a ray whose end adds nothing but the light found there (no
     /// lighting, no bounce: the last vertex of the course's path tracer
     /// without light samples) can bring any: false only where only the
-    /// emitters shine ([`Scene::only_emitters_shine`]) and the ray misses
+    /// emitters shine (`Scene::only_emitters_shine`) and the ray misses
     /// their boxes ([`Scene::may_find_emission`]).
     #[inline]
     pub fn may_bring_light(&self, ray: &Ray) -> bool {

@@ -140,7 +140,7 @@ pub fn noise2(x: f32, y: f32) -> f32 {
 /// Improved Perlin noise in 3D, in about [-1.04, 1.04] (see the module table).
 ///
 /// With AVX2 (detected at run time) the eight corners are computed in the
-/// lanes of one vector ([`super::octaves::noise3_one`]), bit for bit the
+/// lanes of one vector (`super::octaves::noise3_one`), bit for bit the
 /// values of [`noise3_scalar`]: the Lua `perlin3` of a bump's three points and
 /// the short tails of fractal sums call this one point at a time.
 #[inline]
