@@ -261,7 +261,7 @@ impl<'a> Bsdf<'a> {
             Some(_) => (self.f_cos(wi, cos), 0.0),
             None => {
                 let e = if strategy == Strategy::Uniform { 0.0 } else { 1.0 };
-                (blinn_phong(m, self.n, wi, self.d, cos), power_cosine_pdf(e, cos))
+                (self.f_cos(wi, cos), power_cosine_pdf(e, cos))
             }
         }
     }
@@ -321,19 +321,14 @@ impl<'a> Bsdf<'a> {
                     let local = power_cosine(1.0, u);
                     (local, power_cosine_pdf(1.0, local.z))
                 };
-                let wi = match b {
-                    Some(_) => self.frame.to_world(local),
-                    None => Frame::new(n).to_world(local),
-                };
+                // Without a BRDF the frame was not built (see [`Bsdf::new`]).
+                let frame = if b.is_some() { self.frame } else { Frame::new(n) };
+                let wi = frame.to_world(local);
                 let cos = n.dot(wi);
                 if cos <= 0.0 || pdf <= 0.0 {
                     return None;
                 }
-                let f_cos = match b {
-                    Some(_) => self.f_cos(wi, cos),
-                    None => blinn_phong(m, n, wi, self.d, cos),
-                };
-                Some(BsdfSample { wi, pdf, f_cos })
+                Some(BsdfSample { wi, pdf, f_cos: self.f_cos(wi, cos) })
             }
         }
     }

@@ -475,7 +475,7 @@ fn shade<const V: u8>(
         // Under MIS the last vertex's bounce is traced too, for emission
         // only (see [`past_limit`]).
         if more || p.mis {
-            match bounce(scene, m, &at, origin, depth, beta, p, st) {
+            match bounce(scene, &at, origin, depth, beta, p, st) {
                 // Nothing follows the bounce at this vertex (see [`li`]).
                 Some(b) if defer && matches!(m.kind, Specular::None) => return Shaded::Bounce(color, b),
                 Some(b) => color += b.weight * li::<V>(scene, &b.ray, depth + 1, b.next, b.came, p, st) / b.q,

@@ -19,7 +19,6 @@ use luster_core::math::{Ray, Vec3};
 #[inline(always)]
 pub(super) fn bounce(
     scene: &Scene,
-    m: &Material,
     bsdf: &Bsdf,
     origin: Vec3,
     depth: u32,
@@ -29,7 +28,7 @@ pub(super) fn bounce(
 ) -> Option<Bounce> {
     // Only an MIS bounce off a BRDF chooses a lobe; the others skip the
     // draw (a stratified one at the first hit), keeping the later ones.
-    let choice = if p.mis && m.brdf.is_some() {
+    let choice = if p.mis && bsdf.material().brdf.is_some() {
         st.sampler.next_1d()
     } else {
         st.sampler.skip();
