@@ -33,6 +33,7 @@ pub mod blinn_phong;
 pub mod brdf;
 pub mod frame;
 pub mod fresnel;
+pub mod lobe;
 pub mod microfacet;
 pub mod phong;
 pub mod sampling;

@@ -1,6 +1,8 @@
 //! The entry points a script may define ([`Entry`]), and what a
 //! `DecalMode material` shader's outputs amount to ([`MaterialOutputs`]).
 
+use super::closure::Closure;
+
 /// The entry points a script may define: for surfaces (`emission` is a
 /// surface's emitted radiance under `DecalMode material`) and for volumes
 /// (`density`, and `emission` per unit length).
@@ -71,4 +73,7 @@ pub struct MaterialOutputs {
     pub emission: Option<[f32; 3]>,
     /// `reflect(s)`: the mirror reflectance, 0–1.
     pub reflect: Option<[f32; 3]>,
+    /// `material(s)`: the closure it returned. A script that defines
+    /// `material` gives this alone; the outputs above are then `None`.
+    pub closure: Option<Closure>,
 }

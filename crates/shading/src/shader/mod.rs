@@ -57,6 +57,7 @@ mod entry;
 mod error;
 mod ffi;
 mod input;
+pub mod closure;
 mod instrument;
 mod invoke;
 mod modules;
@@ -318,6 +319,7 @@ impl ShaderSet {
             metalness: num(Entry::Metalness, m.metalness),
             emission: rgb(Entry::Emission, m.emission),
             reflect: rgb(Entry::Reflect, m.reflect),
+            closure: None,
         })
     }
 

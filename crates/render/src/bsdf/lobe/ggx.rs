@@ -1,0 +1,4 @@
+//! PLACEHOLDER.
+
+/// Narrowest lobe width.
+pub const MIN_ALPHA: f32 = 1e-3;

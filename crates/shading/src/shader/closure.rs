@@ -1,0 +1,78 @@
+//! A shader's closure as Rust receives it: the tree `material(s)` built from
+//! `diffuse{}`, `conductor{}`, `dielectric{}`, `sheen{}`, `emission{}`,
+//! `transparent{}` and the combinators (`docs/closures.md`), as plain data
+//! the renderer turns into lobes. Nodes are stored children first, so every
+//! child's index is below its parent's.
+
+/// Most nodes one closure may have; a larger closure is an error naming
+/// the shader.
+pub const MAX_NODES: usize = 32;
+
+/// What a node is.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum NodeKind {
+    /// `diffuse{albedo, roughness}`: `c[0]` albedo, `x[0]` roughness.
+    #[default]
+    Diffuse,
+    /// `conductor{f0, edge, roughness, anisotropy}`: `c[0]` f0, `c[1]`
+    /// edge, `x[0]` roughness, `x[1]` anisotropy.
+    Conductor,
+    /// `dielectric{ior, roughness, anisotropy, tint, specular, thin}`:
+    /// `c[0]` tint (transmission colour), `c[1]` specular (reflection
+    /// tint), `x[0]` ior, `x[1]` roughness, `x[2]` anisotropy, `thin`.
+    Dielectric,
+    /// `sheen{color, roughness}`: `c[0]` colour, `x[0]` roughness.
+    Sheen,
+    /// `emission{radiance}`: `c[0]` radiance.
+    Emission,
+    /// `transparent{color}`: `c[0]` the colour light passes with.
+    Transparent,
+    /// `a + b`.
+    Add,
+    /// `w * a`: `c[0]` the weight.
+    Scale,
+    /// `layer{top = a, base = b}`.
+    Layer,
+}
+
+/// One node of a closure.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Node {
+    /// What it is.
+    pub kind: NodeKind,
+    /// The first child (`Add`, `Scale`; a `Layer`'s top).
+    pub a: u8,
+    /// The second child (`Add`; a `Layer`'s base).
+    pub b: u8,
+    /// A thin-walled dielectric.
+    pub thin: bool,
+    /// Colours, by kind (see [`NodeKind`]).
+    pub c: [[f32; 3]; 3],
+    /// Numbers, by kind (see [`NodeKind`]).
+    pub x: [f32; 3],
+}
+
+/// A closure: its nodes and which is the root.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Closure {
+    /// The nodes, children before parents; `nodes[..len]` are used.
+    pub nodes: [Node; MAX_NODES],
+    /// How many nodes are used.
+    pub len: u8,
+    /// The root node's index.
+    pub root: u8,
+}
+
+impl Default for Closure {
+    fn default() -> Closure {
+        Closure { nodes: [Node::default(); MAX_NODES], len: 0, root: 0 }
+    }
+}
+
+impl Closure {
+    /// The root node.
+    #[inline]
+    pub fn root(&self) -> &Node {
+        &self.nodes[self.root as usize]
+    }
+}
