@@ -30,6 +30,10 @@ pub struct Material {
     /// own materials emit nothing; object lights carry their radiance
     /// separately, as lights).
     pub emission: Vec3,
+    /// Whether a shader's closure replaces the fields above but the
+    /// emission: its lobes travel beside the material (in the path state),
+    /// flattened at the shading point.
+    pub closure: bool,
     /// Facts the path tracer asks at every vertex, worked out from the
     /// fields above by [`from_desc`](Self::from_desc) and
     /// [`refresh`](Self::refresh): a material changed after either (a
@@ -64,7 +68,7 @@ impl Traits {
             _ => None,
         };
         Traits {
-            reflects: m.diffuse.max_element() > 0.0 || m.specular.max_element() > 0.0,
+            reflects: m.closure || m.diffuse.max_element() > 0.0 || m.specular.max_element() > 0.0,
             emits: m.emission != Vec3::ZERO,
             phong_diffuse,
             diffuse_only: m.brdf.as_ref().is_some_and(|b| b.diffuse_only(m.diffuse, m.specular).is_some()),
@@ -85,6 +89,7 @@ impl Default for Material {
             roughness: 0.0,
             brdf: None,
             emission: Vec3::ZERO,
+            closure: false,
             traits: Traits::default(),
         }
     }
@@ -114,6 +119,7 @@ impl Material {
                 .as_ref()
                 .map(|b| Brdf::from_desc(b, d.phong_exponent, d.refraction_index, d.absorption_index)),
             emission: Vec3::ZERO,
+            closure: false,
             traits: Traits::default(),
         };
         m.refresh();

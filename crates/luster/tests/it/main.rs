@@ -3,6 +3,7 @@
 //! OBJ models, split renders, the watch server and the fuzz smoke run.
 
 mod bad_input;
+mod closures;
 mod camera_gaze;
 mod cluster;
 mod cluster_camera;

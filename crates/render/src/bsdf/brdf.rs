@@ -9,7 +9,6 @@
 //! probabilities proportional to the luminance of `kd` and `ks`, and
 //! [`Brdf::pdf`] is the matching mixture density.
 
-use super::microfacet::Microfacet;
 use super::phong::{Lobe, PhongFamily, Variant};
 use super::sampling::{cosine_weighted, power_cosine_pdf};
 use super::torrance_sparrow::TorranceSparrow;
@@ -23,8 +22,6 @@ pub enum Brdf {
     Phong(PhongFamily),
     /// Torrance-Sparrow microfacets.
     TorranceSparrow(TorranceSparrow),
-    /// GGX over a Lambertian base, for shader-driven materials (`ks` is `F0`).
-    Microfacet(Microfacet),
 }
 
 /// A direction drawn by [`Brdf::sample`].
@@ -67,7 +64,6 @@ impl Brdf {
         match self {
             Brdf::Phong(b) => b.eval(kd, ks, wi, wo),
             Brdf::TorranceSparrow(b) => b.eval(kd, ks, wi, wo),
-            Brdf::Microfacet(b) => b.eval(kd, ks, wi, wo),
         }
     }
 
@@ -84,7 +80,6 @@ impl Brdf {
             match self {
                 Brdf::Phong(b) => b.sample_lobe(wo, u),
                 Brdf::TorranceSparrow(b) => b.sample_lobe(wo, u),
-                Brdf::Microfacet(b) => b.sample_lobe(wo, u),
             }
         };
         if wi.z <= 0.0 {
@@ -106,7 +101,6 @@ impl Brdf {
             _ if pd >= 1.0 => 0.0,
             Brdf::Phong(b) => b.lobe_pdf(wo, wi),
             Brdf::TorranceSparrow(b) => b.lobe_pdf(wo, wi),
-            Brdf::Microfacet(b) => b.lobe_pdf(wo, wi),
         };
         pd * power_cosine_pdf(1.0, wi.z) + (1.0 - pd) * lobe
     }

@@ -28,6 +28,33 @@ impl Frame {
         Vec3::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
     }
 
+    /// The frame whose `+z` is the unit normal `n` and whose `+x` lies along
+    /// the part of `t` across `n` (any frame where that part vanishes).
+    #[inline]
+    pub fn with_tangent(n: Vec3, t: Vec3) -> Frame {
+        let across = t - n * n.dot(t);
+        let l2 = across.length_squared();
+        // A tangent (nearly) along the normal says nothing about a direction
+        // in the surface.
+        if !(l2 > 1e-6 * t.length_squared()) || !l2.is_finite() {
+            return Frame::new(n);
+        }
+        let t = across / l2.sqrt();
+        Frame { t, b: n.cross(t), n }
+    }
+
+    /// The tangent, `+x`.
+    #[inline]
+    pub fn tangent(&self) -> Vec3 {
+        self.t
+    }
+
+    /// The normal, `+z`.
+    #[inline]
+    pub fn normal(&self) -> Vec3 {
+        self.n
+    }
+
     /// A local direction in world coordinates.
     #[inline]
     pub fn to_world(&self, v: Vec3) -> Vec3 {

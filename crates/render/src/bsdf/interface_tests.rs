@@ -49,7 +49,6 @@ fn materials() -> Vec<(&'static str, Material)> {
         ("diffuse-only Phong", make(kd, Vec3::ZERO, brdf(BrdfKind::ModifiedPhong, 10.0))),
         ("glossy Blinn-Phong", make(kd, ks, brdf(BrdfKind::ModifiedBlinnPhong, 40.0))),
         ("Torrance-Sparrow", make(kd, ks, brdf(BrdfKind::TorranceSparrow, 30.0))),
-        ("GGX", make(kd, ks, Some(Brdf::Microfacet(Microfacet::from_roughness(0.4))))),
     ]
 }
 

@@ -31,10 +31,10 @@
 
 pub mod blinn_phong;
 pub mod brdf;
+pub mod closure;
 pub mod frame;
 pub mod fresnel;
 pub mod lobe;
-pub mod microfacet;
 pub mod phong;
 pub mod sampling;
 pub mod specular;
@@ -46,8 +46,8 @@ mod interface_tests;
 mod tests;
 
 pub use brdf::{diffuse_pdf, Brdf, DiffuseOnly, Sample};
+pub use closure::Lobes;
 pub use frame::Frame;
-pub use microfacet::Microfacet;
 pub use phong::{Lobe, PhongFamily, Variant};
 pub use specular::Specular;
 pub use torrance_sparrow::TorranceSparrow;
@@ -173,6 +173,8 @@ pub struct Bsdf<'a> {
     /// surface. A `Vec3A`: it is read right after it is written, and a
     /// `Vec3`'s narrower stores could not be forwarded to that wider load.
     pub f: Option<Vec3A>,
+    /// A shader closure's lobes, which replace the material's models.
+    lobes: Option<&'a Lobes>,
 }
 
 impl<'a> Bsdf<'a> {
@@ -181,7 +183,7 @@ impl<'a> Bsdf<'a> {
     #[inline(always)]
     pub fn new(m: &'a Material, n: Vec3, d: Vec3) -> Bsdf<'a> {
         if m.brdf.is_none() {
-            return Bsdf { m, n, frame: Frame::AXES, wo: Vec3::ZERO, d, f: None };
+            return Bsdf { m, n, frame: Frame::AXES, wo: Vec3::ZERO, d, f: None, lobes: None };
         }
         let frame = Frame::new(n);
         // [`PhongFamily::eval_diffuse`]'s test of the viewer's cosine. The
@@ -193,7 +195,21 @@ impl<'a> Bsdf<'a> {
             }
             None => (frame.to_local(-d), None),
         };
-        Bsdf { m, n, frame, wo, d, f }
+        Bsdf { m, n, frame, wo, d, f, lobes: None }
+    }
+
+    /// The scattering of a shader closure's `lobes` (flattened for the ray
+    /// direction `d`) on material `m`.
+    #[inline]
+    pub fn closure(m: &'a Material, lobes: &'a Lobes, d: Vec3) -> Bsdf<'a> {
+        let (frame, wo) = (lobes.frame, lobes.wo);
+        Bsdf { m, n: frame.normal(), frame, wo, d, f: None, lobes: Some(lobes) }
+    }
+
+    /// The closure's lobes, where the material is a closure.
+    #[inline(always)]
+    pub fn lobes(&self) -> Option<&'a Lobes> {
+        self.lobes
     }
 
     /// The material.
@@ -205,7 +221,10 @@ impl<'a> Bsdf<'a> {
     /// The lobes it scatters with.
     #[inline]
     pub fn flags(&self) -> Flags {
-        self.m.flags()
+        match self.lobes {
+            Some(l) => l.flags,
+            None => self.m.flags(),
+        }
     }
 
     /// The perfectly specular part, which the integrators trace as rays
@@ -232,6 +251,9 @@ impl<'a> Bsdf<'a> {
     /// `cos`, so `wi` need not be brought into the frame.
     #[inline(always)]
     pub fn f_cos(&self, wi: Vec3, cos: f32) -> Vec3 {
+        if let Some(l) = self.lobes {
+            return l.eval(self.frame.to_local(wi)).0;
+        }
         let m = self.m;
         match (&m.brdf, self.f) {
             (_, Some(f)) => Vec3::from(f) * cos,
@@ -246,6 +268,9 @@ impl<'a> Bsdf<'a> {
     /// weight then needs), the local directions worked out once.
     #[inline(always)]
     pub fn eval_pdf(&self, wi: Vec3, cos: f32, strategy: Strategy) -> (Vec3, f32) {
+        if let Some(l) = self.lobes {
+            return l.eval(self.frame.to_local(wi));
+        }
         let m = self.m;
         match &m.brdf {
             Some(b) if strategy == Strategy::Brdf => {
@@ -271,6 +296,9 @@ impl<'a> Bsdf<'a> {
     /// direction `wi` (`cos = n·wi`) under `strategy`; zero below the surface.
     #[inline]
     pub fn pdf(&self, wi: Vec3, cos: f32, strategy: Strategy) -> f32 {
+        if let Some(l) = self.lobes {
+            return l.pdf(self.frame.to_local(wi));
+        }
         let m = self.m;
         match (&m.brdf, strategy) {
             (Some(b), Strategy::Brdf) => {
@@ -290,6 +318,12 @@ impl<'a> Bsdf<'a> {
     /// density).
     #[inline(always)]
     pub fn sample(&self, strategy: Strategy, choice: f32, u: (f32, f32)) -> Option<BsdfSample> {
+        if let Some(l) = self.lobes {
+            // A closure draws from its own lobes under every strategy: a
+            // hemisphere would miss its transmission.
+            let s = l.sample(choice, u)?;
+            return Some(BsdfSample { wi: self.frame.to_world(s.wi), pdf: s.pdf, f_cos: s.f_cos });
+        }
         let (m, n) = (self.m, self.n);
         // Each arm tests the direction (`n·wi > 0`, `p > 0`) before its
         // `f cos`: the same tests as one after the match, without carrying an

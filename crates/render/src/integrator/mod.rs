@@ -21,6 +21,7 @@ pub use state::{PathState, RayStats, MIN_WEIGHT, SECONDARY_BUDGET};
 
 use std::borrow::Cow;
 
+use crate::bsdf::closure::At;
 use crate::light::{Light, LightSample};
 use crate::material::Material;
 use crate::render::scene::{Hit, Scene};
@@ -137,7 +138,7 @@ fn textured<'a>(scene: &'a Scene, ray: &Ray, hit: &Hit, depth: u32, st: &mut Pat
     let mut ctx = ShadeCtx { incident, ng, object, instance, depth, pixel, view, ..ShadeCtx::default() };
     ctx.set_footprint(st.spread * st.travelled);
     frame.ctx = ctx;
-    match scene.textures.apply(hit.textures, &frame, &mut material, &mut ns) {
+    match scene.textures.apply(hit.textures, &frame, &mut material, &mut ns, &mut st.lobes) {
         Ok(Applied::Lit) => {}
         Ok(Applied::Unlit(c)) => return Surface::Unlit(c),
         Err(e) => {
@@ -149,6 +150,10 @@ fn textured<'a>(scene: &'a Scene, ray: &Ray, hit: &Hit, depth: u32, st: &mut Pat
     }
     if ns.dot(hit.ng) < 0.0 {
         ns = -ns;
+    }
+    if material.closure {
+        // Maps after the closure's may have bent the normal.
+        st.lobes.reframe(&At::new(ns, hit.ng, st.lobes.frame.tangent(), ray.d.normalize()));
     }
     // The maps may have changed the colours, the model or the emission.
     material.refresh();

@@ -2,6 +2,7 @@
 //! integrators: the ray counts for the summary, the secondary-ray budget,
 //! the shutter time, the sampler, and the first shader failure.
 
+use crate::bsdf::Lobes;
 use crate::render::sampler::PixelSampler;
 use luster_core::math::Vec2;
 use luster_shading::shader::ShaderError;
@@ -38,6 +39,10 @@ pub struct PathState {
     /// The first shader failure on this path, naming the object. The path
     /// then contributes black and the render loop stops (see `render_tiles`).
     pub error: Option<Box<ShaderError>>,
+    /// The lobes of the last closure a shader returned, flattened where it
+    /// was shaded: the vertex copies them out at once. Boxed, so that the
+    /// state stays small to move; allocated once per state.
+    pub(crate) lobes: Box<Lobes>,
 }
 
 impl PathState {
@@ -54,6 +59,7 @@ impl PathState {
             pixel: [0; 2],
             view: crate::texture::View::default(),
             error: None,
+            lobes: Box::default(),
         }
     }
 

@@ -54,7 +54,7 @@
 
 use super::{light_reaching_inline, surface_at, PathState, Surface};
 use crate::bsdf::specular::{branch_weights, glossy, reflect, refract};
-use crate::bsdf::{fresnel, Bsdf, Specular};
+use crate::bsdf::{fresnel, Bsdf, Lobes, Specular};
 use crate::integrator::media;
 use crate::material::Material;
 use crate::render::scene::{Hit, Scene};
@@ -130,7 +130,10 @@ fn shade(
         color += m.emission;
     }
 
-    if !inside_dielectric {
+    if m.closure {
+        let lobes = *st.lobes;
+        color += closure_shade(scene, ray, hit, entering, depth, weight, medium, &lobes, st);
+    } else if !inside_dielectric {
         color += direct(scene, m, hit, ns, ray, st);
     }
 
@@ -190,6 +193,75 @@ fn shade(
         // The ray reached this exit point through the medium: Beer's law over
         // the distance covered (directions are unit length, so t is distance).
         color *= (-absorption * hit.t).exp();
+    }
+    color
+}
+
+/// [`shade`] where a shader's closure is the material, approximated as the
+/// recursive tracer can (`docs/closures.md`, "The recursive ray tracer"):
+/// the light every lobe reflects from each light directly, a
+/// mirror ray for the smooth reflecting lobes and a refracted ray for the
+/// smooth transmitting ones (each weighted by its Fresnel share), and the
+/// straight-through ray of a cut-out. Rough lobes reflect only the lights:
+/// there is no indirect light here, as for the course's diffuse surfaces.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn closure_shade(
+    scene: &Scene,
+    ray: &Ray,
+    hit: &Hit,
+    entering: bool,
+    depth: u32,
+    weight: f32,
+    medium: Medium,
+    lobes: &Lobes,
+    st: &mut PathState,
+) -> Vec3 {
+    let ng = if entering { hit.ng } else { -hit.ng };
+    let eps = scene.shadow_epsilon;
+    let n = lobes.frame.normal();
+    let front = hit.p + ng * eps;
+    let mut color = Vec3::ZERO;
+    for light in &scene.lights {
+        if lobes.is_empty() {
+            light.skip_sample(&mut st.sampler);
+            continue;
+        }
+        if let Some((ls, _, tr)) = light_reaching_inline(scene, light, front, hit.p, n, st) {
+            color += lobes.eval_rough(lobes.frame.to_local(ls.wi)) * (tr * ls.e);
+        }
+    }
+    if depth < scene.max_depth {
+        let split = lobes.mirror_split();
+        let w = weight * split.reflect.max_element();
+        if w > 0.0 && st.spawn(w) {
+            let r = Ray::new(front, reflect(ray.d, n));
+            color += split.reflect * traced(scene, &r, depth + 1, w, medium, st);
+        }
+        let w = weight * split.refract.max_element();
+        if w > 0.0 && st.spawn(w) {
+            let cos_i = -ray.d.dot(n);
+            let dir = if split.thin {
+                Some(ray.d)
+            } else {
+                let (_, cos_t) = fresnel::dielectric(cos_i, 1.0, split.eta);
+                cos_t.map(|cos_t| refract(ray.d, n, 1.0 / split.eta, cos_i, cos_t))
+            };
+            if let Some(dir) = dir {
+                let crosses = match (split.thin, medium) {
+                    (true, m) => m,
+                    (false, Medium::Outside) => Medium::Inside,
+                    (false, Medium::Inside) => Medium::Outside,
+                };
+                let r = Ray::new(hit.p - ng * eps, dir);
+                color += split.refract * traced(scene, &r, depth + 1, w, crosses, st);
+            }
+        }
+    }
+    let w = weight * lobes.transparency.max_element();
+    if w > 0.0 && st.spawn(w) {
+        let r = Ray::new(hit.p - ng * eps, ray.d);
+        color += lobes.transparency * traced(scene, &r, depth, w, medium, st);
     }
     color
 }

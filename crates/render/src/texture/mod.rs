@@ -36,6 +36,7 @@ pub mod shader;
 pub use image::Image;
 pub use procedural::{Checkerboard, Perlin};
 
+use crate::bsdf::closure::Lobes;
 use crate::material::Material;
 use luster_core::math::{Transform, Vec2, Vec3};
 use luster_scene::description::{DecalMode, Interpolation, TextureMapDesc, TextureSource};
@@ -372,10 +373,11 @@ impl Textures {
         f: &TexFrame,
         m: &mut Material,
         n: &mut Vec3,
+        lobes: &mut Lobes,
     ) -> Result<Applied, Box<ShaderError>> {
         for map in self.maps_of(list) {
             let unlit = match map.texture {
-                Texture::Shader { id } => self.apply_shader(id, map, f, m, n)?,
+                Texture::Shader { id } => self.apply_shader(id, map, f, m, n, lobes)?,
                 _ => self.apply_map(map, f, m, n),
             };
             if let Some(c) = unlit {

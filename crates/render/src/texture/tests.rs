@@ -140,7 +140,7 @@ fn flat_normal_map_texel_leaves_the_normal_unchanged() {
     let list = tex.add_list(&[0]);
     let mut m = crate::material::Material::default();
     let mut out = n;
-    assert!(matches!(tex.apply(list, &f, &mut m, &mut out), Ok(Applied::Lit)));
+    assert!(matches!(tex.apply(list, &f, &mut m, &mut out, &mut Lobes::default()), Ok(Applied::Lit)));
     assert!((out - n).length() < 0.01, "{out}");
 }
 
@@ -221,7 +221,7 @@ fn decal_modes_change_the_right_component() {
     let apply = |i: u32| {
         let mut m = base;
         let mut n = Vec3::Z;
-        let r = tex.apply(TexList { start: i, len: 1 }, &f, &mut m, &mut n).unwrap();
+        let r = tex.apply(TexList { start: i, len: 1 }, &f, &mut m, &mut n, &mut Lobes::default()).unwrap();
         (r, m)
     };
     let (_, m) = apply(0);

@@ -35,6 +35,37 @@ pub enum NodeKind {
     Layer,
 }
 
+impl NodeKind {
+    /// Every kind, in the order of its number in the FFI record
+    /// (`luster_node.kind` in `prelude.lua`).
+    pub const ALL: [NodeKind; 9] = [
+        NodeKind::Diffuse,
+        NodeKind::Conductor,
+        NodeKind::Dielectric,
+        NodeKind::Sheen,
+        NodeKind::Emission,
+        NodeKind::Transparent,
+        NodeKind::Add,
+        NodeKind::Scale,
+        NodeKind::Layer,
+    ];
+
+    /// The Lua name: the constructor's, or the combinator's.
+    pub fn name(self) -> &'static str {
+        match self {
+            NodeKind::Diffuse => "diffuse",
+            NodeKind::Conductor => "conductor",
+            NodeKind::Dielectric => "dielectric",
+            NodeKind::Sheen => "sheen",
+            NodeKind::Emission => "emission",
+            NodeKind::Transparent => "transparent",
+            NodeKind::Add => "add",
+            NodeKind::Scale => "scale",
+            NodeKind::Layer => "layer",
+        }
+    }
+}
+
 /// One node of a closure.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Node {
@@ -74,5 +105,40 @@ impl Closure {
     #[inline]
     pub fn root(&self) -> &Node {
         &self.nodes[self.root as usize]
+    }
+}
+
+/// One line, node by node (a closure may share a node between parents, so a
+/// nested form could repeat it exponentially): `#0 diffuse{albedo=(0.8,
+/// 0.8, 0.8), roughness=0} #1 ... root #2`. For `--debug-pixel`.
+impl std::fmt::Display for Closure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        for (i, n) in self.nodes[..usize::from(self.len)].iter().enumerate() {
+            let rgb = |k: usize| format!("({}, {}, {})", n.c[k][0], n.c[k][1], n.c[k][2]);
+            let x = &n.x;
+            let body = match n.kind {
+                NodeKind::Diffuse => format!("albedo={}, roughness={}", rgb(0), x[0]),
+                NodeKind::Conductor => {
+                    format!("f0={}, edge={}, roughness={}, anisotropy={}", rgb(0), rgb(1), x[0], x[1])
+                }
+                NodeKind::Dielectric => format!(
+                    "ior={}, roughness={}, anisotropy={}, tint={}, specular={}, thin={}",
+                    x[0],
+                    x[1],
+                    x[2],
+                    rgb(0),
+                    rgb(1),
+                    n.thin
+                ),
+                NodeKind::Sheen => format!("color={}, roughness={}", rgb(0), x[0]),
+                NodeKind::Emission => format!("radiance={}", rgb(0)),
+                NodeKind::Transparent => format!("color={}", rgb(0)),
+                NodeKind::Add => format!("#{} + #{}", n.a, n.b),
+                NodeKind::Scale => format!("{} * #{}", rgb(0), n.a),
+                NodeKind::Layer => format!("top=#{}, base=#{}", n.a, n.b),
+            };
+            write!(f, "#{i} {}{{{body}}} ", n.kind.name())?;
+        }
+        write!(f, "root #{}", self.root)
     }
 }

@@ -21,6 +21,9 @@ pub(super) struct Compiled {
     pub(super) height3: Option<Slot>,
     /// Every material output in one call (`DecalMode material`).
     pub(super) material: Option<Slot>,
+    /// Whether the script defines `material(s)`: then `material` calls it
+    /// alone.
+    pub(super) closure: bool,
 }
 
 /// Wrappers kept per shader: one per entry point, `height3` and `material`.
@@ -32,6 +35,7 @@ struct Wrappers {
     entries: [Option<Function>; ENTRIES],
     height3: Option<Function>,
     material: Option<Function>,
+    closure: bool,
 }
 
 /// The prelude's functions that build a script's sandbox and its wrappers.
@@ -111,21 +115,26 @@ impl ThreadState {
 
         let mut entries: [Option<Function>; ENTRIES] = Default::default();
         for entry in Entry::ALL {
-            entries[entry as usize] = make_entry.call((env.clone(), entry.name(), name)).map_err(lua_err)?;
+            // material(s) has no wrapper of its own: `make_material` calls it.
+            if entry != Entry::Material {
+                entries[entry as usize] =
+                    make_entry.call((env.clone(), entry.name(), name)).map_err(lua_err)?;
+            }
         }
-        if entries.iter().all(Option::is_none) {
+        let closure = matches!(env.raw_get::<Value>(Entry::Material.name()), Ok(Value::Function(_)));
+        if entries.iter().all(Option::is_none) && !closure {
             return Err(ShaderError::new(
                 ShaderErrorKind::NoEntryPoint,
                 name,
                 format!(
                     "{file}: defines none of the functions color, height, reflect, specular, roughness, \
-                     metalness, emission or density"
+                     metalness, emission, material or density"
                 ),
             ));
         }
         let height3 = make_height3.call((env.clone(), name)).map_err(lua_err)?;
         let material = make_material.call((env, name)).map_err(lua_err)?;
-        Ok(Wrappers { name: name.to_string(), entries, height3, material })
+        Ok(Wrappers { name: name.to_string(), entries, height3, material, closure })
     }
 
     /// Puts a shader's wrappers on the caller's stack.
@@ -141,6 +150,6 @@ impl ThreadState {
         }
         let height3 = keep(&w.height3).map_err(internal)?;
         let material = keep(&w.material).map_err(internal)?;
-        Ok(Compiled { name: w.name, entries, height3, material })
+        Ok(Compiled { name: w.name, entries, height3, material, closure: w.closure })
     }
 }

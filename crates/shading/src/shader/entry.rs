@@ -24,10 +24,13 @@ pub enum Entry {
     Roughness = 6,
     /// `metalness(s)`: how metallic a surface is.
     Metalness = 7,
+    /// `material(s)`: a closure (`docs/closures.md`), called only through
+    /// [`ShaderSet::material`](super::ShaderSet::material), never alone.
+    Material = 8,
 }
 
 /// How many entry points there are.
-pub const ENTRIES: usize = 8;
+pub const ENTRIES: usize = 9;
 
 impl Entry {
     /// Every entry point, in index order.
@@ -40,6 +43,7 @@ impl Entry {
         Entry::Specular,
         Entry::Roughness,
         Entry::Metalness,
+        Entry::Material,
     ];
 
     /// The function name a script defines.
@@ -53,12 +57,15 @@ impl Entry {
             Entry::Specular => "specular",
             Entry::Roughness => "roughness",
             Entry::Metalness => "metalness",
+            Entry::Material => "material",
         }
     }
 }
 
 /// What a `DecalMode material` shader says about a surface point: one value
-/// per output the script defines (`None` for the others).
+/// per output the script defines (`None` for the others). A script that
+/// defines `material(s)` gives `closure` alone: its other outputs are not
+/// called.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct MaterialOutputs {
     /// `color(s)`: the base colour, 0–1.

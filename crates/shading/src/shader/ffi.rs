@@ -38,7 +38,8 @@ use std::sync::Arc;
 use std::sync::OnceLock;
 use std::time::Instant;
 
-use super::{ImageSampler, SampleFilter};
+use super::closure::{Closure, Node, NodeKind, MAX_NODES};
+use super::{Entry, ImageSampler, MaterialOutputs, SampleFilter};
 use crate::noise::{course, fractal, perlin, simplex, voronoi};
 
 /// A 3-vector as Lua sees it (`luster_vec3`).
@@ -98,8 +99,23 @@ pub(crate) struct Out {
     pub bad: i32,
 }
 
+/// One closure node as the constructors write it (`luster_node`); the
+/// fields mean what [`Node`]'s do.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct NodeOut {
+    pub kind: i32,
+    pub a: i32,
+    pub b: i32,
+    pub thin: i32,
+    pub c: [[f64; 3]; 3],
+    pub x: [f64; 3],
+}
+
 /// Where the `DecalMode material` wrapper writes every material output the
-/// script defines (`luster_material`); the others keep their defaults.
+/// script defines (`luster_material`); the others keep their defaults. A
+/// script with `material(s)` writes the closure's nodes instead:
+/// `nodes[..closure_len]`, rooted at `closure_root`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct MaterialOut {
@@ -109,6 +125,36 @@ pub(crate) struct MaterialOut {
     pub reflect: [f64; 3],
     pub roughness: f64,
     pub metalness: f64,
+    pub closure_len: i32,
+    pub closure_root: i32,
+    pub nodes: [NodeOut; MAX_NODES],
+}
+
+/// The closure in `m`, or `None` when the record is not one the prelude's
+/// constructors write (an unknown kind, a child not below its parent): the
+/// renderer relies on both.
+fn closure_of(m: &MaterialOut) -> Option<Closure> {
+    let len = usize::try_from(m.closure_len).ok().filter(|n| (1..=MAX_NODES).contains(n))?;
+    let root = usize::try_from(m.closure_root).ok().filter(|&r| r < len)?;
+    let mut c = Closure { len: len as u8, root: root as u8, ..Closure::default() };
+    for (i, (dst, src)) in c.nodes.iter_mut().zip(&m.nodes[..len]).enumerate() {
+        let kind = *usize::try_from(src.kind).ok().and_then(|k| NodeKind::ALL.get(k))?;
+        let child = |k: i32| usize::try_from(k).ok().filter(|&k| k < i).map(|k| k as u8);
+        let (a, b) = match kind {
+            NodeKind::Add | NodeKind::Layer => (child(src.a)?, child(src.b)?),
+            NodeKind::Scale => (child(src.a)?, 0),
+            _ => (0, 0),
+        };
+        *dst = Node {
+            kind,
+            a,
+            b,
+            thin: src.thin != 0,
+            c: src.c.map(|c| c.map(|v| v as f32)),
+            x: src.x.map(|v| v as f32),
+        };
+    }
+    Some(c)
 }
 
 /// The per-call deadline (`luster_clock`). `start_ns == 0` means "not started":
@@ -441,19 +487,37 @@ impl IoBlock {
         (*self.clock).expired = 0;
     }
 
-    /// Writes the shading point, clears the material outputs and arms the
-    /// clock for one `DecalMode material` call.
+    /// Writes the shading point and arms the clock for one `DecalMode
+    /// material` call. The record needs no clearing: the wrapper writes
+    /// every output the script defines, and a closure's count (the nodes
+    /// past it are never read).
     #[inline]
     pub(crate) fn begin_material(&self, fill: impl FnOnce(&mut Shade)) {
         self.begin(fill);
-        // SAFETY: see the module doc; no Lua code runs during this write.
-        unsafe { *self.material = MaterialOut::default() }
     }
 
-    /// The material outputs the wrapper wrote.
-    pub(crate) fn material(&self) -> MaterialOut {
-        // SAFETY: see the module doc; the Lua call has returned.
-        unsafe { *self.material }
+    /// What the material wrapper wrote, as [`MaterialOutputs`]: the outputs
+    /// for which `defines` is true, or the closure alone when it defines
+    /// `material`. Reads only the nodes in use, not the whole record.
+    /// `None` when the closure is malformed (see [`closure_of`]).
+    pub(crate) fn material_outputs(&self, defines: impl Fn(Entry) -> bool) -> Option<MaterialOutputs> {
+        // SAFETY: see the module doc; the Lua call has returned, and nothing
+        // writes the record while this reference lives.
+        let m = unsafe { &*self.material };
+        if defines(Entry::Material) {
+            return Some(MaterialOutputs { closure: Some(closure_of(m)?), ..MaterialOutputs::default() });
+        }
+        let rgb = |e: Entry, c: [f64; 3]| defines(e).then(|| c.map(|x| x as f32));
+        let num = |e: Entry, x: f64| defines(e).then_some(x as f32);
+        Some(MaterialOutputs {
+            color: rgb(Entry::Color, m.color),
+            specular: rgb(Entry::Specular, m.specular),
+            roughness: num(Entry::Roughness, m.roughness),
+            metalness: num(Entry::Metalness, m.metalness),
+            emission: rgb(Entry::Emission, m.emission),
+            reflect: rgb(Entry::Reflect, m.reflect),
+            closure: None,
+        })
     }
 
     /// Writes the three points of a bump evaluation and arms the clock: the

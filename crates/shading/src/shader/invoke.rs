@@ -10,7 +10,7 @@ use super::ffi;
 use super::shade::{describe, fill_point, fill_shade, object_random};
 use super::state::ThreadState;
 use super::threads::MISS;
-use super::{Entry, ShadeInput, ShadePoint};
+use super::{Entry, MaterialOutputs, ShadeInput, ShadePoint};
 
 impl ThreadState {
     /// Calls one entry point; the result's channels (a height in `[0]`).
@@ -74,6 +74,13 @@ impl ThreadState {
     ) -> Result<[f64; 3], ShaderError> {
         match status_of(code) {
             Some(status) => self.finish_call(id, entry, input, status),
+            None if entry == Entry::Material && self.shaders.get(id).is_some_and(|s| s.closure) => {
+                Err(ShaderError::new(
+                    ShaderErrorKind::Usage,
+                    &self.shaders[id].name,
+                    "material(s) returns a closure, which ShaderSet::material gives; it has no single result",
+                ))
+            }
             None => Err(self.no_entry(id, entry.name())),
         }
     }
@@ -155,8 +162,8 @@ impl ThreadState {
             Some(shader) if entry == "material" => ShaderError::new(
                 ShaderErrorKind::Usage,
                 &shader.name,
-                "the script defines none of the material outputs (color, specular, roughness, metalness, \
-                 emission, reflect)",
+                "the script defines neither material(s) nor any of the material outputs (color, specular, \
+                 roughness, metalness, emission, reflect)",
             ),
             Some(shader) => ShaderError::new(
                 ShaderErrorKind::Usage,
@@ -166,22 +173,30 @@ impl ThreadState {
         }
     }
 
-    /// Calls every material output shader `id` defines, in one Lua call.
+    /// Calls every material output shader `id` defines, or its
+    /// `material(s)`, in one Lua call.
     pub(crate) fn call_material(
         &self,
         id: usize,
         input: &ShadeInput,
-    ) -> Result<ffi::MaterialOut, ShaderError> {
+    ) -> Result<MaterialOutputs, ShaderError> {
         let Some(f) = self.shaders.get(id).and_then(|s| s.material) else {
             return Err(self.no_entry(id, "material"));
         };
         self.io.begin_material(|s| fill_shade(self.avx, s, input, self.random(input.instance_id)));
         let status = self.caller.call(f);
         let shader = &self.shaders[id];
-        let result = self.outcome(&shader.name, status).map(|()| self.io.material());
+        let defines = self.entries(id);
+        let result = self.outcome(&shader.name, status).and_then(|()| {
+            self.io.material_outputs(|e| defines[e as usize]).ok_or_else(|| {
+                let msg = "shader runtime: material(s) wrote a malformed closure";
+                ShaderError::new(ShaderErrorKind::Internal, &shader.name, msg)
+            })
+        });
         if super::debug_pixel() == Some(input.pixel) {
             let out = match &result {
-                Ok(m) => format!("{m:?}"),
+                Ok(MaterialOutputs { closure: Some(c), .. }) => format!("closure {c}"),
+                Ok(m) => describe_outputs(m),
                 Err(e) => format!("error: {}", e.message),
             };
             eprintln!(
@@ -265,4 +280,23 @@ fn ran(status: c_int) -> u32 {
 /// The Lua status in a [`RAN`] code; `None` for [`MISS`].
 fn status_of(code: u32) -> Option<c_int> {
     (code != MISS && code & RAN != 0).then_some((code & 0xffff) as c_int)
+}
+
+/// The outputs a script without `material(s)` defined, for `--debug-pixel`:
+/// `color=(r, g, b) roughness=x ...`.
+fn describe_outputs(m: &MaterialOutputs) -> String {
+    let rgb = |k: &str, c: Option<[f32; 3]>| c.map(|c| format!("{k}=({}, {}, {})", c[0], c[1], c[2]));
+    let num = |k: &str, x: Option<f32>| x.map(|x| format!("{k}={x}"));
+    [
+        rgb("color", m.color),
+        rgb("specular", m.specular),
+        num("roughness", m.roughness),
+        num("metalness", m.metalness),
+        rgb("emission", m.emission),
+        rgb("reflect", m.reflect),
+    ]
+    .into_iter()
+    .flatten()
+    .collect::<Vec<_>>()
+    .join(" ")
 }

@@ -52,12 +52,12 @@
 //! pathological pattern on a long string) runs to its end before the next check.
 
 mod call;
+pub mod closure;
 mod compile;
 mod entry;
 mod error;
 mod ffi;
 mod input;
-pub mod closure;
 mod instrument;
 mod invoke;
 mod modules;
@@ -70,6 +70,8 @@ mod state;
 mod tests;
 #[cfg(test)]
 mod tests_author;
+#[cfg(test)]
+mod tests_closure;
 #[cfg(test)]
 mod tests_modules;
 #[cfg(test)]
@@ -296,31 +298,37 @@ impl ShaderSet {
         self.has(id, Entry::Emission)
     }
 
-    /// Whether shader `id` defines any material output (`color`, `specular`,
-    /// `roughness`, `metalness`, `emission` or `reflect`), which
-    /// `DecalMode material` needs.
+    /// Whether shader `id` defines `material(s)` or any material output
+    /// (`color`, `specular`, `roughness`, `metalness`, `emission` or
+    /// `reflect`), one of which `DecalMode material` needs.
     pub fn has_material(&self, id: usize) -> bool {
-        [Entry::Color, Entry::Specular, Entry::Roughness, Entry::Metalness, Entry::Emission, Entry::Reflect]
-            .into_iter()
-            .any(|e| self.has(id, e))
+        [
+            Entry::Material,
+            Entry::Color,
+            Entry::Specular,
+            Entry::Roughness,
+            Entry::Metalness,
+            Entry::Emission,
+            Entry::Reflect,
+        ]
+        .into_iter()
+        .any(|e| self.has(id, e))
     }
 
-    /// Every material output shader `id` defines at `input`, in one call into
-    /// Lua, each checked against its range (reflectances and `roughness`,
-    /// `metalness` in 0–1, `emission` finite and not negative).
+    /// Whether shader `id` defines `material(s)`: its
+    /// [`ShaderSet::material`] then gives a closure and no other output.
+    pub fn has_closure(&self, id: usize) -> bool {
+        self.has(id, Entry::Material)
+    }
+
+    /// What shader `id` says about the surface at `input`, in one call into
+    /// Lua: the closure its `material(s)` returns (`docs/closures.md`),
+    /// converted to [`closure::Closure`]; or, for a script without
+    /// `material`, every material output it defines, each checked against
+    /// its range (reflectances and `roughness`, `metalness` in 0–1,
+    /// `emission` finite and not negative).
     pub fn material(&self, id: usize, input: &ShadeInput) -> Result<MaterialOutputs, ShaderError> {
-        let m = threads::with_state(&self.shared, |state| state.call_material(id, input))?;
-        let rgb = |e: Entry, c: [f64; 3]| self.has(id, e).then(|| c.map(|x| x as f32));
-        let num = |e: Entry, x: f64| self.has(id, e).then_some(x as f32);
-        Ok(MaterialOutputs {
-            color: rgb(Entry::Color, m.color),
-            specular: rgb(Entry::Specular, m.specular),
-            roughness: num(Entry::Roughness, m.roughness),
-            metalness: num(Entry::Metalness, m.metalness),
-            emission: rgb(Entry::Emission, m.emission),
-            reflect: rgb(Entry::Reflect, m.reflect),
-            closure: None,
-        })
+        threads::with_state(&self.shared, |state| state.call_material(id, input))
     }
 
     /// The density of volume shader `id` at `input` (a number; the caller

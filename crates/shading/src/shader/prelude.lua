@@ -10,6 +10,7 @@ local ffi = ffi
 -- Kept for require (below) before the real globals lose them.
 local loadstring, setfenv, pcall = loadstring, setfenv, pcall
 local error, type, tostring, select, pairs, ipairs = error, type, tostring, select, pairs, ipairs
+local next = next
 local setmetatable, tonumber = setmetatable, tonumber
 local floor, sqrt, format, abs, min = math.floor, math.sqrt, string.format, math.abs, math.min
 local band, bxor, rshift, tobit = bit.band, bit.bxor, bit.rshift, bit.tobit
@@ -24,10 +25,14 @@ typedef struct {
   int32_t object_id, instance_id, depth, pixel_x, pixel_y, __luster_pad;
 } luster_shade;
 typedef struct { double r, g, b; int32_t bad; } luster_out;
+typedef struct { int32_t kind, a, b, thin; double c[3][3]; double x[3]; } luster_node;
 typedef struct {
   double color[3], specular[3], emission[3], reflect[3];
   double roughness, metalness;
+  int32_t closure_len, closure_root;
+  luster_node nodes[32];
 } luster_material;
+typedef struct { double gen; int32_t index; } luster_closure;
 typedef struct { uint64_t start_ns, timeout_ns; int32_t expired; } luster_clock;
 typedef struct { double f1, f2, px, py, pz, id; } luster_cell;
 typedef struct {
@@ -95,6 +100,12 @@ end
 -- scalar code costs (benches/shader.rs measures both).
 ---------------------------------------------------------------------------
 local vec3_t
+-- A closure (see the closures section below). A vec3 times a closure is a
+-- weighted closure, which vec3's own __mul hands over to closure_mul.
+local closure_ct = ffi.typeof("luster_closure")
+local function is_closure(v) return type(v) == "cdata" and ffi.istype(closure_ct, v) end
+-- closure_mul, closure_entry and the emission{} constructor (c_emission).
+local closures = {}
 local vec3_methods = {}
 local vec3_mt = { __index = vec3_methods }
 local function isvec(v) return type(v) == "cdata" and ffi.istype(vec3_t, v) end
@@ -104,6 +115,7 @@ local vec2_t = ffi.typeof("luster_vec2")
 local function typename(v)
   if type(v) ~= "cdata" then return type(v) end
   if isvec(v) then return "vec3" end
+  if is_closure(v) then return "closure" end
   if ffi.istype(shade_t, v) then return "shading point" end
   if ffi.istype(vec2_t, v) then return "uv" end
   return "runtime value"
@@ -148,7 +160,13 @@ local function binary(op, f)
 end
 vec3_mt.__add = binary("+", function(a, b) return a + b end)
 vec3_mt.__sub = binary("-", function(a, b) return a - b end)
-vec3_mt.__mul = binary("*", function(a, b) return a * b end)
+do
+  local vec3_mul = binary("*", function(a, b) return a * b end)
+  function vec3_mt.__mul(a, b)
+    if is_closure(a) or is_closure(b) then return closures.mul(a, b) end
+    return vec3_mul(a, b)
+  end
+end
 vec3_mt.__div = binary("/", function(a, b) return a / b end)
 function vec3_mt.__unm(a) return vec3_t(-a.x, -a.y, -a.z) end
 function vec3_mt.__tostring(a) return format("vec3(%g, %g, %g)", a.x, a.y, a.z) end
@@ -880,12 +898,446 @@ local function make_height3(env, shader_name)
 end
 local function make_entry(env, entry, shader_name)
   local f = env[entry]
-  if type(f) ~= "function" then return nil end
+  -- A built-in of the same name (the emission{} constructor) is no entry
+  -- point, and material(s) is called through make_material alone.
+  if type(f) ~= "function" or f == BUILTINS[entry] or entry == "material" then return nil end
   if entry == "height" or entry == "density" or entry == "roughness" or entry == "metalness" then
     return scalar_entry(f, shader_name, entry)
   end
   return color_entry(f, shader_name, entry)
 end
+
+---------------------------------------------------------------------------
+-- Closures (docs/closures.md): material(s) returns a tree of BSDF nodes that
+-- the constructors below write straight into the `material` record, children
+-- before parents, as they run. A closure value is a small cdata holding its
+-- node's index and the call it was built in (`gen`): it costs no Lua table,
+-- its + and * are metamethods, and one kept from an earlier call is refused
+-- (its node has been overwritten since). The kind numbers are NodeKind's
+-- order in closure.rs.
+---------------------------------------------------------------------------
+-- A function of its own: a function may have only 200 locals.
+;(function()
+local closure_mul
+local MAX_NODES = 32
+local K_DIFFUSE, K_CONDUCTOR, K_DIELECTRIC, K_SHEEN, K_EMISSION = 0, 1, 2, 3, 4
+local K_TRANSPARENT, K_ADD, K_SCALE, K_LAYER = 5, 6, 7, 8
+local KIND_NAMES = { [0] = "diffuse", "conductor", "dielectric", "sheen", "emission", "transparent",
+  "add", "scale", "layer" }
+local FLT_MAX = 3.4028234663852886e38
+local nodes = material.nodes
+-- The current call of a material wrapper, and whether one is running: a
+-- closure built at the top level or in another entry point would be stale
+-- before any call could return it.
+local gen, building = 0, false
+local closure_t
+local EMPTY = {}
+local CLOSURE_EXAMPLE = "a closure such as diffuse{...}"
+
+-- Every check helper below is called by a constructor or operator, which
+-- the user's code called: level 4 from here is the user's line. `extra`
+-- counts further prelude frames in between.
+local function fail(msg, extra)
+  error(msg, 4 + (extra or 0))
+end
+local function a_type(v)
+  if v == nil then return "nothing (nil)" end
+  return "a " .. typename(v)
+end
+local function unknown_key(who, fname, k, list)
+  fail(format("%s: unknown parameter '%s' (%s takes %s)", who, tostring(k), fname, list), 1)
+end
+-- Unknown names are the likeliest mistake (a misspelt parameter would
+-- otherwise silently take its default).
+local function check_keys(t, who, fname, known, list)
+  if type(t) ~= "table" or t[KIND_MARK] ~= nil then
+    fail(format("%s takes one table of named parameters (%s), got %s", who, list, a_type(t)))
+  end
+  -- The first keys one next() at a time, without a loop: a loop here
+  -- (pairs or counted) would be a trace of its own, entered and left on
+  -- every call, costing more than the rest of the constructor.
+  local k = next(t)
+  if k == nil then return end
+  if not known[k] then unknown_key(who, fname, k, list) end
+  k = next(t, k)
+  if k == nil then return end
+  if not known[k] then unknown_key(who, fname, k, list) end
+  k = next(t, k)
+  if k == nil then return end
+  if not known[k] then unknown_key(who, fname, k, list) end
+  k = next(t, k)
+  if k == nil then return end
+  if not known[k] then unknown_key(who, fname, k, list) end
+  k = next(t, k)
+  if k == nil then return end
+  if not known[k] then unknown_key(who, fname, k, list) end
+  k = next(t, k)
+  if k == nil then return end
+  if not known[k] then unknown_key(who, fname, k, list) end
+  k = next(t, k)
+  if k == nil then return end
+  if not known[k] then unknown_key(who, fname, k, list) end
+  k = next(t, k)
+  if k == nil then return end
+  if not known[k] then unknown_key(who, fname, k, list) end
+  -- More than eight (openpbr{} with many parameters).
+  k = next(t, k)
+  while k ~= nil do
+    if not known[k] then unknown_key(who, fname, k, list) end
+    k = next(t, k)
+  end
+end
+local function range_text(lo, hi)
+  if hi == FLT_MAX then return "a finite number, 0 or more" end
+  return format("a number from %g to %g", lo, hi)
+end
+local function num_arg(v, default, who, pname, lo, hi)
+  if v == nil then return default end
+  if type(v) == "number" and v >= lo and v <= hi then return v end
+  local what = type(v) == "number" and describe(v) or a_type(v)
+  fail(format("%s: %s is %s (expected %s)", who, pname, what, range_text(lo, hi)))
+end
+local function bool_arg(v, default, who, pname)
+  if v == nil then return default end
+  if v == true or v == false then return v end
+  fail(format("%s: %s is %s (expected true or false)", who, pname, a_type(v)))
+end
+local function color_expected(hi)
+  return format("%s, or a colour: rgb(r, g, b), vec3(r, g, b) or {r, g, b} with each value %s",
+    range_text(0, hi), hi == FLT_MAX and "finite and 0 or more" or format("from 0 to %g", hi))
+end
+local function color_range_msg(who, pname, r, g, b, hi)
+  for i = 1, 3 do
+    local v = select(i, r, g, b)
+    if not (v >= 0 and v <= hi) then
+      local expect = hi == FLT_MAX and "finite, 0 or more" or format("0 to %g", hi)
+      return format("%s: %s's %s value is %s (expected %s)", who, pname, channel_names[i], describe(v), expect)
+    end
+  end
+end
+-- A colour parameter: a number (grey), a vec3, rgb(...) or {r, g, b}, each
+-- value from 0 to hi (FLT_MAX: any finite value f32 holds). nil takes the
+-- default grey.
+local function color_arg(v, default, who, pname, hi)
+  local r, g, b
+  if type(v) == "number" then
+    if v >= 0 and v <= hi then return v, v, v end
+    fail(format("%s: %s is %s (expected %s)", who, pname, describe(v), color_expected(hi)))
+  elseif v == nil then
+    return default, default, default
+  elseif isvec(v) then
+    r, g, b = v.x, v.y, v.z
+  elseif type(v) == "table" then
+    local mark = v[KIND_MARK]
+    if mark == "rgb" then
+      local c = v.value
+      r, g, b = c.x, c.y, c.z
+    elseif mark == nil then
+      r, g, b = v[1], v[2], v[3]
+      if r == nil and g == nil and b == nil then r, g, b = v.r, v.g, v.b end
+    end
+    if type(r) ~= "number" or type(g) ~= "number" or type(b) ~= "number" then
+      fail(format("%s: %s is a table without three numbers (expected %s)", who, pname, color_expected(hi)))
+    end
+  else
+    fail(format("%s: %s is %s (expected %s)", who, pname, a_type(v), color_expected(hi)))
+  end
+  if r >= 0 and r <= hi and g >= 0 and g <= hi and b >= 0 and b <= hi then return r, g, b end
+  fail(color_range_msg(who, pname, r, g, b, hi))
+end
+local STALE = "a closure from an earlier call of material(s) (a closure lasts for the call that built it: "
+  .. "build closures inside material(s) on every call)"
+-- A closure operand's node index.
+local function closure_arg(v, who, pname)
+  if is_closure(v) then
+    if v.gen == gen then return v.index end
+    fail(format("%s: %s is %s", who, pname, STALE))
+  end
+  local what = v == nil and "missing" or a_type(v)
+  fail(format("%s: %s is %s (expected %s)", who, pname, what, CLOSURE_EXAMPLE))
+end
+-- Appends one node; its index. Every field is written: the record is not
+-- cleared between calls.
+local function emit(extra, who, kind, a, b, thin, r0, g0, b0, r1, g1, b1, x0, x1, x2)
+  local n = material.closure_len
+  if not building then
+    fail(format("%s: closures can be built only while material(s) runs (not at the top level or in "
+      .. "another function's call)", who), extra)
+  end
+  if n >= MAX_NODES then
+    fail(format("%s: the closure would have more than %d nodes (each constructor, + and layer adds one, "
+      .. "a weight other than 1 one, mix three)", who, MAX_NODES), extra)
+  end
+  local node = nodes[n]
+  node.kind, node.a, node.b, node.thin = kind, a, b, thin
+  local c = node.c
+  c[0][0], c[0][1], c[0][2] = r0, g0, b0
+  c[1][0], c[1][1], c[1][2] = r1, g1, b1
+  c[2][0], c[2][1], c[2][2] = 0, 0, 0
+  local x = node.x
+  x[0], x[1], x[2] = x0, x1, x2
+  material.closure_len = n + 1
+  return n
+end
+-- (1 - t) a + t b, as two Scale nodes and an Add.
+local function mix_nodes(extra, who, ia, ib, r, g, b)
+  local sa = emit(extra + 1, who, K_SCALE, ia, 0, 0, 1 - r, 1 - g, 1 - b, 0, 0, 0, 0, 0, 0)
+  local sb = emit(extra + 1, who, K_SCALE, ib, 0, 0, r, g, b, 0, 0, 0, 0, 0, 0)
+  -- Not a tail call: fail's levels count this frame.
+  local n = emit(extra + 1, who, K_ADD, sa, sb, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0)
+  return n
+end
+
+local DIFFUSE = { albedo = true, roughness = true }
+local function c_diffuse(t)
+  local W = "diffuse{}"
+  t = t or EMPTY
+  check_keys(t, W, "diffuse", DIFFUSE, "albedo, roughness")
+  local r, g, b = color_arg(t.albedo, 0.8, W, "albedo", 1)
+  local rough = num_arg(t.roughness, 0, W, "roughness", 0, 1)
+  return closure_t(gen, emit(0, W, K_DIFFUSE, 0, 0, 0, r, g, b, 0, 0, 0, rough, 0, 0))
+end
+local CONDUCTOR = { f0 = true, edge = true, roughness = true, anisotropy = true }
+local function c_conductor(t)
+  local W = "conductor{}"
+  t = t or EMPTY
+  check_keys(t, W, "conductor", CONDUCTOR, "f0, edge, roughness, anisotropy")
+  local fr, fg, fb = color_arg(t.f0, 1, W, "f0", 1)
+  local er, eg, eb = color_arg(t.edge, 1, W, "edge", 1)
+  local rough = num_arg(t.roughness, 0, W, "roughness", 0, 1)
+  local aniso = num_arg(t.anisotropy, 0, W, "anisotropy", 0, 1)
+  return closure_t(gen, emit(0, W, K_CONDUCTOR, 0, 0, 0, fr, fg, fb, er, eg, eb, rough, aniso, 0))
+end
+local DIELECTRIC = { ior = true, roughness = true, anisotropy = true, tint = true, specular = true, thin = true }
+local function c_dielectric(t)
+  local W = "dielectric{}"
+  t = t or EMPTY
+  check_keys(t, W, "dielectric", DIELECTRIC, "ior, roughness, anisotropy, tint, specular, thin")
+  local ior = num_arg(t.ior, 1.5, W, "ior", 1, 5)
+  local rough = num_arg(t.roughness, 0, W, "roughness", 0, 1)
+  local aniso = num_arg(t.anisotropy, 0, W, "anisotropy", 0, 1)
+  local tr, tg, tb = color_arg(t.tint, 1, W, "tint", 1)
+  local sr, sg, sb = color_arg(t.specular, 1, W, "specular", 1)
+  local thin = bool_arg(t.thin, false, W, "thin") and 1 or 0
+  return closure_t(gen, emit(0, W, K_DIELECTRIC, 0, 0, thin, tr, tg, tb, sr, sg, sb, ior, rough, aniso))
+end
+local SHEEN = { color = true, roughness = true }
+local function c_sheen(t)
+  local W = "sheen{}"
+  t = t or EMPTY
+  check_keys(t, W, "sheen", SHEEN, "color, roughness")
+  local r, g, b = color_arg(t.color, 1, W, "color", 1)
+  local rough = num_arg(t.roughness, 0.3, W, "roughness", 0, 1)
+  return closure_t(gen, emit(0, W, K_SHEEN, 0, 0, 0, r, g, b, 0, 0, 0, rough, 0, 0))
+end
+local EMISSION = { radiance = true }
+local function c_emission(t)
+  local W = "emission{}"
+  t = t or EMPTY
+  check_keys(t, W, "emission", EMISSION, "radiance")
+  local r, g, b = color_arg(t.radiance, 1, W, "radiance", FLT_MAX)
+  return closure_t(gen, emit(0, W, K_EMISSION, 0, 0, 0, r, g, b, 0, 0, 0, 0, 0, 0))
+end
+local TRANSPARENT = { color = true }
+local function c_transparent(t)
+  local W = "transparent{}"
+  t = t or EMPTY
+  check_keys(t, W, "transparent", TRANSPARENT, "color")
+  local r, g, b = color_arg(t.color, 1, W, "color", 1)
+  return closure_t(gen, emit(0, W, K_TRANSPARENT, 0, 0, 0, r, g, b, 0, 0, 0, 0, 0, 0))
+end
+local LAYER = { top = true, base = true }
+local function c_layer(t)
+  local W = "layer{}"
+  t = t or EMPTY
+  check_keys(t, W, "layer", LAYER, "top, base")
+  local top = closure_arg(t.top, W, "top")
+  local base = closure_arg(t.base, W, "base")
+  return closure_t(gen, emit(0, W, K_LAYER, top, base, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0))
+end
+local function closure_add(a, b)
+  local W = "closure +"
+  local ia = closure_arg(a, W, "the left operand")
+  local ib = closure_arg(b, W, "the right operand")
+  return closure_t(gen, emit(0, W, K_ADD, ia, ib, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0))
+end
+local function no_weight(who, pname)
+  fail(format("%s: %s is missing (expected %s)", who, pname, color_expected(1)))
+end
+-- w * a or a * w; a weight of exactly 1 adds no node.
+closure_mul = function(a, b)
+  local W = "closure *"
+  local c, w = a, b
+  if not is_closure(a) then c, w = b, a end
+  if is_closure(w) then
+    fail("closure *: both operands are closures (expected a closure and a weight: a number or a colour "
+      .. "from 0 to 1)", -1)
+  end
+  local ic = closure_arg(c, W, "the closure")
+  if w == nil then no_weight(W, "the weight") end
+  local r, g, bb = color_arg(w, 1, W, "the weight", 1)
+  if r == 1 and g == 1 and bb == 1 then return c end
+  return closure_t(gen, emit(0, W, K_SCALE, ic, 0, 0, r, g, bb, 0, 0, 0, 0, 0, 0))
+end
+-- (1 - t) a + t b; t of exactly 0 or 1 is a or b itself, adding no node.
+local function closure_mix(a, b, t)
+  local W = "mix()"
+  local ia = closure_arg(a, W, "the first closure")
+  local ib = closure_arg(b, W, "the second closure")
+  if t == nil then no_weight(W, "t") end
+  local r, g, bb = color_arg(t, 1, W, "t", 1)
+  if r == 0 and g == 0 and bb == 0 then return a end
+  if r == 1 and g == 1 and bb == 1 then return b end
+  return closure_t(gen, mix_nodes(0, W, ia, ib, r, g, bb))
+end
+-- mix() of numbers and vec3s as before; of closures, closure_mix.
+local function mix_any(a, b, t)
+  if is_closure(a) or is_closure(b) then return closure_mix(a, b, t) end
+  return a + (b - a) * t
+end
+
+local CLOSURE_OPS = "closures are added (a + b), weighted (w * a) and mixed (mix(a, b, t))"
+local function closure_no_op(op)
+  return function() fail(format("closure %s: not defined: %s", op, CLOSURE_OPS), -1) end
+end
+closure_t = ffi.metatype("luster_closure", {
+  __add = closure_add,
+  __mul = closure_mul,
+  __sub = closure_no_op("-"),
+  __div = closure_no_op("/"),
+  __unm = closure_no_op("-"),
+  __pow = closure_no_op("^"),
+  __mod = closure_no_op("%"),
+  __concat = closure_no_op(".."),
+  __index = function(_, k)
+    error(format("a closure has no field '%s' (%s)", tostring(k), CLOSURE_OPS), 2)
+  end,
+  __newindex = function(_, k)
+    error(format("a closure has no field '%s' (%s)", tostring(k), CLOSURE_OPS), 2)
+  end,
+  __tostring = function(c)
+    if c.gen ~= gen then return "closure (from an earlier call)" end
+    return format("closure #%d (%s)", c.index, KIND_NAMES[nodes[c.index].kind])
+  end,
+})
+
+-- openpbr{...}: OpenPBR Surface 1.1's parameters on the constructors above
+-- (docs/closures.md has the mapping). A branch whose weight is 0 builds no
+-- nodes.
+local OPENPBR_NAMES = { "base_weight", "base_color", "base_metalness", "base_diffuse_roughness",
+  "specular_weight", "specular_color", "specular_roughness", "specular_ior", "specular_anisotropy",
+  "transmission_weight", "transmission_color", "coat_weight", "coat_color", "coat_roughness", "coat_ior",
+  "fuzz_weight", "fuzz_color", "fuzz_roughness", "emission_luminance", "emission_color",
+  "subsurface_weight", "subsurface_color", "geometry_opacity", "geometry_thin_walled", "thin_walled" }
+local OPENPBR = {}
+for _, k in ipairs(OPENPBR_NAMES) do OPENPBR[k] = true end
+local OPENPBR_LIST = table.concat(OPENPBR_NAMES, ", ")
+-- OpenPBR's specular_weight scales the dielectric's F0 = ((ior - 1) / (ior
+-- + 1))^2; the ior with that F0.
+local function weighted_ior(ior, w)
+  if w == 1 then return ior end
+  local s = (ior - 1) / (ior + 1)
+  local r = sqrt(min(w * s * s, 1))
+  if r >= 1 then return 5 end
+  return min((1 + r) / (1 - r), 5)
+end
+local function c_openpbr(t)
+  local W = "openpbr{}"
+  t = t or EMPTY
+  check_keys(t, W, "openpbr", OPENPBR, OPENPBR_LIST)
+  local bw = num_arg(t.base_weight, 1, W, "base_weight", 0, 1)
+  local bcr, bcg, bcb = color_arg(t.base_color, 0.8, W, "base_color", 1)
+  local metal = num_arg(t.base_metalness, 0, W, "base_metalness", 0, 1)
+  local bdr = num_arg(t.base_diffuse_roughness, 0, W, "base_diffuse_roughness", 0, 1)
+  local sw = num_arg(t.specular_weight, 1, W, "specular_weight", 0, 1)
+  local scr, scg, scb = color_arg(t.specular_color, 1, W, "specular_color", 1)
+  local sr = num_arg(t.specular_roughness, 0.3, W, "specular_roughness", 0, 1)
+  local sior = num_arg(t.specular_ior, 1.5, W, "specular_ior", 1, 5)
+  local sa = num_arg(t.specular_anisotropy, 0, W, "specular_anisotropy", 0, 1)
+  local tw = num_arg(t.transmission_weight, 0, W, "transmission_weight", 0, 1)
+  local tcr, tcg, tcb = color_arg(t.transmission_color, 1, W, "transmission_color", 1)
+  local cw = num_arg(t.coat_weight, 0, W, "coat_weight", 0, 1)
+  local ccr, ccg, ccb = color_arg(t.coat_color, 1, W, "coat_color", 1)
+  local cr = num_arg(t.coat_roughness, 0, W, "coat_roughness", 0, 1)
+  local cior = num_arg(t.coat_ior, 1.6, W, "coat_ior", 1, 5)
+  local fw = num_arg(t.fuzz_weight, 0, W, "fuzz_weight", 0, 1)
+  local fcr, fcg, fcb = color_arg(t.fuzz_color, 1, W, "fuzz_color", 1)
+  local fr = num_arg(t.fuzz_roughness, 0.5, W, "fuzz_roughness", 0, 1)
+  local el = num_arg(t.emission_luminance, 0, W, "emission_luminance", 0, FLT_MAX)
+  local ecr, ecg, ecb = color_arg(t.emission_color, 1, W, "emission_color", 1)
+  local ssw = num_arg(t.subsurface_weight, 0, W, "subsurface_weight", 0, 1)
+  local sscr, sscg, sscb = color_arg(t.subsurface_color, 0.8, W, "subsurface_color", 1)
+  local op = num_arg(t.geometry_opacity, 1, W, "geometry_opacity", 0, 1)
+  local thin = (bool_arg(t.geometry_thin_walled, false, W, "geometry_thin_walled")
+    or bool_arg(t.thin_walled, false, W, "thin_walled")) and 1 or 0
+
+  local top
+  if metal < 1 then
+    local ior = weighted_ior(sior, sw)
+    if tw < 1 then
+      -- Subsurface until luster has it: the diffuse albedo leans towards
+      -- subsurface_color.
+      local ar, ag, ab = bcr + (sscr - bcr) * ssw, bcg + (sscg - bcg) * ssw, bcb + (sscb - bcb) * ssw
+      local d = emit(0, W, K_DIFFUSE, 0, 0, 0, bw * ar, bw * ag, bw * ab, 0, 0, 0, bdr, 0, 0)
+      local gloss = emit(0, W, K_DIELECTRIC, 0, 0, thin, 1, 1, 1, scr, scg, scb, ior, sr, sa)
+      top = emit(0, W, K_LAYER, gloss, d, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0)
+    end
+    if tw > 0 then
+      local clear = emit(0, W, K_DIELECTRIC, 0, 0, thin, tcr, tcg, tcb, scr, scg, scb, ior, sr, sa)
+      if top then top = mix_nodes(0, W, top, clear, tw, tw, tw) else top = clear end
+    end
+  end
+  if metal > 0 then
+    local m = emit(0, W, K_CONDUCTOR, 0, 0, 0, bw * bcr, bw * bcg, bw * bcb, sw * scr, sw * scg, sw * scb,
+      sr, sa, 0)
+    if top then top = mix_nodes(0, W, top, m, metal, metal, metal) else top = m end
+  end
+  if cw > 0 then
+    -- The layer passes the base what the weighted coat lets through:
+    -- the same as mixing the coated and uncoated substrate, in fewer nodes.
+    local coat = emit(0, W, K_DIELECTRIC, 0, 0, 0, ccr, ccg, ccb, 1, 1, 1, cior, cr, 0)
+    if cw < 1 then coat = emit(0, W, K_SCALE, coat, 0, 0, cw, cw, cw, 0, 0, 0, 0, 0, 0) end
+    top = emit(0, W, K_LAYER, coat, top, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0)
+  end
+  if fw > 0 then
+    local fuzz = emit(0, W, K_SHEEN, 0, 0, 0, fcr, fcg, fcb, 0, 0, 0, fr, 0, 0)
+    if fw < 1 then fuzz = emit(0, W, K_SCALE, fuzz, 0, 0, fw, fw, fw, 0, 0, 0, 0, 0, 0) end
+    top = emit(0, W, K_LAYER, fuzz, top, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0)
+  end
+  if el > 0 then
+    local e = emit(0, W, K_EMISSION, 0, 0, 0, el * ecr, el * ecg, el * ecb, 0, 0, 0, 0, 0, 0)
+    top = emit(0, W, K_ADD, top, e, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0)
+  end
+  if op < 1 then
+    local clear = emit(0, W, K_TRANSPARENT, 0, 0, 0, 1, 1, 1, 0, 0, 0, 0, 0, 0)
+    if op > 0 then top = mix_nodes(0, W, clear, top, op, op, op) else top = clear end
+  end
+  return closure_t(gen, top)
+end
+BUILTINS.diffuse, BUILTINS.conductor, BUILTINS.dielectric = c_diffuse, c_conductor, c_dielectric
+BUILTINS.sheen, BUILTINS.emission, BUILTINS.transparent = c_sheen, c_emission, c_transparent
+BUILTINS.layer, BUILTINS.openpbr = c_layer, c_openpbr
+BUILTINS.mix, BUILTINS.lerp = mix_any, mix_any
+closures.mul, closures.emission = closure_mul, c_emission
+
+-- The material(s) wrapper: a fresh node list per call.
+local function closure_entry(f, shader_name)
+  return function()
+    gen = gen + 1
+    material.closure_len = 0
+    building = true
+    local c = f(shade)
+    building = false
+    if is_closure(c) and c.gen == gen then
+      material.closure_root = c.index
+      return
+    end
+    if is_closure(c) then bad(shader_name, "material", STALE) end
+    bad(shader_name, "material", format("%s (expected %s)", a_type(c), CLOSURE_EXAMPLE))
+  end
+end
+closures.entry = closure_entry
+end)()
 
 -- DecalMode material: every material output the script defines, in one call
 -- from Rust, checked against its range (docs/shaders.md, "Material outputs").
@@ -908,9 +1360,12 @@ local function material_scalar(f, shader_name, entry)
   return v
 end
 local function make_material(env, shader_name)
+  -- A script that defines material(s) gives its closure alone.
+  if type(env.material) == "function" then return closures.entry(env.material, shader_name) end
   local color, specular, emission, reflect = env.color, env.specular, env.emission, env.reflect
   local roughness, metalness = env.roughness, env.metalness
-  local function fn(f) if type(f) == "function" then return f end return nil end
+  -- emission is also the closure constructor, which is no output.
+  local function fn(f) if type(f) == "function" and f ~= closures.emission then return f end return nil end
   color, specular, emission, reflect = fn(color), fn(specular), fn(emission), fn(reflect)
   roughness, metalness = fn(roughness), fn(metalness)
   if not (color or specular or emission or reflect or roughness or metalness) then return nil end
@@ -960,7 +1415,7 @@ return {
   -- LuaJIT's messages name the records by number ('struct 97'): the names
   -- the author knows them by.
   ctypes = { vec3 = tostring(ffi.typeof("luster_vec3")), ["shading point"] = tostring(shade_t),
-    uv = tostring(vec2_t) },
+    uv = tostring(vec2_t), closure = tostring(closure_ct) },
   shade = address(shade),
   shade_b = address(shade_b),
   shade_c = address(shade_c),
@@ -968,6 +1423,6 @@ return {
   material = address(material),
   clock = address(clock),
   sizes = { shade = ffi.sizeof("luster_shade"), out = ffi.sizeof("luster_out"),
-    material = ffi.sizeof("luster_material"),
+    material = ffi.sizeof("luster_material"), node = ffi.sizeof("luster_node"),
     clock = ffi.sizeof("luster_clock"), cell = ffi.sizeof("luster_cell") },
 }

@@ -15,7 +15,7 @@ use super::compile::{Compiled, Makers, WRAPPERS};
 use super::error::{ShaderError, ShaderErrorKind};
 use super::ffi::{self, IoBlock, Shade};
 use super::shade::{has_avx, object_random};
-use super::{ImageSampler, Shared, ENTRIES};
+use super::{Entry, ImageSampler, Shared, ENTRIES};
 
 /// The trusted prelude (see its header comment).
 const PRELUDE: &str = include_str!("prelude.lua");
@@ -109,6 +109,7 @@ impl ThreadState {
             ("shade", std::mem::size_of::<Shade>()),
             ("out", std::mem::size_of::<ffi::Out>()),
             ("material", std::mem::size_of::<ffi::MaterialOut>()),
+            ("node", std::mem::size_of::<ffi::NodeOut>()),
             ("clock", std::mem::size_of::<ffi::Clock>()),
             ("cell", std::mem::size_of::<ffi::CellOut>()),
         ] {
@@ -204,8 +205,13 @@ impl ThreadState {
             .replace("cdata", "luster value (vec3, s or s.uv)")
     }
 
-    /// Which entry points shader `id` defines.
+    /// Which entry points shader `id` defines (`material` has no wrapper
+    /// of its own: see [`Compiled::closure`]).
     pub(crate) fn entries(&self, id: usize) -> [bool; ENTRIES] {
-        self.shaders.get(id).map_or([false; ENTRIES], |c| c.entries.map(|e| e.is_some()))
+        self.shaders.get(id).map_or([false; ENTRIES], |c| {
+            let mut e = c.entries.map(|e| e.is_some());
+            e[Entry::Material as usize] = c.closure;
+            e
+        })
     }
 }

@@ -29,6 +29,7 @@ pub use dielectric::Dielectric;
 pub use diffuse::Diffuse;
 pub use sheen::Sheen;
 
+use super::closure::MirrorSplit;
 use super::Flags;
 use luster_core::math::Vec3;
 
@@ -105,6 +106,34 @@ impl Lobe {
             Lobe::Diffuse(_) | Lobe::Conductor(_) => Vec3::ZERO,
             Lobe::Dielectric(l) => l.transmittance(wo),
             Lobe::Sheen(l) => Vec3::ONE - l.albedo(wo),
+        }
+    }
+
+    /// The lobe as the recursive ray tracer follows it, where it is smooth
+    /// enough to be a mirror (roughness under 0.1): the weights of the
+    /// mirror-reflected and the refracted ray, by the Fresnel equations at
+    /// the viewer's angle. `None` for a rough lobe, which reflects the
+    /// lights only.
+    #[inline]
+    pub fn mirror_split(&self, wo: Vec3) -> Option<MirrorSplit> {
+        const SMOOTH: f32 = 0.01;
+        match self {
+            Lobe::Conductor(c) if c.ggx.alpha_rms() < SMOOTH => {
+                Some(MirrorSplit { reflect: c.fresnel(wo.z), ..MirrorSplit::default() })
+            }
+            Lobe::Dielectric(d) if d.ggx.alpha_rms() < SMOOTH => {
+                let r = dielectric::fresnel_dielectric(wo.z, d.eta);
+                let (r, t) = if d.thin && r < 1.0 {
+                    // The sheet's two faces, every internal reflection summed.
+                    let t = 1.0 - r;
+                    (r + t * t * r / (1.0 - r * r), t * t / (1.0 - r * r))
+                } else {
+                    (r, 1.0 - r)
+                };
+                let refract = if d.reflection_only { Vec3::ZERO } else { d.tint * t };
+                Some(MirrorSplit { reflect: d.specular * r, refract, eta: d.eta, thin: d.thin })
+            }
+            _ => None,
         }
     }
 

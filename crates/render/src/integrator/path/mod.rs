@@ -40,11 +40,11 @@ use luster_core::math::{Ray, Vec3, Vec3A};
 mod next_event;
 mod params;
 mod vertex;
-use crate::bsdf::Bsdf;
-use next_event::{hit_weight, next_event, power_heuristic};
+use crate::bsdf::{Bsdf, Lobes};
+use next_event::{hit_weight, next_event, next_event_closure, power_heuristic};
 pub use params::PathParams;
 use params::{by_variant, every_light, pick_chance};
-use vertex::{bounce, specular};
+use vertex::{bounce, bounce_through, specular};
 
 /// Bounces after which even Russian roulette stops a path (the throughput of
 /// a path that long is far below anything visible).
@@ -438,7 +438,7 @@ fn shade<const V: u8>(
     // sample lights: nothing draws between here and [`next_event`], so it
     // is the value that would be drawn there (see [`LightAhead`]).
     let samples_lights = (p.next_event || p.mis) && m.traits.reflects && !inside_dielectric;
-    let ahead = if samples_lights && !past { LightAhead::draw(scene, p, st) } else { None };
+    let ahead = if samples_lights && !past && !m.closure { LightAhead::draw(scene, p, st) } else { None };
 
     // Under the course's next-event estimation an object light that a
     // random bounce hits counts nothing (its samples counted it): skip the
@@ -466,7 +466,11 @@ fn shade<const V: u8>(
         return Shaded::Done(color);
     }
     let origin = hit.p + ng * eps;
-    if m.traits.reflects && !inside_dielectric {
+    if m.closure {
+        // A closure's lobes, copied out before anything else is shaded.
+        let lobes = *st.lobes;
+        color += closure_vertex::<V>(scene, ray, hit, ng, &lobes, m, depth, beta, p, st);
+    } else if m.traits.reflects && !inside_dielectric {
         let more = depth < MAX_BOUNCES && (p.russian_roulette || depth < scene.max_depth);
         let at = Bsdf::new(m, n, ray.d);
         if p.next_event || p.mis {
@@ -497,4 +501,50 @@ fn shade<const V: u8>(
         }
     }
     Shaded::Done(color)
+}
+
+/// What a vertex whose material is a shader's closure adds besides its
+/// emission: its light samples, its bounce (through the surface too, where
+/// a lobe transmits) and, where the closure lets light straight through,
+/// the light behind it along the same ray. Out of line: closures are the
+/// rarer case, and their lobes are large.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn closure_vertex<const V: u8>(
+    scene: &Scene,
+    ray: &Ray,
+    hit: &Hit,
+    ng: Vec3,
+    lobes: &Lobes,
+    m: &Material,
+    depth: u32,
+    beta: Vec3,
+    p: PathParams,
+    st: &mut PathState,
+) -> Vec3 {
+    let eps = scene.shadow_epsilon;
+    let mut color = Vec3::ZERO;
+    let at = Bsdf::closure(m, lobes, ray.d);
+    if !lobes.is_empty() {
+        if p.next_event || p.mis {
+            color += next_event_closure(scene, hit, &at, ng, depth, p, st);
+        }
+        let more = depth < MAX_BOUNCES && (p.russian_roulette || depth < scene.max_depth);
+        if more || p.mis {
+            if let Some(b) = bounce_through(scene, &at, hit.p, ng * eps, depth, beta, p, st) {
+                color += b.weight * li::<V>(scene, &b.ray, depth + 1, b.next, b.came, p, st) / b.q;
+            }
+        }
+    }
+    // A cut-out: the ray goes on as if the surface were not there. Shadow
+    // rays stop at the surface, so no light sample reached what the ray
+    // finds beyond it: an emitter there counts in full.
+    if !is_black(lobes.transparency) && depth < MAX_BOUNCES {
+        let next = beta * lobes.transparency;
+        if st.spawn(next.max_element()) {
+            let on = Ray::new(hit.p - ng * eps, ray.d);
+            color += lobes.transparency * li::<V>(scene, &on, depth, next, Came::Direct, p, st);
+        }
+    }
+    color
 }

@@ -63,10 +63,13 @@ impl Scene {
         }
     }
 
-    /// Whether the maps `tex` hold a material shader that defines `emission(s)`.
+    /// Whether the maps `tex` hold a material shader that defines
+    /// `emission(s)` or returns a closure (which may hold an emission).
     fn shader_emits(&self, shaders: &ShaderSet, tex: TexList) -> bool {
         self.textures.maps_of(tex).any(|m| match (m.texture, m.decal) {
-            (Texture::Shader { id }, DecalMode::Material) => shaders.has_emission(id as usize),
+            (Texture::Shader { id }, DecalMode::Material) => {
+                shaders.has_emission(id as usize) || shaders.has_closure(id as usize)
+            }
             _ => false,
         })
     }

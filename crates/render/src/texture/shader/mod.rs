@@ -19,13 +19,15 @@
 use std::time::Duration;
 
 use super::{bump, Image, TexFrame, TextureMap, Textures};
+use crate::bsdf::closure::{At, Lobes};
+use crate::bsdf::lobe::{Conductor, Diffuse, Lobe};
 use crate::bsdf::Specular;
-use crate::bsdf::{Brdf, Microfacet};
+use crate::bsdf::Brdf;
 use crate::material::Material;
 use luster_core::math::{Vec2, Vec3};
 use luster_scene::description::{DecalMode, ImageDesc, TextureMapDesc, TextureSource};
 use luster_shading::shader::{
-    Entry, ImageSampler, MaterialOutputs, SampleFilter, ShadeInput, ShadePoint, ShaderError, ShaderImages,
+    Entry, ImageSampler, MaterialOutputs, SampleFilter, ShadeInput, ShadePoint, ShaderError, ShaderErrorKind, ShaderImages,
     ShaderSet, ShaderSource,
 };
 use std::sync::Arc;
@@ -131,8 +133,8 @@ pub fn compile_with_modules(
                 return Err(MapError {
                     map: m,
                     message: format!(
-                        "shader '{name}': {} defines none of color, specular, roughness, metalness, \
-                         emission or reflect, one of which DecalMode material needs",
+                        "shader '{name}': {} defines none of material, color, specular, roughness, \
+                         metalness, emission or reflect, one of which DecalMode material needs",
                         path.display()
                     ),
                 });
@@ -315,6 +317,7 @@ impl Textures {
         f: &TexFrame,
         m: &mut Material,
         n: &mut Vec3,
+        lobes: &mut Lobes,
     ) -> Result<Option<Vec3>, Box<ShaderError>> {
         let Some(set) = &self.shaders else { return Ok(None) };
         let id = id as usize;
@@ -343,7 +346,22 @@ impl Textures {
                     *n = shader_bump(set, id, map.bump_factor, f, *n)?;
                 }
             }
-            DecalMode::Material => apply_outputs(&set.material(id, &input(f, f.p_object, f.uv, *n))?, m),
+            DecalMode::Material => {
+                let o = set.material(id, &input(f, f.p_object, f.uv, *n))?;
+                let at = || At::new(*n, f.ctx.ng, tangent(f), f.ctx.incident);
+                if apply_outputs(&o, m, lobes, at).is_err() {
+                    let name = set.name(id).unwrap_or("?");
+                    return Err(Box::new(ShaderError::new(
+                        ShaderErrorKind::BadResult,
+                        name,
+                        format!(
+                            "material() returned a closure of more than {} lobes (or over 256 nodes, \
+                             counting a shared one each time it is used)",
+                            crate::bsdf::closure::MAX_LOBES
+                        ),
+                    )));
+                }
+            }
             DecalMode::ReplaceNormal | DecalMode::ReplaceBackground => {}
         }
         Ok(None)
@@ -373,18 +391,53 @@ fn shader_bump(set: &ShaderSet, id: usize, k: f32, f: &TexFrame, n: Vec3) -> Res
     })
 }
 
+/// The roughness whose GGX width matches a Blinn-Phong exponent `p`, so a
+/// material that states only its exponent keeps its highlight's width:
+/// Walter et al.'s (2007) `α = sqrt(2 / (p + 2))`, and roughness `√α`.
+fn exponent_roughness(p: f32) -> f32 {
+    (2.0 / (p.max(0.0) + 2.0)).sqrt().sqrt()
+}
+
+/// The world tangent of frame `f`: `∂p/∂u`, along which anisotropic lobes
+/// stretch.
+#[inline]
+fn tangent(f: &TexFrame) -> Vec3 {
+    match &f.to_world {
+        Some(xf) => xf.vector(f.dpdu),
+        None => f.dpdu,
+    }
+}
+
 /// What a `DecalMode material` shader's outputs do to the point's material
-/// (the table in `docs/shaders.md`, "Material outputs"):
+/// (the tables in `docs/shaders.md`, "Material outputs", and
+/// `docs/closures.md`):
 ///
-/// * `color` is the base colour (`kd`), `specular` the specular colour
-///   (`ks`), `reflect` the mirror reflectance (a non-mirror becomes a mirror,
-///   as with `replace_km`), `emission` the emitted radiance;
-/// * `roughness` or `metalness` switch the point to the GGX microfacet BRDF
-///   ([`Microfacet`]) whatever the material's own model: `α = roughness²`,
-///   or without a `roughness` the width matching the material's exponent;
-///   metalness `μ` turns the diffuse part off and tints the specular colour
-///   by the base: `kd ← (1 - μ) kd`, `ks ← (1 - μ) ks + μ kd`.
-pub fn apply_outputs(o: &MaterialOutputs, m: &mut Material) {
+/// * a closure (`material(s)`) replaces the material: its lobes go to
+///   `lobes`, flattened at the point `at` gives, and its emission to the
+///   material's;
+/// * otherwise `color` is the base colour (`kd`), `specular` the specular
+///   colour (`ks`), `reflect` the mirror reflectance (a non-mirror becomes
+///   a mirror, as with `replace_km`), `emission` the emitted radiance;
+/// * `roughness` or `metalness` make the point the closure
+///   `diffuse{albedo = (1 − max ks) kd} + conductor{f0 = ks, roughness}`
+///   whatever the material's own model, where metalness `μ` first turns
+///   the diffuse part off and tints the specular colour by the base:
+///   `kd ← (1 − μ) kd`, `ks ← (1 − μ) ks + μ kd`. Without a `roughness`
+///   the width is the one matching the material's exponent.
+///
+/// Fails only for a closure of more than [`crate::bsdf::closure::MAX_LOBES`]
+/// lobes.
+pub fn apply_outputs(
+    o: &MaterialOutputs,
+    m: &mut Material,
+    lobes: &mut Lobes,
+    at: impl FnOnce() -> At,
+) -> Result<(), crate::bsdf::closure::TooManyLobes> {
+    if let Some(c) = &o.closure {
+        *lobes = Lobes::flatten(c, &at())?;
+        *m = Material { emission: lobes.emission, closure: true, ..Material::default() };
+        return Ok(());
+    }
     if let Some(c) = o.color {
         m.diffuse = Vec3::from_array(c);
     }
@@ -401,20 +454,32 @@ pub fn apply_outputs(o: &MaterialOutputs, m: &mut Material) {
         m.emission = Vec3::from_array(c);
     }
     if o.roughness.is_none() && o.metalness.is_none() {
-        return;
+        return Ok(());
     }
-    let lobe = match (o.roughness, m.brdf) {
-        (Some(r), _) => Microfacet::from_roughness(r),
-        (None, Some(Brdf::Microfacet(mf))) => mf,
-        (None, Some(Brdf::Phong(p))) => Microfacet::from_exponent(p.exponent),
-        (None, Some(Brdf::TorranceSparrow(t))) => Microfacet::from_exponent(t.exponent),
-        (None, None) => Microfacet::from_exponent(m.phong),
+    let roughness = match (o.roughness, m.brdf) {
+        (Some(r), _) => r,
+        (None, Some(Brdf::Phong(p))) => exponent_roughness(p.exponent),
+        (None, Some(Brdf::TorranceSparrow(t))) => exponent_roughness(t.exponent),
+        (None, None) => exponent_roughness(m.phong),
     };
     if let Some(mu) = o.metalness {
         m.specular = m.specular * (1.0 - mu) + m.diffuse * mu;
         m.diffuse *= 1.0 - mu;
     }
-    m.brdf = Some(Brdf::Microfacet(lobe));
+    let (kd, ks) = (m.diffuse, m.specular);
+    // A specular colour under 2% reflects nothing: no real material is
+    // that dark head on, so it means "no specular" (Unreal's convention).
+    let specular = ks.max_element() >= 0.02;
+    let base = kd * (1.0 - ks.max_element().clamp(0.0, 1.0));
+    let parts = [
+        (Vec3::ONE, Lobe::Diffuse(Diffuse::new(base, 0.0))),
+        (Vec3::ONE, Lobe::Conductor(Conductor::new(ks, Vec3::ONE, roughness, 0.0))),
+    ];
+    let n = if specular { 2 } else { 1 };
+    *lobes = Lobes::of(&parts[..n], &at())?;
+    m.brdf = None;
+    m.closure = true;
+    Ok(())
 }
 
 #[cfg(test)]

@@ -3,6 +3,7 @@
 
 use super::*;
 use crate::texture::Texture;
+use crate::bsdf::lobe::{Conductor, Diffuse, Lobe};
 use luster_scene::Loc;
 use luster_shading::shader::ParamValue;
 
@@ -51,7 +52,7 @@ fn one_script_serves_maps_with_different_parameters() {
             let Texture::Shader { id } = m.texture else { panic!("a shader map") };
             let mut mat = Material::default();
             let mut n = Vec3::Z;
-            assert_eq!(tex.apply_shader(id, m, &frame(), &mut mat, &mut n).unwrap(), None);
+            assert_eq!(tex.apply_shader(id, m, &frame(), &mut mat, &mut n, &mut Lobes::default()).unwrap(), None);
             mat.diffuse
         })
         .collect();
@@ -87,10 +88,10 @@ fn the_script_sees_the_frame_and_reflect_makes_a_mirror() {
     let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
     let mut mat = Material::default();
     let mut n = Vec3::Y;
-    assert_eq!(tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut n).unwrap(), None);
+    assert_eq!(tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut n, &mut Lobes::default()).unwrap(), None);
     assert_eq!(mat.mirror, Vec3::new(0.5, 1.5, 1.25));
     assert_eq!(mat.kind, Specular::Mirror);
-    assert_eq!(tex.apply_shader(1, &tex.maps[1], &frame(), &mut mat, &mut n).unwrap(), Some(Vec3::Y));
+    assert_eq!(tex.apply_shader(1, &tex.maps[1], &frame(), &mut mat, &mut n, &mut Lobes::default()).unwrap(), Some(Vec3::Y));
 }
 
 #[test]
@@ -100,16 +101,16 @@ fn a_height_shader_bumps_and_its_errors_come_back() {
     let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
     let mut mat = Material::default();
     let mut n = Vec3::Z;
-    tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut n).unwrap();
+    tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut n, &mut Lobes::default()).unwrap();
     // Slope 0.5 along x tilts the normal towards -x: n ∝ (-0.5, 0, 1).
     assert!((n - Vec3::new(-0.5, 0.0, 1.0).normalize()).length() < 1e-3, "{n}");
     let high = TexFrame { p_object: Vec3::new(0.0, 2.0, 0.0), ..frame() };
-    let e = tex.apply_shader(0, &tex.maps[0], &high, &mut mat, &mut n).unwrap_err();
+    let e = tex.apply_shader(0, &tex.maps[0], &high, &mut mat, &mut n, &mut Lobes::default()).unwrap_err();
     assert!(e.message.contains("s.lua:2: bad"), "{}", e.message);
 }
 
 #[test]
-fn material_outputs_set_the_material_and_switch_to_the_microfacet_model() {
+fn material_outputs_become_a_diffuse_and_conductor_closure() {
     let code = "function color(s) return 0.8, 0.4, 0.2 end\n\
                 function specular(s) return 0.04, 0.04, 0.04 end\n\
                 function roughness(s) return 0.5 end\n\
@@ -119,13 +120,27 @@ fn material_outputs_set_the_material_and_switch_to_the_microfacet_model() {
     let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
     let mut mat = Material { phong: 30.0, ..Material::default() };
     let mut n = Vec3::Z;
-    assert_eq!(tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut n).unwrap(), None);
+    let mut lobes = Lobes::default();
+    assert_eq!(tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut n, &mut lobes).unwrap(), None);
     let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-6;
     assert!(close(mat.diffuse, Vec3::new(0.6, 0.3, 0.15)), "{}", mat.diffuse);
     assert!(close(mat.specular, Vec3::new(0.23, 0.13, 0.08)), "{}", mat.specular);
     assert_eq!(mat.emission, Vec3::new(3.0, 2.0, 1.0));
-    assert_eq!(mat.brdf, Some(Brdf::Microfacet(Microfacet { alpha: 0.25 })));
-    assert_eq!(mat.kind, Specular::None);
+    assert!(mat.closure && mat.brdf.is_none() && mat.kind == Specular::None);
+    // The diffuse part dimmed by the largest specular colour, then the metal.
+    assert_eq!(lobes.len(), 2);
+    let want = [
+        Lobe::Diffuse(Diffuse::new(Vec3::new(0.6, 0.3, 0.15) * 0.77, 0.0)),
+        Lobe::Conductor(Conductor::new(Vec3::new(0.23, 0.13, 0.08), Vec3::ONE, 0.5, 0.0)),
+    ];
+    for (k, w) in want.iter().enumerate() {
+        let (l, weight) = lobes.lobe(k);
+        assert_eq!(weight, Vec3::ONE);
+        let wo = Vec3::new(0.6, 0.0, 0.8);
+        let wi = Vec3::new(-0.3, 0.2, 0.9).normalize();
+        let (a, b) = (l.eval(wo, wi), w.eval(wo, wi));
+        assert!(close(a.0, b.0) && (a.1 - b.1).abs() < 1e-5, "lobe {k}");
+    }
 }
 
 #[test]
@@ -136,19 +151,42 @@ fn material_mode_keeps_what_the_script_does_not_define() {
     let before =
         Material { diffuse: Vec3::splat(0.5), specular: Vec3::ONE, phong: 40.0, ..Material::default() };
     let mut mat = before;
-    tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut Vec3::Z.clone()).unwrap();
+    let mut lobes = Lobes::default();
+    tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut Vec3::Z.clone(), &mut lobes).unwrap();
     assert_eq!(
-        (mat.diffuse, mat.specular, mat.phong, mat.brdf),
-        (before.diffuse, before.specular, 40.0, None)
+        (mat.diffuse, mat.specular, mat.phong, mat.brdf, mat.closure),
+        (before.diffuse, before.specular, 40.0, None, false)
     );
     assert_eq!(mat.emission, Vec3::new(0.0, 5.0, 0.0));
-    // Metalness without roughness keeps the exponent's highlight width.
+    // Metalness without roughness keeps the exponent's highlight width:
+    // α = sqrt(2 / (p + 2)), roughness √α.
     let descs = [map("function metalness(s) return 1 end", DecalMode::Material, &[])];
     let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
     let mut mat = before;
-    tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut Vec3::Z.clone()).unwrap();
+    tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut Vec3::Z.clone(), &mut lobes).unwrap();
     assert_eq!((mat.diffuse, mat.specular), (Vec3::ZERO, Vec3::splat(0.5)));
-    assert_eq!(mat.brdf, Some(Brdf::Microfacet(Microfacet::from_exponent(40.0))));
+    let r = (2.0f32 / 42.0).sqrt().sqrt();
+    let want = Lobe::Conductor(Conductor::new(Vec3::splat(0.5), Vec3::ONE, r, 0.0));
+    assert!(mat.closure);
+    // The diffuse lobe is black and left out.
+    assert_eq!(lobes.len(), 1);
+    let (wo, wi) = (Vec3::new(0.6, 0.0, 0.8), Vec3::new(-0.5, 0.1, 0.86).normalize());
+    assert!((lobes.lobe(0).0.eval(wo, wi).0 - want.eval(wo, wi).0).abs().max_element() < 1e-5);
+}
+
+#[test]
+fn a_closure_replaces_the_material() {
+    let code = "function material(s) return 0.5 * diffuse{albedo = 0.6} + emission{radiance = 2} end";
+    let descs = [map(code, DecalMode::Material, &[])];
+    let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
+    let mut mat =
+        Material { diffuse: Vec3::ONE, kind: Specular::Mirror, mirror: Vec3::ONE, ..Material::default() };
+    let mut lobes = Lobes::default();
+    tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut Vec3::Z.clone(), &mut lobes).unwrap();
+    assert!(mat.closure && mat.kind == Specular::None && mat.diffuse == Vec3::ZERO);
+    assert_eq!(mat.emission, Vec3::splat(2.0));
+    assert_eq!(lobes.len(), 1);
+    assert_eq!(lobes.lobe(0).1, Vec3::splat(0.5));
 }
 
 #[test]
@@ -169,7 +207,7 @@ fn out_of_range_material_outputs_are_one_sentence_errors() {
         let descs = [map(code, DecalMode::Material, &[])];
         let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
         let mut mat = Material::default();
-        let e = tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut Vec3::Z.clone()).unwrap_err();
+        let e = tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut Vec3::Z.clone(), &mut Lobes::default()).unwrap_err();
         assert_eq!(e.kind, luster_shading::shader::ShaderErrorKind::BadResult, "{code}: {e}");
         let text = e.to_string();
         assert!(text.contains(what) && !text.contains('\n'), "{code}: {text}");
@@ -177,7 +215,7 @@ fn out_of_range_material_outputs_are_one_sentence_errors() {
     // A script with no material output cannot drive the mode.
     let descs = [map("function height(s) return 0 end", DecalMode::Material, &[])];
     let e = compile(&descs, DEFAULT, None).unwrap_err();
-    assert!(e.message.contains("defines none of color, specular, roughness"), "{}", e.message);
+    assert!(e.message.contains("defines none of material, color, specular, roughness"), "{}", e.message);
 }
 
 #[test]

@@ -7,10 +7,10 @@
 
 use super::{every_light, pick_chance, Came, LightAhead, PathParams};
 use crate::bsdf::diffuse_pdf;
-use crate::bsdf::Bsdf;
+use crate::bsdf::{Bsdf, Flags};
 use crate::integrator::media;
 use crate::integrator::{is_black, light_reaching_from, shadow_reach, surface_at, PathState, Surface};
-use crate::light::{Light, ShadedLight};
+use crate::light::{Light, LightSample, ShadedLight};
 use crate::render::scene::{Hit, Scene};
 use luster_core::math::{Ray, Vec3, Vec3A};
 
@@ -94,6 +94,71 @@ fn next_event_any(
         color += f * (tr * ls.e) * w;
     }
     color.into()
+}
+
+/// [`next_event`] at a vertex whose material is a shader's closure: the
+/// light samples are drawn from the hit point, and a light behind the
+/// surface counts where a lobe transmits, its shadow ray leaving from the
+/// far side (`ng` is the geometric normal on the viewer's side).
+#[inline(never)]
+pub(super) fn next_event_closure(
+    scene: &Scene,
+    hit: &Hit,
+    at: &Bsdf,
+    ng: Vec3,
+    depth: u32,
+    p: PathParams,
+    st: &mut PathState,
+) -> Vec3 {
+    let eps = scene.shadow_epsilon;
+    let front = hit.p + ng * eps;
+    let transmits = at.flags().contains(Flags::TRANSMISSION);
+    let mut color = Vec3::ZERO;
+    let (lights, scale) = if p.mis && !every_light(scene, p) {
+        let (i, pick) = scene.light_pick.choose(st.sampler.next_1d());
+        if pick <= 0.0 {
+            return Vec3::ZERO;
+        }
+        (&scene.lights[i..=i], 1.0 / pick)
+    } else {
+        (&scene.lights[..], 1.0)
+    };
+    for light in lights {
+        if let Light::Shaded(l) = light {
+            color += shaded_sample(scene, l, hit, at, front, depth, scale, p, st);
+            continue;
+        }
+        let Some(ls) = light.sample_at(hit.p, hit.p, at.n, st.time, &mut st.sampler) else {
+            continue;
+        };
+        let side = ng.dot(ls.wi);
+        if is_black(ls.e) || side == 0.0 || (side < 0.0 && !transmits) {
+            continue;
+        }
+        let origin = if side > 0.0 { front } else { hit.p - ng * eps };
+        let (f, bsdf_pdf) = at.eval_pdf(ls.wi, at.n.dot(ls.wi), p.strategy());
+        if is_black(f) {
+            continue;
+        }
+        // The shadow ray aims at the sampled point from its own origin, off
+        // the surface on the light's side: the reach is measured from there.
+        let ray = if ls.dist.is_finite() {
+            let to = hit.p + ls.wi * ls.dist - origin;
+            let dist = to.length();
+            let reach = shadow_reach(scene, &LightSample { dist, ..ls });
+            (Ray::new(origin, to / dist), reach)
+        } else {
+            (Ray::new(origin, ls.wi), ls.dist)
+        };
+        let tr = media::shadow(scene, &ray.0, ray.1, st);
+        if is_black(tr) {
+            continue;
+        }
+        let w =
+            if p.mis && hittable(light) { power_heuristic(ls.pdf / scale, bsdf_pdf) * scale } else { scale };
+        color += f * (tr * ls.e) * w;
+    }
+    color
 }
 
 /// [`next_event`] at a vertex whose BRDF value is the same for every light

@@ -64,6 +64,47 @@ pub(super) fn bounce(
     Some(Bounce { ray, weight, q, next, came: Came::Bounce { pdf, n: bsdf.n } })
 }
 
+/// [`bounce`] off a shader closure: a lobe is always chosen, and a
+/// direction through the surface leaves from its far side (`p − off`
+/// rather than `p + off`, `off` the viewer's side's offset).
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+pub(super) fn bounce_through(
+    scene: &Scene,
+    bsdf: &Bsdf,
+    p_hit: Vec3,
+    off: Vec3,
+    depth: u32,
+    beta: Vec3,
+    p: PathParams,
+    st: &mut PathState,
+) -> Option<Bounce> {
+    let choice = st.sampler.next_1d();
+    let u = st.sampler.next_2d();
+    let BsdfSample { wi, pdf, f_cos } = bsdf.sample(p.strategy(), choice, u)?;
+    let weight = f_cos / pdf;
+    if !weight.is_finite() || pdf <= 0.0 {
+        return None;
+    }
+    let next = beta * weight;
+    let mut q = 1.0;
+    if p.russian_roulette {
+        q = next.max_element().min(1.0);
+        if st.sampler.next_1d() >= q {
+            return None;
+        }
+    }
+    let origin = if wi.dot(off) >= 0.0 { p_hit + off } else { p_hit - off };
+    let ray = Ray::new(origin, wi);
+    if past_limit(scene, depth + 1, p) && !scene.may_find_emission(&ray) {
+        return None;
+    }
+    if !st.spawn(next.max_element()) {
+        return None;
+    }
+    Some(Bounce { ray, weight, q, next, came: Came::Bounce { pdf, n: bsdf.n } })
+}
+
 /// Mirror, conductor and dielectric rays, as the recursive ray tracer sends
 /// them (with its glossy roughness), each weighted by its reflectance.
 #[allow(clippy::too_many_arguments)]
