@@ -95,7 +95,10 @@ fn white_closures_pass_the_furnace() {
         ("conductor 0.6", "conductor{f0 = 1, roughness = 0.6}"),
         ("conductor 1.0", "conductor{f0 = 1, roughness = 1}"),
         ("anisotropic conductor", "conductor{f0 = 1, roughness = 0.5, anisotropy = 0.8}"),
-        ("coat over white", "layer{top = dielectric{ior = 1.5, roughness = 0.2}, base = diffuse{albedo = 1}}"),
+        (
+            "coat over white",
+            "layer{top = dielectric{ior = 1.5, roughness = 0.2}, base = diffuse{albedo = 1}}",
+        ),
         ("glass", "dielectric{ior = 1.5, roughness = 0.3}"),
         ("thin glass", "dielectric{ior = 1.5, roughness = 0.3, thin = true}"),
         ("openpbr white", "openpbr{base_color = 1}"),
@@ -117,7 +120,11 @@ fn white_closures_pass_the_furnace() {
 fn a_grey_closure_is_as_bright_as_its_albedo() {
     let dir = tempfile::tempdir().expect("temp dir");
     white_sky(dir.path());
-    let desc = load(dir.path(), &sphere_under_sky(MIS), "function material(s) return 0.5 * diffuse{albedo = 0.8} end");
+    let desc = load(
+        dir.path(),
+        &sphere_under_sky(MIS),
+        "function material(s) return 0.5 * diffuse{albedo = 0.8} end",
+    );
     let (mean, se, _, _) = two_seeds(&desc, 16);
     assert!((mean - 0.4).abs() < 4.0 * se + 1e-3, "{mean} ± {se}");
 }
@@ -156,7 +163,8 @@ fn light_through_a_rough_pane_agrees_between_light_samples_and_bounces() {
     for params in ["MIS", "ImportanceSampling", "NextEventEstimation ImportanceSampling"] {
         let desc = load(dir.path(), &scene(params), shader);
         let (a, b) = (render(&desc, 256, 1), render(&desc, 256, 2));
-        let (la, lb): (Vec<f64>, Vec<f64>) = a.pixels.iter().zip(&b.pixels).map(|(x, y)| (luminance(*x), luminance(*y))).unzip();
+        let (la, lb): (Vec<f64>, Vec<f64>) =
+            a.pixels.iter().zip(&b.pixels).map(|(x, y)| (luminance(*x), luminance(*y))).unzip();
         let n = la.len() as f64;
         let var = la.iter().zip(&lb).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / (2.0 * n);
         let mean = (la.iter().sum::<f64>() + lb.iter().sum::<f64>()) / (2.0 * n);
@@ -193,7 +201,10 @@ fn a_bad_closure_is_one_sentence_and_exit_code_2() {
     let dir = tempfile::tempdir().expect("temp dir");
     white_sky(dir.path());
     for (code, want) in [
-        ("function material(s)\n  local c = diffuse{albdo = 1}\n  return c\nend\n", "m.lua:2: diffuse{}: unknown parameter 'albdo'"),
+        (
+            "function material(s)\n  local c = diffuse{albdo = 1}\n  return c\nend\n",
+            "m.lua:2: diffuse{}: unknown parameter 'albdo'",
+        ),
         ("function material(s)\n  local c = conductor{roughness = 1.5}\n  return c\nend\n", "roughness"),
         ("function material(s)\n  return 1\nend\n", "material() returned a number"),
         ("function material(s)\n  local c = diffuse{albedo = 0/0}\n  return c\nend\n", "albedo"),
@@ -212,4 +223,18 @@ fn a_bad_closure_is_one_sentence_and_exit_code_2() {
         assert_eq!(err.trim_end().lines().count(), 1, "{code}: {err}");
         assert!(!dir.path().join("out/a.exr").exists(), "no half-written image");
     }
+}
+
+/// The closures example scene loads, compiles every example shader and
+/// renders (at a tenth of its size, one sample per pixel) without an error.
+#[test]
+fn the_closures_example_renders() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/closures.xml");
+    let mut desc = luster::scene::load(&path).expect("the example loads");
+    for cam in &mut desc.cameras {
+        cam.resolution = (cam.resolution.0 / 10, cam.resolution.1 / 10);
+    }
+    let img = render(&desc, 1, 1);
+    let mean = img.pixels.iter().map(|p| luminance(*p)).sum::<f64>() / img.pixels.len() as f64;
+    assert!(mean > 0.0 && mean.is_finite(), "mean {mean}");
 }

@@ -3,8 +3,8 @@
 //! OBJ models, split renders, the watch server and the fuzz smoke run.
 
 mod bad_input;
-mod closures;
 mod camera_gaze;
+mod closures;
 mod cluster;
 mod cluster_camera;
 mod common;

@@ -36,7 +36,9 @@ impl Frame {
         let l2 = across.length_squared();
         // A tangent (nearly) along the normal says nothing about a direction
         // in the surface.
-        if !(l2 > 1e-6 * t.length_squared()) || !l2.is_finite() {
+        if l2.partial_cmp(&(1e-6 * t.length_squared())) != Some(std::cmp::Ordering::Greater)
+            || !l2.is_finite()
+        {
             return Frame::new(n);
         }
         let t = across / l2.sqrt();

@@ -20,7 +20,7 @@ impl Pcg {
 
 /// Materials covering each path through the interface: the course's
 /// Blinn-Phong without a BRDF, diffuse-only Phong (the cached value), glossy
-/// Phong, Torrance–Sparrow and GGX.
+/// Phong and Torrance–Sparrow (a shader closure has its own test below).
 fn materials() -> Vec<(&'static str, Material)> {
     let kd = Vec3::new(0.5, 0.4, 0.3);
     let ks = Vec3::new(0.3, 0.3, 0.35);
@@ -147,4 +147,45 @@ fn flags_name_the_lobes_a_material_has() {
     let mirror = Material { kind: Specular::Mirror, ..Material::default() };
     assert!(mirror.flags().contains(Flags::SPECULAR) && !mirror.flags().intersects(Flags::TRANSMISSION));
     assert_eq!(Material::default().flags(), Flags::NONE);
+}
+
+/// A shader closure through the same interface: in world space, under every
+/// strategy (a closure samples its own lobes under each), a sample's density
+/// and value are what `pdf` and `f_cos` say, transmitted directions
+/// included, and the flags name its transmission.
+#[test]
+fn a_closures_sample_is_what_pdf_and_f_cos_say_of_its_direction() {
+    use super::closure::At;
+    use super::lobe::{Conductor, Dielectric, Diffuse, Lobe};
+    let mut rng = Pcg(0x2545_f491_4f6c_dd1d);
+    let n = Vec3::new(-0.2, 0.4, 0.89).normalize();
+    let m = Material { closure: true, ..Material::default() };
+    let parts = [
+        (Vec3::splat(0.5), Lobe::Diffuse(Diffuse::new(Vec3::new(0.7, 0.5, 0.3), 0.4))),
+        (Vec3::splat(0.3), Lobe::Conductor(Conductor::new(Vec3::splat(0.9), Vec3::ONE, 0.3, 0.5))),
+        (Vec3::splat(0.2), Lobe::Dielectric(Dielectric::new(1.5, 0.3, 0.0, Vec3::ONE, Vec3::ONE, false))),
+    ];
+    let mut transmitted = 0;
+    for strategy in STRATEGIES {
+        for _ in 0..2000 {
+            let d = -(n + Vec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5)).normalize();
+            if d.dot(n) >= 0.0 {
+                continue;
+            }
+            let lobes = Lobes::of(&parts, &At::new(n, n, Vec3::X, d)).unwrap();
+            let bsdf = Bsdf::closure(&m, &lobes, d);
+            assert!(bsdf.flags().contains(Flags::TRANSMISSION | Flags::DIFFUSE | Flags::GLOSSY));
+            let Some(s) = bsdf.sample(strategy, rng.next(), (rng.next(), rng.next())) else { continue };
+            let cos = n.dot(s.wi);
+            transmitted += usize::from(cos < 0.0);
+            let pdf = bsdf.pdf(s.wi, cos, strategy);
+            assert!(close(s.pdf, pdf), "{strategy:?}: sample pdf {} vs pdf {pdf}", s.pdf);
+            let f = bsdf.f_cos(s.wi, cos);
+            for c in 0..3 {
+                assert!(close(s.f_cos[c], f[c]), "{strategy:?}: f cos {} vs {f}", s.f_cos);
+            }
+            assert_eq!(bsdf.eval_pdf(s.wi, cos, strategy), (f, pdf));
+        }
+    }
+    assert!(transmitted > 100, "only {transmitted} transmitted samples");
 }

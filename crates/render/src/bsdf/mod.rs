@@ -2,10 +2,11 @@
 //! interface, [`Bsdf`], which both integrators call.
 //!
 //! A [`Material`] scatters in up to two parts:
-//! - a diffuse and glossy part: a hw6 BRDF ([`brdf`]: the Phong family,
-//!   Torrance–Sparrow, and GGX microfacets for shader materials) or, where the
-//!   material names none, the course's Blinn-Phong reflectance
-//!   ([`blinn_phong`](mod@blinn_phong));
+//! - a diffuse and glossy part: a hw6 BRDF ([`brdf`]: the Phong family and
+//!   Torrance–Sparrow) or, where the material names none, the course's
+//!   Blinn-Phong reflectance ([`blinn_phong`](mod@blinn_phong)); or, where a
+//!   shader returned a closure, its [`Lobes`] ([`closure`], built of the
+//!   [`lobe`]s: diffuse, conductor, dielectric, sheen);
 //! - a perfectly specular part ([`specular`]): a mirror, a conductor or a
 //!   dielectric, each with the course's glossy roughness.
 //!

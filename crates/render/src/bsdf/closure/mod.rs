@@ -63,6 +63,8 @@ pub struct TooManyLobes;
 pub struct Lobes {
     lobe: [Lobe; MAX_LOBES],
     weight: [Vec3; MAX_LOBES],
+    /// Each lobe's albedo for the viewer's direction, unweighted.
+    albedo: [Vec3; MAX_LOBES],
     /// The chance of picking each lobe, summed up to it.
     cdf: [f32; MAX_LOBES],
     len: usize,
@@ -87,6 +89,7 @@ impl Default for Lobes {
         Lobes {
             lobe: [none; MAX_LOBES],
             weight: [Vec3::ZERO; MAX_LOBES],
+            albedo: [Vec3::ZERO; MAX_LOBES],
             cdf: [0.0; MAX_LOBES],
             len: 0,
             visits: 0,
@@ -149,7 +152,7 @@ impl Lobes {
     pub fn of(parts: &[(Vec3, Lobe)], at: &At) -> Result<Lobes, TooManyLobes> {
         let mut out = Lobes { frame: at.frame, wo: at.wo, ..Lobes::default() };
         for &(w, lobe) in parts {
-            out.push(w, lobe)?;
+            out.push(w, lobe, false)?;
         }
         out.finish();
         Ok(out)
@@ -173,15 +176,15 @@ impl Lobes {
         let col = |k: usize| Vec3::from_array(node.c[k]);
         let [x0, x1, x2] = node.x;
         match node.kind {
-            NodeKind::Diffuse => self.push(w, Lobe::Diffuse(Diffuse::new(col(0), x0))),
-            NodeKind::Conductor => self.push(w, Lobe::Conductor(Conductor::new(col(0), col(1), x0, x1))),
+            NodeKind::Diffuse => self.push(w, Lobe::Diffuse(Diffuse::new(col(0), x0)), top),
+            NodeKind::Conductor => self.push(w, Lobe::Conductor(Conductor::new(col(0), col(1), x0, x1)), top),
             NodeKind::Dielectric => {
                 let eta = if node.thin || at.outside { x0 } else { 1.0 / x0 };
                 let mut d = Dielectric::new(eta, x1, x2, col(0), col(1), node.thin);
                 d.reflection_only = top;
-                self.push(w, Lobe::Dielectric(d))
+                self.push(w, Lobe::Dielectric(d), top)
             }
-            NodeKind::Sheen => self.push(w, Lobe::Sheen(Sheen::new(col(0), x0))),
+            NodeKind::Sheen => self.push(w, Lobe::Sheen(Sheen::new(col(0), x0)), top),
             NodeKind::Emission => {
                 self.emission += w * col(0);
                 Ok(())
@@ -217,9 +220,15 @@ impl Lobes {
         self.walk(c, node.b as usize, w * through.max(Vec3::ZERO), at, top)
     }
 
-    /// Appends a lobe of weight `w`, unless the weight is zero.
-    fn push(&mut self, w: Vec3, lobe: Lobe) -> Result<(), TooManyLobes> {
+    /// Appends a lobe of weight `w`, unless the weight is zero, or (outside
+    /// a layer's top, where even a black lobe hides what is under it) the
+    /// lobe scatters nothing.
+    fn push(&mut self, w: Vec3, lobe: Lobe, top: bool) -> Result<(), TooManyLobes> {
         if w.max_element() <= 0.0 {
+            return Ok(());
+        }
+        let albedo = lobe.albedo(self.wo);
+        if !top && albedo.max_element() <= 0.0 {
             return Ok(());
         }
         if self.len == MAX_LOBES {
@@ -227,6 +236,7 @@ impl Lobes {
         }
         self.lobe[self.len] = lobe;
         self.weight[self.len] = w;
+        self.albedo[self.len] = albedo;
         self.len += 1;
         Ok(())
     }
@@ -236,7 +246,7 @@ impl Lobes {
     fn finish(&mut self) {
         let mut total = 0.0;
         for k in 0..self.len {
-            let a = (self.weight[k] * self.lobe[k].albedo(self.wo)).dot(LUMINANCE).max(0.0);
+            let a = (self.weight[k] * self.albedo[k]).dot(LUMINANCE).max(0.0);
             total += a;
             self.cdf[k] = total;
             self.flags = self.flags | self.lobe[k].flags();
@@ -345,6 +355,6 @@ impl Lobes {
     /// The share of the light from the viewer's direction the lobes
     /// scatter, estimated from their albedos.
     pub fn albedo(&self) -> Vec3 {
-        (0..self.len).map(|k| self.weight[k] * self.lobe[k].albedo(self.wo)).sum()
+        (0..self.len).map(|k| self.weight[k] * self.albedo[k]).sum()
     }
 }

@@ -21,14 +21,14 @@ use std::time::Duration;
 use super::{bump, Image, TexFrame, TextureMap, Textures};
 use crate::bsdf::closure::{At, Lobes};
 use crate::bsdf::lobe::{Conductor, Diffuse, Lobe};
-use crate::bsdf::Specular;
 use crate::bsdf::Brdf;
+use crate::bsdf::Specular;
 use crate::material::Material;
 use luster_core::math::{Vec2, Vec3};
 use luster_scene::description::{DecalMode, ImageDesc, TextureMapDesc, TextureSource};
 use luster_shading::shader::{
-    Entry, ImageSampler, MaterialOutputs, SampleFilter, ShadeInput, ShadePoint, ShaderError, ShaderErrorKind, ShaderImages,
-    ShaderSet, ShaderSource,
+    Entry, ImageSampler, MaterialOutputs, SampleFilter, ShadeInput, ShadePoint, ShaderError, ShaderErrorKind,
+    ShaderImages, ShaderSet, ShaderSource,
 };
 use std::sync::Arc;
 

@@ -2,8 +2,8 @@
 //! points, evaluation at surface points, and material outputs.
 
 use super::*;
-use crate::texture::Texture;
 use crate::bsdf::lobe::{Conductor, Diffuse, Lobe};
+use crate::texture::Texture;
 use luster_scene::Loc;
 use luster_shading::shader::ParamValue;
 
@@ -52,7 +52,10 @@ fn one_script_serves_maps_with_different_parameters() {
             let Texture::Shader { id } = m.texture else { panic!("a shader map") };
             let mut mat = Material::default();
             let mut n = Vec3::Z;
-            assert_eq!(tex.apply_shader(id, m, &frame(), &mut mat, &mut n, &mut Lobes::default()).unwrap(), None);
+            assert_eq!(
+                tex.apply_shader(id, m, &frame(), &mut mat, &mut n, &mut Lobes::default()).unwrap(),
+                None
+            );
             mat.diffuse
         })
         .collect();
@@ -88,10 +91,16 @@ fn the_script_sees_the_frame_and_reflect_makes_a_mirror() {
     let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
     let mut mat = Material::default();
     let mut n = Vec3::Y;
-    assert_eq!(tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut n, &mut Lobes::default()).unwrap(), None);
+    assert_eq!(
+        tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut n, &mut Lobes::default()).unwrap(),
+        None
+    );
     assert_eq!(mat.mirror, Vec3::new(0.5, 1.5, 1.25));
     assert_eq!(mat.kind, Specular::Mirror);
-    assert_eq!(tex.apply_shader(1, &tex.maps[1], &frame(), &mut mat, &mut n, &mut Lobes::default()).unwrap(), Some(Vec3::Y));
+    assert_eq!(
+        tex.apply_shader(1, &tex.maps[1], &frame(), &mut mat, &mut n, &mut Lobes::default()).unwrap(),
+        Some(Vec3::Y)
+    );
 }
 
 #[test]
@@ -207,7 +216,9 @@ fn out_of_range_material_outputs_are_one_sentence_errors() {
         let descs = [map(code, DecalMode::Material, &[])];
         let tex = Textures::new(vec![], &descs, None, compile(&descs, DEFAULT, None).unwrap());
         let mut mat = Material::default();
-        let e = tex.apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut Vec3::Z.clone(), &mut Lobes::default()).unwrap_err();
+        let e = tex
+            .apply_shader(0, &tex.maps[0], &frame(), &mut mat, &mut Vec3::Z.clone(), &mut Lobes::default())
+            .unwrap_err();
         assert_eq!(e.kind, luster_shading::shader::ShaderErrorKind::BadResult, "{code}: {e}");
         let text = e.to_string();
         assert!(text.contains(what) && !text.contains('\n'), "{code}: {text}");
