@@ -151,8 +151,9 @@ fn textured<'a>(scene: &'a Scene, ray: &Ray, hit: &Hit, depth: u32, st: &mut Pat
     if ns.dot(hit.ng) < 0.0 {
         ns = -ns;
     }
-    if material.closure {
-        // Maps after the closure's may have bent the normal.
+    // Maps after the closure's may have bent the normal (the lobes' frame
+    // holds it facing the viewer).
+    if material.closure && st.lobes.frame.normal().dot(ns).abs() < 1.0 {
         st.lobes.reframe(&At::new(ns, hit.ng, st.lobes.frame.tangent(), ray.d.normalize()));
     }
     // The maps may have changed the colours, the model or the emission.

@@ -63,7 +63,8 @@ pub struct TooManyLobes;
 pub struct Lobes {
     lobe: [Lobe; MAX_LOBES],
     weight: [Vec3; MAX_LOBES],
-    /// Each lobe's albedo for the viewer's direction, unweighted.
+    /// Each lobe's albedo for the viewer's direction, unweighted (worked
+    /// out by [`finish`](Self::finish) where there is more than one lobe).
     albedo: [Vec3; MAX_LOBES],
     /// The chance of picking each lobe, summed up to it.
     cdf: [f32; MAX_LOBES],
@@ -140,22 +141,45 @@ impl Lobes {
     /// Flattens `c` at `at`, or fails when it has more than [`MAX_LOBES`]
     /// lobes of non-zero weight.
     pub fn flatten(c: &Closure, at: &At) -> Result<Lobes, TooManyLobes> {
-        let mut out = Lobes { frame: at.frame, wo: at.wo, ..Lobes::default() };
-        if c.len > 0 {
-            out.walk(c, c.root as usize, Vec3::ONE, at, false)?;
-        }
-        out.finish();
+        let mut out = Lobes::default();
+        out.flatten_into(c, at)?;
         Ok(out)
+    }
+
+    /// [`flatten`](Self::flatten) into `self`, whose arrays are written only
+    /// as far as the lobes go (a shading point's lobes are flattened where
+    /// the path keeps them, not built elsewhere and copied there).
+    pub fn flatten_into(&mut self, c: &Closure, at: &At) -> Result<(), TooManyLobes> {
+        self.start(at);
+        if c.len > 0 {
+            self.walk(c, c.root as usize, Vec3::ONE, at, false)?;
+        }
+        self.finish();
+        Ok(())
     }
 
     /// The lobes `parts` (weight, lobe) side by side at `at`.
     pub fn of(parts: &[(Vec3, Lobe)], at: &At) -> Result<Lobes, TooManyLobes> {
-        let mut out = Lobes { frame: at.frame, wo: at.wo, ..Lobes::default() };
-        for &(w, lobe) in parts {
-            out.push(w, lobe, false)?;
-        }
-        out.finish();
+        let mut out = Lobes::default();
+        out.of_into(parts, at)?;
         Ok(out)
+    }
+
+    /// [`of`](Self::of) into `self` (see [`flatten_into`](Self::flatten_into)).
+    pub fn of_into(&mut self, parts: &[(Vec3, Lobe)], at: &At) -> Result<(), TooManyLobes> {
+        self.start(at);
+        for &(w, lobe) in parts {
+            self.push(w, lobe, false)?;
+        }
+        self.finish();
+        Ok(())
+    }
+
+    /// Empties `self` for a flattening at `at`.
+    fn start(&mut self, at: &At) {
+        (self.len, self.visits, self.flags) = (0, 0, Flags::NONE);
+        (self.emission, self.transparency) = (Vec3::ZERO, Vec3::ZERO);
+        (self.frame, self.wo) = (at.frame, at.wo);
     }
 
     /// The same lobes seen from `at`: a later map bent the shading normal.
@@ -222,13 +246,9 @@ impl Lobes {
 
     /// Appends a lobe of weight `w`, unless the weight is zero, or (outside
     /// a layer's top, where even a black lobe hides what is under it) the
-    /// lobe scatters nothing.
+    /// lobe's colours are black.
     fn push(&mut self, w: Vec3, lobe: Lobe, top: bool) -> Result<(), TooManyLobes> {
-        if w.max_element() <= 0.0 {
-            return Ok(());
-        }
-        let albedo = lobe.albedo(self.wo);
-        if !top && albedo.max_element() <= 0.0 {
+        if w.max_element() <= 0.0 || (!top && lobe.is_black()) {
             return Ok(());
         }
         if self.len == MAX_LOBES {
@@ -236,16 +256,22 @@ impl Lobes {
         }
         self.lobe[self.len] = lobe;
         self.weight[self.len] = w;
-        self.albedo[self.len] = albedo;
         self.len += 1;
         Ok(())
     }
 
-    /// Works out the lobes' chances of being picked (by weighted albedo)
-    /// and their flags.
+    /// Works out the lobes' albedos and chances of being picked (by
+    /// weighted albedo) and their flags. A lone lobe is always picked: its
+    /// albedo is worked out only when asked for.
     fn finish(&mut self) {
+        if self.len == 1 {
+            self.cdf[0] = 1.0;
+            self.flags = self.lobe[0].flags();
+            return;
+        }
         let mut total = 0.0;
         for k in 0..self.len {
+            self.albedo[k] = self.lobe[k].albedo(self.wo);
             let a = (self.weight[k] * self.albedo[k]).dot(LUMINANCE).max(0.0);
             total += a;
             self.cdf[k] = total;
@@ -355,6 +381,6 @@ impl Lobes {
     /// The share of the light from the viewer's direction the lobes
     /// scatter, estimated from their albedos.
     pub fn albedo(&self) -> Vec3 {
-        (0..self.len).map(|k| self.weight[k] * self.albedo[k]).sum()
+        (0..self.len).map(|k| self.weight[k] * self.lobe[k].albedo(self.wo)).sum()
     }
 }

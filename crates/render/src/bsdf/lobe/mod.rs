@@ -96,6 +96,19 @@ impl Lobe {
         }
     }
 
+    /// Whether the lobe's colours are black, so that it scatters nothing
+    /// (a conductor's Fresnel rises towards white at grazing angles
+    /// whatever its colours, so it never is).
+    #[inline]
+    pub fn is_black(&self) -> bool {
+        match self {
+            Lobe::Diffuse(l) => l.color() == Vec3::ZERO,
+            Lobe::Conductor(_) => false,
+            Lobe::Dielectric(l) => l.specular == Vec3::ZERO && (l.reflection_only || l.tint == Vec3::ZERO),
+            Lobe::Sheen(l) => l.color() == Vec3::ZERO,
+        }
+    }
+
     /// What of the light from `wo` passes through the lobe to a layer below
     /// it, where the lobe is a layer's top: a dielectric's transmission
     /// (tinted), the part a sheen does not scatter; none through a diffuse

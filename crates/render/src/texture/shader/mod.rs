@@ -434,7 +434,7 @@ pub fn apply_outputs(
     at: impl FnOnce() -> At,
 ) -> Result<(), crate::bsdf::closure::TooManyLobes> {
     if let Some(c) = &o.closure {
-        *lobes = Lobes::flatten(c, &at())?;
+        lobes.flatten_into(c, &at())?;
         *m = Material { emission: lobes.emission, closure: true, ..Material::default() };
         return Ok(());
     }
@@ -476,7 +476,7 @@ pub fn apply_outputs(
         (Vec3::ONE, Lobe::Conductor(Conductor::new(ks, Vec3::ONE, roughness, 0.0))),
     ];
     let n = if specular { 2 } else { 1 };
-    *lobes = Lobes::of(&parts[..n], &at())?;
+    lobes.of_into(&parts[..n], &at())?;
     m.brdf = None;
     m.closure = true;
     Ok(())
