@@ -358,7 +358,7 @@ impl Lobes {
     /// its light samples, the smooth lobes being traced as rays.
     pub fn eval_rough(&self, wi: Vec3) -> Vec3 {
         (0..self.len)
-            .filter(|&k| self.lobe[k].mirror_split(self.wo).is_none())
+            .filter(|&k| !self.lobe[k].is_smooth())
             .map(|k| self.weight[k] * self.lobe[k].eval(self.wo, wi).0)
             .sum()
     }
@@ -376,11 +376,5 @@ impl Lobes {
             }
         }
         split
-    }
-
-    /// The share of the light from the viewer's direction the lobes
-    /// scatter, estimated from their albedos.
-    pub fn albedo(&self) -> Vec3 {
-        (0..self.len).map(|k| self.weight[k] * self.lobe[k].albedo(self.wo)).sum()
     }
 }

@@ -3,6 +3,7 @@
 //! density, and white furnaces of layered stacks.
 
 use super::*;
+use crate::bsdf::lobe::tests::Pcg as Rng;
 use luster_shading::shader::closure::MAX_NODES;
 
 /// A closure built bottom-up, as the Lua side writes it.
@@ -45,17 +46,6 @@ impl Tree {
 fn at(cos: f32) -> At {
     let wo = Vec3::new((1.0 - cos * cos).max(0.0).sqrt(), 0.0, cos);
     At { frame: Frame::AXES, wo, outside: true }
-}
-
-/// A small deterministic generator (xorshift), for Monte Carlo checks.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f32 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 40) as f32 / (1u64 << 24) as f32
-    }
 }
 
 /// The Monte Carlo estimate of the closure's albedo: the mean of

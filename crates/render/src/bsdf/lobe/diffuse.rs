@@ -121,88 +121,11 @@ fn g_over_pi(mu: f32) -> f32 {
 pub(super) mod tests {
     use super::*;
 
-    /// PCG32 (O'Neill 2014): a fixed-seed stream, so every run draws the same samples.
-    pub(in crate::bsdf::lobe) struct Pcg(pub u64);
-
-    impl Pcg {
-        pub fn next(&mut self) -> f32 {
-            let old = self.0;
-            self.0 = old.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-            let x = (((old >> 18) ^ old) >> 27) as u32;
-            let r = x.rotate_right((old >> 59) as u32);
-            (r >> 8) as f32 / (1u32 << 24) as f32
-        }
-    }
+    use super::super::tests::{gamma_q, Pcg};
 
     pub(in crate::bsdf::lobe) fn dir(mu: f32, phi: f32) -> Vec3 {
         let s = (1.0 - mu * mu).max(0.0).sqrt();
         Vec3::new(s * phi.cos(), s * phi.sin(), mu)
-    }
-
-    /// `ln Γ(x)` for x > 0 (Lanczos, g = 7, n = 9).
-    fn ln_gamma(x: f64) -> f64 {
-        const C: [f64; 9] = [
-            0.999_999_999_999_809_9,
-            676.520_368_121_885_1,
-            -1_259.139_216_722_402_8,
-            771.323_428_777_653_1,
-            -176.615_029_162_140_6,
-            12.507_343_278_686_905,
-            -0.138_571_095_265_720_12,
-            9.984_369_578_019_572e-6,
-            1.505_632_735_149_311_6e-7,
-        ];
-        let x = x - 1.0;
-        let t = x + 7.5;
-        let sum = C[0] + (1..9).map(|i| C[i] / (x + i as f64)).sum::<f64>();
-        0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + sum.ln()
-    }
-
-    /// The upper regularised incomplete gamma `Q(a, x)`: the chi-square
-    /// p-value is `Q(dof/2, stat/2)` (series below `a + 1`, else Lentz's
-    /// continued fraction).
-    fn gamma_q(a: f64, x: f64) -> f64 {
-        if x <= 0.0 {
-            return 1.0;
-        }
-        let front = (-x + a * x.ln() - ln_gamma(a)).exp();
-        if x < a + 1.0 {
-            let (mut term, mut sum, mut ap) = (1.0 / a, 1.0 / a, a);
-            for _ in 0..10_000 {
-                ap += 1.0;
-                term *= x / ap;
-                sum += term;
-                if term.abs() < sum.abs() * 1e-15 {
-                    break;
-                }
-            }
-            1.0 - sum * front
-        } else {
-            let tiny = 1e-300;
-            let mut b = x + 1.0 - a;
-            let mut c = 1.0 / tiny;
-            let mut d = 1.0 / b;
-            let mut h = d;
-            for i in 1..10_000 {
-                let an = -(i as f64) * (i as f64 - a);
-                b += 2.0;
-                d = an * d + b;
-                if d.abs() < tiny {
-                    d = tiny;
-                }
-                c = b + an / c;
-                if c.abs() < tiny {
-                    c = tiny;
-                }
-                d = 1.0 / d;
-                let del = d * c;
-                h *= del;
-                if (del - 1.0).abs() < 1e-15 {
-                    break;
-                }
-            }
-            front * h
-        }
     }
 
     /// The p-value of a chi-square test of `sample`'s directions against

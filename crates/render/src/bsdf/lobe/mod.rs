@@ -22,7 +22,7 @@ pub mod ggx;
 pub mod sheen;
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 pub use conductor::Conductor;
 pub use dielectric::Dielectric;
@@ -129,12 +129,12 @@ impl Lobe {
     /// lights only.
     #[inline]
     pub fn mirror_split(&self, wo: Vec3) -> Option<MirrorSplit> {
-        const SMOOTH: f32 = 0.01;
+        if !self.is_smooth() {
+            return None;
+        }
         match self {
-            Lobe::Conductor(c) if c.ggx.alpha_rms() < SMOOTH => {
-                Some(MirrorSplit { reflect: c.fresnel(wo.z), ..MirrorSplit::default() })
-            }
-            Lobe::Dielectric(d) if d.ggx.alpha_rms() < SMOOTH => {
+            Lobe::Conductor(c) => Some(MirrorSplit { reflect: c.fresnel(wo.z), ..MirrorSplit::default() }),
+            Lobe::Dielectric(d) => {
                 let r = dielectric::fresnel_dielectric(wo.z, d.eta);
                 let (r, t) = if d.thin && r < 1.0 {
                     // The sheet's two faces, every internal reflection summed.
@@ -147,6 +147,19 @@ impl Lobe {
                 Some(MirrorSplit { reflect: d.specular * r, refract, eta: d.eta, thin: d.thin })
             }
             _ => None,
+        }
+    }
+
+    /// Whether the recursive ray tracer follows the lobe as rays
+    /// ([`mirror_split`](Self::mirror_split)): a conductor or dielectric of
+    /// roughness under 0.1 (`α` under 0.01).
+    #[inline]
+    pub fn is_smooth(&self) -> bool {
+        const SMOOTH: f32 = 0.01;
+        match self {
+            Lobe::Conductor(c) => c.ggx.alpha_rms() < SMOOTH,
+            Lobe::Dielectric(d) => d.ggx.alpha_rms() < SMOOTH,
+            Lobe::Diffuse(_) | Lobe::Sheen(_) => false,
         }
     }
 

@@ -273,7 +273,8 @@ fn albedo_quadrature(t: &Tables, mu_o: f64, r: f64, row: f32) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::super::diffuse::tests::{chi_square_p, dir, mc_albedo, Pcg};
+    use super::super::diffuse::tests::{chi_square_p, dir, mc_albedo};
+    use super::super::tests::Pcg;
     use super::*;
 
     const COLOR: Vec3 = Vec3::new(0.9, 0.6, 0.3);

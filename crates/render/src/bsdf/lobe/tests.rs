@@ -48,7 +48,7 @@ fn ln_gamma(x: f64) -> f64 {
 
 /// The regularized upper incomplete gamma function `Q(a, x)` (series below
 /// `a + 1`, Lentz's continued fraction above, as in Numerical Recipes).
-fn gamma_q(a: f64, x: f64) -> f64 {
+pub(crate) fn gamma_q(a: f64, x: f64) -> f64 {
     if x <= 0.0 {
         return 1.0;
     }

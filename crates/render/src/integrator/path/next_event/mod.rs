@@ -64,18 +64,7 @@ fn next_event_any(
     st: &mut PathState,
 ) -> Vec3A {
     let mut color = Vec3::ZERO;
-    // MIS takes every light of a scene with few ([`every_light`]), else one
-    // per hit, chosen by power: a shadow ray per hit whatever the number of
-    // lights. The course's variant samples them all.
-    let (lights, scale) = if p.mis && !every_light(scene, p) {
-        let (i, pick) = scene.light_pick.choose(st.sampler.next_1d());
-        if pick <= 0.0 {
-            return Vec3A::ZERO;
-        }
-        (&scene.lights[i..=i], 1.0 / pick)
-    } else {
-        (&scene.lights[..], 1.0)
-    };
+    let Some((lights, scale)) = lights_to_sample(scene, p, st) else { return Vec3A::ZERO };
     for (i, light) in lights.iter().enumerate() {
         if let Light::Shaded(l) = light {
             color += shaded_sample(scene, l, hit, at, origin, depth, scale, p, st);
@@ -96,6 +85,24 @@ fn next_event_any(
     color.into()
 }
 
+/// The lights a vertex samples and the scale of each one's estimate. MIS
+/// takes every light of a scene with few ([`every_light`]), else one per
+/// hit, chosen by power (scaled by one over its chance): a shadow ray per
+/// hit whatever the number of lights. The course's variant samples them
+/// all. `None` where the chosen light cannot be chosen.
+#[inline(always)]
+fn lights_to_sample<'s>(scene: &'s Scene, p: PathParams, st: &mut PathState) -> Option<(&'s [Light], f32)> {
+    if p.mis && !every_light(scene, p) {
+        let (i, pick) = scene.light_pick.choose(st.sampler.next_1d());
+        if pick <= 0.0 {
+            return None;
+        }
+        Some((&scene.lights[i..=i], 1.0 / pick))
+    } else {
+        Some((&scene.lights[..], 1.0))
+    }
+}
+
 /// [`next_event`] at a vertex whose material is a shader's closure: the
 /// light samples are drawn from the hit point, and a light behind the
 /// surface counts where a lobe transmits, its shadow ray leaving from the
@@ -114,15 +121,7 @@ pub(super) fn next_event_closure(
     let front = hit.p + ng * eps;
     let transmits = at.flags().contains(Flags::TRANSMISSION);
     let mut color = Vec3::ZERO;
-    let (lights, scale) = if p.mis && !every_light(scene, p) {
-        let (i, pick) = scene.light_pick.choose(st.sampler.next_1d());
-        if pick <= 0.0 {
-            return Vec3::ZERO;
-        }
-        (&scene.lights[i..=i], 1.0 / pick)
-    } else {
-        (&scene.lights[..], 1.0)
-    };
+    let Some((lights, scale)) = lights_to_sample(scene, p, st) else { return Vec3::ZERO };
     for light in lights {
         if let Light::Shaded(l) = light {
             color += shaded_sample(scene, l, hit, at, front, depth, scale, p, st);
