@@ -192,6 +192,20 @@ impl Volume {
         })
     }
 
+    /// The baked or loaded density grid (before `Density` scales it), in the
+    /// bound's own space; `None` for a constant or an unbaked script.
+    pub fn density_grid(&self) -> Option<&Grid<f32>> {
+        match &self.field {
+            Field::Grid(g) => Some(g),
+            _ => None,
+        }
+    }
+
+    /// The `Density` factor on the field.
+    pub fn density_scale(&self) -> f32 {
+        self.scale
+    }
+
     /// The density of a volume whose density is the same everywhere in its
     /// bound (so transmittance through it is exact without marching).
     pub fn constant_density(&self) -> Option<f32> {
