@@ -37,7 +37,7 @@
 //! Shadow rays through a homogeneous medium use that closed form; through a
 //! scripted one they take midpoint steps twice as long as the medium's.
 
-use super::PathState;
+use super::{tracking, PathState};
 use crate::render::scene::{Hit, HitGeom, Scene};
 use crate::volume::{steps, Kind, Probe, Volume};
 use luster_core::math::{Ray, Vec3};
@@ -128,8 +128,14 @@ fn shadow_volumes(scene: &Scene, ray: &Ray, t_max: f32, st: &mut PathState) -> V
 pub fn media_transmittance(scene: &Scene, ray: &Ray, t_max: f32, st: &mut PathState) -> Vec3 {
     let mut tr = Vec3::ONE;
     for v in &scene.volumes.media {
-        tr *= transmittance(scene, v, ray, 0.0, t_max, st);
-        if tr.max_element() < MIN_TRANSMITTANCE {
+        tr *= if st.tracking && v.majorant.is_some() {
+            tracking::transmittance(scene, v, ray, 0.0, t_max, st)
+        } else {
+            transmittance(scene, v, ray, 0.0, t_max, st)
+        };
+        // Tracking's estimates are unbiased as they are (they play Russian
+        // roulette themselves); cutting them off would darken.
+        if !st.tracking && tr.max_element() < MIN_TRANSMITTANCE {
             return Vec3::ZERO;
         }
     }

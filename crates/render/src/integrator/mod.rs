@@ -14,6 +14,7 @@
 pub mod media;
 pub mod path;
 mod state;
+pub mod tracking;
 pub mod whitted;
 
 pub use path::PathParams;

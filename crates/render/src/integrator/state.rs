@@ -43,6 +43,10 @@ pub struct PathState {
     /// was shaded: the vertex copies them out at once. Boxed, so that the
     /// state stays small to move; allocated once per state.
     pub(crate) lobes: Box<Lobes>,
+    /// Whether shadow rays through media estimate their transmittance by
+    /// ratio tracking (the path tracer, unbiased) rather than by marching
+    /// (the recursive tracer, smooth).
+    pub(crate) tracking: bool,
 }
 
 impl PathState {
@@ -60,6 +64,7 @@ impl PathState {
             view: crate::texture::View::default(),
             error: None,
             lobes: Box::default(),
+            tracking: false,
         }
     }
 

@@ -88,6 +88,16 @@ impl Bound {
         }
     }
 
+    /// The ray's origin and direction in the bound's own space (the
+    /// direction not renormalized, so `t` means the same in both).
+    #[inline]
+    pub fn to_local_ray(&self, ray: &Ray) -> (Vec3, Vec3) {
+        match &self.xf {
+            Some(xf) => (xf.inv_point(ray.o), xf.inv_vector(ray.d)),
+            None => (ray.o, ray.d),
+        }
+    }
+
     /// Where the ray's line is inside the bound: `(t_in, t_out)` with
     /// `t_in < t_out` (`t_in` is negative when the origin is inside), or `None`.
     pub fn interval(&self, ray: &Ray) -> Option<(f32, f32)> {

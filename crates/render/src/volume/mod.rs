@@ -19,6 +19,7 @@
 pub mod bound;
 pub mod cache;
 pub mod grid;
+pub mod majorant;
 mod surface;
 #[cfg(test)]
 mod tests;
@@ -28,11 +29,12 @@ mod tests_cache;
 pub use bound::Bound;
 pub use cache::{Baking, GridCache};
 pub use grid::Grid;
+pub use majorant::Majorant;
 
 use crate::texture::shader::shader_name;
 use crate::texture::{TexList, Textures, View};
 use luster_core::math::{Aabb, Vec3};
-use luster_scene::description::{Description, VolumeDesc, VolumeKind};
+use luster_scene::description::{Description, RendererDesc, VolumeDesc, VolumeKind};
 use luster_scene::SceneError;
 use luster_shading::shader::{
     ShadeInput, ShaderError, ShaderErrorKind, ShaderImages, ShaderSet, ShaderSource,
@@ -62,6 +64,10 @@ pub const MAX_EXTENT: f32 = 1e7;
 pub fn steps(len: f32, step: f32) -> u32 {
     (len / step).ceil().clamp(1.0, MAX_STEPS) as u32
 }
+
+/// Points per edge of the grid a medium's script is baked on when a path
+/// tracer renders it and the scene gives no `GridResolution`.
+pub const TRACKING_GRID: u32 = 128;
 
 /// Most memory the baked grids of one volume may take.
 pub const MAX_GRID_BYTES: u64 = 1 << 30;
@@ -131,6 +137,9 @@ pub struct Volume {
     /// The march step in the bound's own space (`s.filterwidth` of a script
     /// that is not baked).
     march_width: f32,
+    /// Bounds on a medium's extinction for the path tracer's tracking;
+    /// `None` for a hypertexture or a script that is not baked.
+    pub majorant: Option<Majorant>,
 }
 
 /// What a volume script sees of the ray along which it is asked, beyond the
@@ -190,6 +199,15 @@ impl Volume {
             }
             Glow::Grid(g) => g.at(self.bound.to_local(p)).max(Vec3::ZERO),
         })
+    }
+
+    /// Whether the medium emits light anywhere.
+    pub fn glows(&self) -> bool {
+        match &self.kind {
+            Kind::Medium { glow: Glow::Constant(c), .. } => c.max_element() > 0.0,
+            Kind::Medium { .. } => true,
+            Kind::Surface { .. } => false,
+        }
     }
 
     /// The baked or loaded density grid (before `Density` scales it), in the
@@ -272,6 +290,7 @@ impl Volumes {
     ) -> Result<Volumes, SceneError> {
         let err = |v: &VolumeDesc, msg: String| SceneError::at(&desc.file, &v.loc, msg);
         let shaders = compile_scripts(desc, images, timeout)?;
+        let path_traced = desc.cameras.iter().any(|c| matches!(c.renderer, RendererDesc::PathTracing(_)));
         let mut out = Volumes { media: Vec::new(), surfaces: Vec::new(), shaders: None };
         let mut next_script = 0;
         for (index, v) in desc.volumes.iter().enumerate() {
@@ -333,8 +352,15 @@ impl Volumes {
                 label,
                 index: index as u32,
                 march_width,
+                majorant: None,
             };
-            if let (Some(n), Some(id)) = (v.grid, script) {
+            // The path tracer's tracking needs bounds on the density, which
+            // only a constant or a grid has: its scripts are baked.
+            let grid = match (v.grid, &v.kind) {
+                (None, VolumeKind::Medium { .. }) if path_traced => Some(TRACKING_GRID),
+                (g, _) => g,
+            };
+            if let (Some(n), Some(id)) = (grid, script) {
                 let slot = baking.cache.and_then(|c| cache::key(desc, index, n).map(|key| (c, key)));
                 if let Some(grids) = slot.as_ref().and_then(|(c, key)| c.get(key)) {
                     vol.use_grids(grids);
@@ -346,6 +372,7 @@ impl Volumes {
                     }
                 }
             }
+            vol.majorant = vol.bounds();
             match vol.kind {
                 Kind::Medium { .. } => out.media.push(vol),
                 Kind::Surface { .. } => out.surfaces.push(vol),
@@ -411,6 +438,23 @@ fn march_step(v: &VolumeDesc, bound: &Bound) -> Result<f32, String> {
 }
 
 impl Volume {
+    /// The majorant of a medium whose density is a constant or a grid.
+    fn bounds(&self) -> Option<Majorant> {
+        let Kind::Medium { absorption, scattering, glow, .. } = &self.kind else { return None };
+        let sigma_t = (*absorption + *scattering).max_element().max(0.0);
+        match &self.field {
+            Field::Constant => Some(Majorant::Uniform(self.scale.max(0.0) * sigma_t)),
+            Field::Grid(g) => {
+                let glows = match glow {
+                    Glow::Grid(e) => Some(&**e),
+                    _ => None,
+                };
+                Some(Majorant::of_grid(g, self.scale.max(0.0), sigma_t, glows, 1.0 / self.step))
+            }
+            Field::Script(_) => None,
+        }
+    }
+
     /// Replaces the script's density (and emission) by `grids`.
     fn use_grids(&mut self, grids: cache::Baked) {
         if let Kind::Medium { glow, .. } = &mut self.kind {

@@ -32,11 +32,14 @@ use std::mem::MaybeUninit;
 use super::{is_black, surface_at, PathState, Surface};
 use crate::bsdf::Specular;
 use crate::integrator::media;
+use crate::integrator::tracking::{self, Event};
 use crate::light::{Light, LightSample};
 use crate::material::Material;
 use crate::render::scene::{Hit, Scene};
+use crate::volume::Kind;
 use luster_core::math::{Ray, Vec3, Vec3A};
 
+mod medium;
 mod next_event;
 mod params;
 mod vertex;
@@ -50,6 +53,11 @@ use vertex::{bounce, bounce_through, specular};
 /// a path that long is far below anything visible).
 pub const MAX_BOUNCES: u32 = 64;
 
+/// The same in a scene with media, where light may scatter hundreds of
+/// times inside a dense cloud before it leaves (surfaces still stop
+/// bouncing past [`MAX_BOUNCES`]).
+pub const MAX_MEDIUM_BOUNCES: u32 = 1024;
+
 /// How the ray being traced left its last surface, which decides how much an
 /// emitter it hits counts.
 #[derive(Clone, Copy, Debug)]
@@ -60,6 +68,9 @@ enum Came {
     /// surface whose facing shading normal was `n` (the normal the light
     /// samples there were drawn for).
     Bounce { pdf: f32, n: Vec3 },
+    /// Scattered in a medium in a direction drawn from its phase function
+    /// with density `pdf` (its light samples were drawn with no normal).
+    Scatter { pdf: f32 },
 }
 
 /// Sampler calls of the first hit drawn from stratified patterns, after
@@ -83,6 +94,7 @@ fn first_hit_calls(scene: &Scene, p: PathParams) -> u32 {
 /// Radiance arriving along the camera ray `ray`.
 pub fn radiance(scene: &Scene, ray: &Ray, p: &PathParams, st: &mut PathState) -> Vec3 {
     let p = *p;
+    st.tracking = true;
     st.sampler.stratify_first(st.sampler.calls() + first_hit_calls(scene, p));
     by_variant!(p, V => li::<V>(scene, ray, 0, Vec3::ONE, Came::Direct, p, st))
 }
@@ -130,6 +142,7 @@ pub fn radiance_pair(
     sb: &mut PathState,
 ) -> [Vec3A; 2] {
     let p = *p;
+    (sa.tracking, sb.tracking) = (true, true);
     by_variant!(p, V => pair::<V>(scene, rays, p, sa, sb))
 }
 
@@ -171,8 +184,12 @@ struct Walk {
     depth: u32,
     beta: Vec3,
     came: Came,
-    /// Whether the scene has media (then no vertex waits).
+    /// Whether the scene has media. Then no vertex waits: each adds its
+    /// light at once, times the product of the weights before it (`thr`),
+    /// into `acc`, so that a path may scatter hundreds of times.
     media: bool,
+    acc: Vec3,
+    thr: Vec3,
     /// The distance travelled before the walk, given back at its end.
     entry: f32,
     n: usize,
@@ -188,6 +205,8 @@ impl Walk {
             beta,
             came,
             media: !scene.volumes.media.is_empty(),
+            acc: Vec3::ZERO,
+            thr: Vec3::ONE,
             entry: st.travelled,
             n: 0,
             pending: [MaybeUninit::uninit(); DEFERRED],
@@ -217,21 +236,24 @@ impl Walk {
         p: PathParams,
         st: &mut PathState,
     ) -> Option<Vec3> {
+        if self.media {
+            return self.step_media::<V>(scene, hit, p, st);
+        }
         // The ray, like the hit, is read where it lies: a copy would be
         // written in a 16- and an 8-byte store, and the direction read back
         // across both, a load the store buffer cannot forward.
         let depth = self.depth;
         // Borrowed in place: moving the hit out of the slot `trace` filled
         // would copy it in wide loads that wait on its narrow stores.
-        let (t, color) = match hit {
+        let color = match hit {
             Some(hit) => {
                 let before = st.travelled;
                 st.travelled += hit.t;
-                let defer = !self.media && self.n < DEFERRED;
+                let defer = self.n < DEFERRED;
                 match shade::<V>(scene, &self.ray, hit, depth, self.beta, self.came, p, defer, st) {
                     Shaded::Done(c) => {
                         st.travelled = before;
-                        (hit.t, c)
+                        c
                     }
                     Shaded::Bounce(c, b) => {
                         // The next vertex sees this one's distance added,
@@ -243,27 +265,75 @@ impl Walk {
                     }
                 }
             }
-            None => (f32::INFINITY, escaped(scene, &self.ray, self.came, past_limit(scene, depth, p), p, st)),
+            None => escaped(scene, &self.ray, self.came, past_limit(scene, depth, p), p, st),
         };
-        // Nothing on the way dims the light or adds to it.
-        if !self.media {
-            return Some(color);
-        }
-        if past_limit(scene, depth, p) {
-            // The light found past the depth limit arrives dimmed by the media
-            // on the way; scattering there would be one bounce too many.
-            if is_black(color) {
-                return Some(color);
+        Some(color)
+    }
+
+    /// [`Walk::step`] in a scene with media: the ray is tracked through
+    /// them up to `hit` ([`tracking::track`]); where it scatters first, the
+    /// path goes on from there, else from the hit as without media.
+    #[inline(never)]
+    fn step_media<const V: u8>(
+        &mut self,
+        scene: &Scene,
+        hit: &Option<Hit>,
+        p: PathParams,
+        st: &mut PathState,
+    ) -> Option<Vec3> {
+        let depth = self.depth;
+        let past = past_limit(scene, depth, p);
+        let t_hit = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+        // Past the depth limit the ray only gathers light: it may not scatter.
+        let tracked = tracking::track(scene, &self.ray, t_hit, self.beta, !past, st);
+        self.acc += self.thr * tracked.emitted;
+        self.thr *= tracked.weight;
+        let beta = self.beta * tracked.weight;
+        let (c, b) = match (tracked.event, hit) {
+            (Event::Absorbed, _) => return Some(Vec3::ZERO),
+            (Event::Scatter { t, medium }, _) => {
+                let Kind::Medium { anisotropy: g, .. } = scene.volumes.media[medium].kind else {
+                    return Some(Vec3::ZERO);
+                };
+                let x = self.ray.at(t);
+                let d = self.ray.d;
+                let mut c = Vec3::ZERO;
+                if p.next_event || p.mis {
+                    c = medium::next_event_phase(scene, x, d, g, depth, p, st);
+                }
+                let more = p.mis || p.russian_roulette || depth < scene.max_depth;
+                let b = if more { medium::scatter_bounce(scene, x, d, g, depth, beta, p, st) } else { None };
+                st.travelled += t;
+                (c, b)
             }
-            return Some(color * media::media_transmittance(scene, &self.ray, t, st));
-        }
-        Some(media::through_media(scene, &self.ray, t, color, st))
+            (Event::Pass, Some(hit)) => {
+                let before = st.travelled;
+                st.travelled += hit.t;
+                match shade::<V>(scene, &self.ray, hit, depth, beta, self.came, p, true, st) {
+                    Shaded::Done(c) => {
+                        st.travelled = before;
+                        return Some(c);
+                    }
+                    Shaded::Bounce(c, b) => (c, Some(b)),
+                }
+            }
+            (Event::Pass, None) => return Some(escaped(scene, &self.ray, self.came, past, p, st)),
+        };
+        let Some(b) = b else { return Some(c) };
+        self.acc += self.thr * c;
+        self.thr *= b.weight / b.q;
+        (self.ray, self.depth, self.beta, self.came) = (b.ray, depth + 1, b.next, b.came);
+        None
     }
 
     /// The light along the walk's first ray, given `color` arriving at its
     /// last vertex: the waiting vertices' terms added deepest first.
     #[inline(always)]
     fn fold(&self, mut color: Vec3, st: &mut PathState) -> Vec3 {
+        if self.media {
+            st.travelled = self.entry;
+            return self.acc + self.thr * color;
+        }
         let mut n = self.n;
         while n > 0 {
             n -= 1;
@@ -370,7 +440,7 @@ impl LightAhead {
 #[inline]
 fn past_limit(scene: &Scene, depth: u32, p: PathParams) -> bool {
     if p.russian_roulette {
-        depth > MAX_BOUNCES
+        depth > if scene.volumes.media.is_empty() { MAX_BOUNCES } else { MAX_MEDIUM_BOUNCES }
     } else {
         depth > scene.max_depth
     }
@@ -397,8 +467,12 @@ fn escaped(scene: &Scene, ray: &Ray, came: Came, past: bool, p: PathParams, st: 
             let pick = pick_chance(scene, p, scene.light_pick.environment_pmf());
             power_heuristic(pdf, env.sampling_pdf(Some(n), d) * pick)
         }
-        Came::Bounce { .. } if p.next_event => 0.0,
-        Came::Bounce { .. } => 1.0,
+        Came::Scatter { pdf } if p.mis => {
+            let pick = pick_chance(scene, p, scene.light_pick.environment_pmf());
+            power_heuristic(pdf, env.sampling_pdf(None, d) * pick)
+        }
+        Came::Bounce { .. } | Came::Scatter { .. } if p.next_event => 0.0,
+        Came::Bounce { .. } | Came::Scatter { .. } => 1.0,
     };
     env.eval(d) * w
 }

@@ -67,7 +67,7 @@ fn next_event_any(
     let Some((lights, scale)) = lights_to_sample(scene, p, st) else { return Vec3A::ZERO };
     for (i, light) in lights.iter().enumerate() {
         if let Light::Shaded(l) = light {
-            color += shaded_sample(scene, l, hit, at, origin, depth, scale, p, st);
+            color += shaded_sample(scene, l, hit.p, &surface(at, p), origin, depth, scale, p, st);
             continue;
         }
         // A point drawn ahead is taken only where every light is sampled
@@ -91,7 +91,11 @@ fn next_event_any(
 /// hit whatever the number of lights. The course's variant samples them
 /// all. `None` where the chosen light cannot be chosen.
 #[inline(always)]
-fn lights_to_sample<'s>(scene: &'s Scene, p: PathParams, st: &mut PathState) -> Option<(&'s [Light], f32)> {
+pub(super) fn lights_to_sample<'s>(
+    scene: &'s Scene,
+    p: PathParams,
+    st: &mut PathState,
+) -> Option<(&'s [Light], f32)> {
     if p.mis && !every_light(scene, p) {
         let (i, pick) = scene.light_pick.choose(st.sampler.next_1d());
         if pick <= 0.0 {
@@ -124,7 +128,7 @@ pub(super) fn next_event_closure(
     let Some((lights, scale)) = lights_to_sample(scene, p, st) else { return Vec3::ZERO };
     for light in lights {
         if let Light::Shaded(l) = light {
-            color += shaded_sample(scene, l, hit, at, front, depth, scale, p, st);
+            color += shaded_sample(scene, l, hit.p, &surface(at, p), front, depth, scale, p, st);
             continue;
         }
         let Some(ls) = light.sample_at(hit.p, hit.p, at.n, st.time, &mut st.sampler) else {
@@ -185,7 +189,7 @@ fn next_event_diffuse<const MIS: bool>(
     let mut color = Vec3::ZERO;
     for (i, light) in scene.lights.iter().enumerate() {
         if let Light::Shaded(l) = light {
-            color += shaded_sample(scene, l, hit, at, origin, depth, 1.0, p, st);
+            color += shaded_sample(scene, l, hit.p, &surface(at, p), origin, depth, 1.0, p, st);
             continue;
         }
         // [`light_reaching_inline`] without media: the shadow ray passes or
@@ -214,15 +218,30 @@ fn next_event_diffuse<const MIS: bool>(
     color.into()
 }
 
-/// One sample of an object whose shader emits: a ray towards a point drawn
-/// on it, which counts only where its first hit is that point (for a sphere,
-/// any point of the object), with the shader's emission found there.
+/// How a vertex scatters light arriving from `wi`: `(f · cos, density of a
+/// bounce drawing wi)`, or `None` where no light arrives from there (below
+/// a surface).
+pub(super) type Scatters<'a> = dyn Fn(Vec3) -> Option<(Vec3, f32)> + 'a;
+
+/// A surface's [`Scatters`]: its BSDF above its normal.
+fn surface<'a>(at: &'a Bsdf, p: PathParams) -> impl Fn(Vec3) -> Option<(Vec3, f32)> + 'a {
+    move |wi| {
+        let cos = at.n.dot(wi);
+        (cos > 0.0).then(|| at.eval_pdf(wi, cos, p.strategy()))
+    }
+}
+
+/// One sample of an object whose shader emits, seen from `x` (a surface
+/// point or a point in a medium) that scatters by `f`: a ray towards a
+/// point drawn on it, which counts only where its first hit is that point
+/// (for a sphere, any point of the object), with the shader's emission
+/// found there.
 #[allow(clippy::too_many_arguments)]
-fn shaded_sample(
+pub(super) fn shaded_sample(
     scene: &Scene,
     l: &ShadedLight,
-    hit: &Hit,
-    at: &Bsdf,
+    x: Vec3,
+    f: &Scatters,
     origin: Vec3,
     depth: u32,
     scale: f32,
@@ -230,11 +249,8 @@ fn shaded_sample(
     st: &mut PathState,
 ) -> Vec3 {
     let u = st.sampler.next_2d();
-    let Some((wi, dist, pdf)) = l.sample(origin, hit.p, st.time, u) else { return Vec3::ZERO };
-    let cos = at.n.dot(wi);
-    if cos <= 0.0 {
-        return Vec3::ZERO;
-    }
+    let Some((wi, dist, pdf)) = l.sample(origin, x, st.time, u) else { return Vec3::ZERO };
+    let Some((f, bsdf_pdf)) = f(wi) else { return Vec3::ZERO };
     let r = Ray::new(origin, wi);
     st.stats.shadow += 1;
     let Some(h) = scene.intersect(&r, st.time, false) else { return Vec3::ZERO };
@@ -261,7 +277,6 @@ fn shaded_sample(
     if !e.traits.emits {
         return Vec3::ZERO;
     }
-    let (f, bsdf_pdf) = at.eval_pdf(wi, cos, p.strategy());
     let w = if p.mis { power_heuristic(pdf / scale, bsdf_pdf) * scale } else { scale };
     f * (tr * e.emission) * (w / pdf)
 }
@@ -281,18 +296,18 @@ pub(super) fn hit_weight(
 ) -> f32 {
     match came {
         Came::Direct => 1.0,
-        Came::Bounce { pdf, .. } if p.mis => {
+        Came::Bounce { pdf, .. } | Came::Scatter { pdf } if p.mis => {
             let pick = pick_chance(scene, p, scene.light_pick.pmf(li));
             power_heuristic(pdf, pick * light_pdf(&scene.lights[li], ray.o, hit, ray.d, time))
         }
-        Came::Bounce { .. } if p.next_event => 0.0,
-        Came::Bounce { .. } => 1.0,
+        Came::Bounce { .. } | Came::Scatter { .. } if p.next_event => 0.0,
+        Came::Bounce { .. } | Came::Scatter { .. } => 1.0,
     }
 }
 
 /// Whether a bounce can hit the light (then MIS weighs its two samples).
 #[inline]
-fn hittable(light: &Light) -> bool {
+pub(super) fn hittable(light: &Light) -> bool {
     matches!(light, Light::Mesh(_) | Light::Sphere(_) | Light::Environment(_) | Light::Shaded(_))
 }
 
