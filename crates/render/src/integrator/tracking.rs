@@ -70,7 +70,7 @@ struct Flight<'a> {
 }
 
 impl<'a> Flight<'a> {
-    fn new(medium: usize, v: &'a Volume, ray: &Ray, t_lo: f32, t_hi: f32) -> Option<Flight<'a>> {
+    fn new(medium: usize, v: &'a Volume, ray: &Ray, t_lo: f32, t_hi: f32, emission: bool) -> Option<Flight<'a>> {
         let maj = v.majorant.as_ref()?;
         let (t0, t1) = v.bound.interval(ray)?;
         let (a, b) = (t0.max(t_lo), t1.min(t_hi));
@@ -78,7 +78,7 @@ impl<'a> Flight<'a> {
             return None;
         }
         let (o, d) = v.bound.to_local_ray(ray);
-        let mut segments = maj.segments(o, d, a, b);
+        let mut segments = maj.segments(o, d, a, b, emission);
         let at = segments.next_segment();
         Some(Flight { medium, segments, at, t: a, next: f32::INFINITY, rate: 0.0 })
     }
@@ -146,7 +146,7 @@ pub fn track(scene: &Scene, ray: &Ray, t_max: f32, beta: Vec3, scatter: bool, st
     let mut flights: Vec<Flight> = Vec::new();
     let mut one: Option<Flight> = None;
     for (i, v) in media.iter().enumerate() {
-        if let Some(mut f) = Flight::new(i, v, ray, 0.0, t_max) {
+        if let Some(mut f) = Flight::new(i, v, ray, 0.0, t_max, true) {
             f.advance(st.sampler.next_1d());
             if one.is_none() && flights.is_empty() {
                 one = Some(f);
@@ -218,7 +218,7 @@ pub fn transmittance(scene: &Scene, v: &Volume, ray: &Ray, t_lo: f32, t_hi: f32,
         }
         return (-(absorption + scattering) * (rho * (b - a))).exp();
     }
-    let Some(mut f) = Flight::new(0, v, ray, t_lo, t_hi) else { return Vec3::ONE };
+    let Some(mut f) = Flight::new(0, v, ray, t_lo, t_hi, false) else { return Vec3::ONE };
     let probe = Probe { time: st.time, dir: ray.d, view: st.view, pixel: st.pixel };
     let mut tr = Vec3::ONE;
     loop {

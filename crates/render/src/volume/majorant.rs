@@ -5,9 +5,10 @@
 //!
 //! A grid's trilinear interpolation never exceeds the largest of a cell's
 //! eight corners, so a block's largest lattice sample bounds the density
-//! anywhere in it. A block whose emission grid glows somewhere gets at
-//! least one tentative collision per march step, since emission is
-//! gathered at tentative collisions and an empty block would be skipped.
+//! anywhere in it. Where emission is gathered (camera and bounce rays, not
+//! shadow rays), a block whose emission grid glows somewhere gets at least
+//! a floor of tentative collisions, since emission is gathered at
+//! tentative collisions and a block without any would be skipped.
 
 use super::grid::Grid;
 use luster_core::math::{Aabb, Vec3};
@@ -36,6 +37,8 @@ pub struct Blocks {
     dims: [usize; 3],
     /// Each block's bound, x fastest.
     rates: Vec<f32>,
+    /// Each block's bound where emission is gathered.
+    glowing: Vec<f32>,
 }
 
 impl Majorant {
@@ -56,6 +59,7 @@ impl Majorant {
         // The last block along an axis may reach past the box; rays are clipped to the box.
         let size = bounds.extent() / lattice * BLOCK as f32;
         let mut rates = vec![0.0f32; dims[0] * dims[1] * dims[2]];
+        let mut glowing = rates.clone();
         for bz in 0..dims[2] {
             for by in 0..dims[1] {
                 for bx in 0..dims[0] {
@@ -72,31 +76,34 @@ impl Majorant {
                             }
                         }
                     }
-                    let mut rate = top.max(0.0) * scale * sigma_t;
-                    if glow {
-                        rate = rate.max(floor);
-                    }
-                    rates[(bz * dims[1] + by) * dims[0] + bx] = rate;
+                    let rate = top.max(0.0) * scale * sigma_t;
+                    let at = (bz * dims[1] + by) * dims[0] + bx;
+                    rates[at] = rate;
+                    glowing[at] = if glow { rate.max(floor) } else { rate };
                 }
             }
         }
-        Majorant::Blocks(Blocks { bounds, size, dims, rates })
+        Majorant::Blocks(Blocks { bounds, size, dims, rates, glowing })
     }
 
-    /// The largest bound anywhere.
+    /// The largest bound anywhere (where emission is gathered).
     pub fn max(&self) -> f32 {
         match self {
             Majorant::Uniform(r) => *r,
-            Majorant::Blocks(b) => b.rates.iter().copied().fold(0.0, f32::max),
+            Majorant::Blocks(b) => b.glowing.iter().copied().fold(0.0, f32::max),
         }
     }
 
     /// The stretches of the ray `o + t d` (in the bound's own space) between
-    /// `t0` and `t1`, each with its bound.
-    pub fn segments(&self, o: Vec3, d: Vec3, t0: f32, t1: f32) -> Segments<'_> {
+    /// `t0` and `t1`, each with its bound: with the floor where emission
+    /// glows when `emission` is gathered along the ray.
+    pub fn segments(&self, o: Vec3, d: Vec3, t0: f32, t1: f32, emission: bool) -> Segments<'_> {
         match self {
             Majorant::Uniform(rate) => Segments { t: t0, t_end: t1, walk: Walk::Uniform(*rate) },
-            Majorant::Blocks(b) => Segments { t: t0, t_end: t1, walk: b.walk(o, d, t0, t1) },
+            Majorant::Blocks(b) => {
+                let rates = if emission { &b.glowing } else { &b.rates };
+                Segments { t: t0, t_end: t1, walk: b.walk(rates, o, d, t0, t1) }
+            }
         }
     }
 }
@@ -132,6 +139,8 @@ enum Walk<'a> {
     /// another, the `t` per block along each axis and the step's sign.
     Blocks {
         b: &'a Blocks,
+        /// The blocks' bounds this walk reads.
+        rates: &'a [f32],
         cell: [i32; 3],
         next: [f32; 3],
         delta: [f32; 3],
@@ -141,7 +150,7 @@ enum Walk<'a> {
 }
 
 impl Blocks {
-    fn walk(&self, o: Vec3, d: Vec3, t0: f32, t1: f32) -> Walk<'_> {
+    fn walk<'a>(&'a self, rates: &'a [f32], o: Vec3, d: Vec3, t0: f32, t1: f32) -> Walk<'a> {
         // Clip to the grid's box: outside it there is no density.
         let inv = d.recip();
         let a = (self.bounds.min - o) * inv;
@@ -171,7 +180,7 @@ impl Blocks {
                 delta[axis] = -self.size[axis] * inv[axis];
             }
         }
-        Walk::Blocks { b: self, cell, next, delta, step }
+        Walk::Blocks { b: self, rates, cell, next, delta, step }
     }
 }
 
@@ -189,7 +198,7 @@ impl Segments<'_> {
                 self.t = self.t_end;
                 Some(s)
             }
-            Walk::Blocks { b, cell, next, delta, step } => {
+            Walk::Blocks { b, rates, cell, next, delta, step } => {
                 let axis = if next[0] < next[1] {
                     if next[0] < next[2] {
                         0
@@ -203,7 +212,7 @@ impl Segments<'_> {
                 };
                 let end = next[axis].min(self.t_end);
                 let rate =
-                    b.rates[(cell[2] as usize * b.dims[1] + cell[1] as usize) * b.dims[0] + cell[0] as usize];
+                    rates[(cell[2] as usize * b.dims[1] + cell[1] as usize) * b.dims[0] + cell[0] as usize];
                 let s = (self.t, end, rate);
                 self.t = end;
                 cell[axis] += step[axis];
@@ -242,7 +251,7 @@ mod tests {
         for _ in 0..200 {
             let o = Vec3::new(rnd(), rnd(), rnd()) * 3.0;
             let d = Vec3::new(rnd(), rnd(), rnd()).normalize();
-            let mut s = m.segments(o, d, -10.0, 10.0);
+            let mut s = m.segments(o, d, -10.0, 10.0, true);
             let mut last: Option<f32> = None;
             while let Some((a, b, rate)) = s.next_segment() {
                 assert!(a <= b);
@@ -269,9 +278,10 @@ mod tests {
         let Majorant::Blocks(bl) = &m else { panic!("a grid has blocks") };
         assert_eq!(bl.dims, [4, 4, 4]);
         // x blocks 2..3, z blocks 0..2: far from both.
-        assert_eq!(bl.rates[(4 + 1) * 4 + 2], 0.0);
-        assert_eq!(bl.rates[(3 * 4 + 1) * 4 + 2], 7.0);
-        assert_eq!(bl.rates[(4 + 1) * 4], 1.0);
+        assert_eq!(bl.glowing[(4 + 1) * 4 + 2], 0.0);
+        assert_eq!(bl.glowing[(3 * 4 + 1) * 4 + 2], 7.0);
+        assert_eq!(bl.rates[(3 * 4 + 1) * 4 + 2], 0.0);
+        assert_eq!(bl.glowing[(4 + 1) * 4], 1.0);
         assert_eq!(m.max(), 7.0);
     }
 }
