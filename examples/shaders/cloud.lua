@@ -17,5 +17,7 @@ function density(s)
   -- A flattened base: clouds sit on a level.
   local shape = 1 - smoothstep(0.35, 1.0, r) - smoothstep(0.1, -0.5, p.y)
   local n = fbm(p.x * scale, p.y * scale, p.z * scale, octaves)
-  return clamp((shape + n * 0.8) - (1 - coverage), 0, 1) * 2
+  -- Noise alone may poke out of the ball: fade it out at the bound.
+  local edge = 1 - smoothstep(0.9, 1.0, r)
+  return clamp((shape + n * 0.8) - (1 - coverage), 0, 1) * 2 * edge
 end

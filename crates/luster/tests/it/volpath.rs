@@ -128,8 +128,17 @@ fn scattering_media_pass_the_furnace() {
         ),
         ("inside glass", medium("m", "0 0 0", 1.0, 2.0, "1 1 1", 0.0, ""), glass),
     ];
-    for (name, volumes, objects) in &cases {
-        let desc = load(dir.path(), &under_sky(objects, volumes, 16), &[("blob.lua", blob)]);
+    let interior = r#"<Sphere id="1"><Material>1</Material><Center>1</Center><Radius>1</Radius><Interior>w</Interior></Sphere>"#;
+    let white = under_sky(interior, "", 16).replace(
+        "<VertexData>",
+        "<Media><Medium id=\"w\"><Absorption>0 0 0</Absorption><Scattering>3 2 1</Scattering><Anisotropy>0.5</Anisotropy></Medium></Media>\n  <VertexData>",
+    );
+    let scenes = cases
+        .iter()
+        .map(|(name, v, o)| (*name, under_sky(o, v, 16)))
+        .chain([("glass filled with a medium", white)]);
+    for (name, text) in scenes {
+        let desc = load(dir.path(), &text, &[("blob.lua", blob)]);
         let (mean, se) = mean_two_seeds(&desc, 128, 0.45);
         println!("{name:<20} {mean:.4?} ± {se:.4?}");
         for c in 0..3 {
@@ -306,5 +315,75 @@ fn light_samples_in_a_medium_agree_with_bounces() {
         let mean: f64 = got.iter().map(|b| b.0).sum::<f64>() / 16.0;
         println!("{params:<20} mean {mean:.4} vs bounces {total:.4}, worst block |z| {worst:.2}");
         assert!(worst < 4.5, "{params}: a block differs from plain bounces by {worst:.2} standard errors");
+    }
+}
+
+/// A sphere of ior 1 (a boundary that neither reflects nor bends light)
+/// around `inside`, or nothing, with `volumes`, under the white sky and a
+/// point light.
+fn null_sphere(interior: &str, volumes: &str) -> String {
+    format!(
+        r#"<Scene>
+  <MaxRecursionDepth>8</MaxRecursionDepth>
+  <Cameras><Camera id="1" type="lookAt"><Position>0 0 5</Position><GazePoint>0 0 0</GazePoint><Up>0 1 0</Up>
+    <FovY>30</FovY><NearDistance>1</NearDistance><ImageResolution>16 16</ImageResolution>
+    <ImageName>a.exr</ImageName>{MIS}</Camera></Cameras>
+  <Textures><Images><Image id="1">sky.exr</Image></Images></Textures>
+  <Lights><SphericalDirectionalLight id="1" type="latlong"><ImageId>1</ImageId></SphericalDirectionalLight>
+    <PointLight id="2"><Position>3 3 3</Position><Intensity>20 20 20</Intensity></PointLight></Lights>
+  <Materials><Material id="1" type="dielectric"><DiffuseReflectance>0 0 0</DiffuseReflectance>
+    <MirrorReflectance>1 1 1</MirrorReflectance><RefractionIndex>1</RefractionIndex><AbsorptionCoefficient>0 0 0</AbsorptionCoefficient></Material></Materials>
+  <Media><Medium id="milk"><Absorption>0.3 0.3 0.6</Absorption><Scattering>1.5 1.2 0.9</Scattering><Anisotropy>0.3</Anisotropy></Medium></Media>
+  <VertexData>0 0 0</VertexData>
+  <Objects><Sphere id="1"><Material>1</Material><Center>1</Center><Radius>1</Radius>{interior}</Sphere></Objects>
+  <Volumes>{volumes}</Volumes>
+</Scene>"#
+    )
+}
+
+/// A medium filling an object (`<Interior>`), entered through its surface,
+/// looks as the same medium in a bound of the same shape does: per channel,
+/// within the two renders' combined noise.
+#[test]
+fn an_interior_medium_matches_a_bounded_one() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    white_sky(dir.path());
+    let inside = load(dir.path(), &null_sphere("<Interior>milk</Interior>", ""), &[]);
+    let (a, sa) = mean_two_seeds(&inside, 256, 0.45);
+    let bounded = r#"<Volume id="m"><Sphere><Center>0 0 0</Center><Radius>1</Radius></Sphere>
+        <Absorption>0.3 0.3 0.6</Absorption><Scattering>1.5 1.2 0.9</Scattering><Anisotropy>0.3</Anisotropy></Volume>"#;
+    let volume = load(dir.path(), &null_sphere("", bounded), &[]);
+    let (b, sb) = mean_two_seeds(&volume, 256, 0.45);
+    println!("interior {a:.4?} ± {sa:.4?}, bounded {b:.4?} ± {sb:.4?}");
+    for c in 0..3 {
+        let z = (a[c] - b[c]) / (sa[c] * sa[c] + sb[c] * sb[c]).sqrt();
+        assert!(z.abs() < 4.0, "channel {c}: interior {:.4} vs bounded {:.4}, z = {z:.2}", a[c], b[c]);
+        assert!(a[c] < 0.95, "channel {c}: the medium dims the sky behind it: {:.4}", a[c]);
+    }
+}
+
+/// An `<Interior>` naming no medium of `<Media>`, and a medium with a
+/// negative coefficient or an anisotropy outside (−1, 1), are one
+/// sentence naming the element.
+#[test]
+fn bad_media_are_refused() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let cases = [
+        (null_sphere("<Interior>cream</Interior>", ""), "cream"),
+        (
+            null_sphere("", "")
+                .replace("<Absorption>0.3 0.3 0.6</Absorption>", "<Absorption>0.3 -1 0.6</Absorption>"),
+            "Absorption",
+        ),
+        (
+            null_sphere("", "").replace("<Anisotropy>0.3</Anisotropy>", "<Anisotropy>1.5</Anisotropy>"),
+            "Anisotropy",
+        ),
+    ];
+    for (text, word) in cases {
+        let p = dir.path().join("s.xml");
+        std::fs::write(&p, text).expect("temp file");
+        let e = luster::scene::load(&p).expect_err("a bad medium is refused").to_string();
+        assert!(e.contains(word) && e.contains("s.xml") && !e.contains('\n'), "{e}");
     }
 }

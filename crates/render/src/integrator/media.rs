@@ -1,6 +1,8 @@
-//! Light through volumes: how the integrator's rays meet hypertexture
-//! surfaces, how shadow rays are attenuated, and single scattering in media
-//! by ray marching.
+//! Light through volumes: how the integrators' rays meet hypertexture
+//! surfaces, how shadow rays are attenuated, and, for the recursive ray
+//! tracer, single scattering in media by ray marching. The path tracer
+//! tracks media instead ([`super::tracking`], `docs/volumes.md`); its
+//! shadow rays come here and are attenuated by ratio tracking.
 //!
 //! # Ray marching
 //!
@@ -100,7 +102,7 @@ pub fn shadow(scene: &Scene, ray: &Ray, t_max: f32, st: &mut PathState) -> Vec3 
         return Vec3::ZERO;
     }
     let vols = &scene.volumes;
-    if vols.surfaces.is_empty() && vols.media.is_empty() {
+    if vols.surfaces.is_empty() && !vols.has_media() {
         return Vec3::ONE;
     }
     shadow_volumes(scene, ray, t_max, st)
@@ -127,6 +129,11 @@ fn shadow_volumes(scene: &Scene, ray: &Ray, t_max: f32, st: &mut PathState) -> V
 /// scattering: what reaches the ray's origin of light from `t_max`.
 pub fn media_transmittance(scene: &Scene, ray: &Ray, t_max: f32, st: &mut PathState) -> Vec3 {
     let mut tr = Vec3::ONE;
+    // A path tracer's shadow ray stays inside the object it starts in
+    // (every surface blocks it): its interior's transmittance is exact.
+    if let Some(m) = st.interior.and_then(|i| scene.volumes.interiors.get(i as usize)) {
+        tr = (-(m.absorption + m.scattering) * t_max).exp();
+    }
     for v in &scene.volumes.media {
         tr *= if st.tracking && v.majorant.is_some() {
             tracking::transmittance(scene, v, ray, 0.0, t_max, st)

@@ -47,6 +47,10 @@ pub struct PathState {
     /// ratio tracking (the path tracer, unbiased) rather than by marching
     /// (the recursive tracer, smooth).
     pub(crate) tracking: bool,
+    /// The medium inside the object the current ray is in (an index into
+    /// the scene's interiors): set by the path tracer as paths cross
+    /// surfaces of objects with an `<Interior>`.
+    pub(crate) interior: Option<u32>,
 }
 
 impl PathState {
@@ -65,6 +69,7 @@ impl PathState {
             error: None,
             lobes: Box::default(),
             tracking: false,
+            interior: None,
         }
     }
 

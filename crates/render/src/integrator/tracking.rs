@@ -17,7 +17,7 @@
 
 use super::PathState;
 use crate::render::scene::Scene;
-use crate::volume::{majorant::Segments, Kind, Probe, Volume};
+use crate::volume::{majorant::Segments, Interior, Kind, Probe, Volume};
 use luster_core::math::{Ray, Vec3};
 
 /// Below this largest channel, a shadow ray's transmittance estimate plays
@@ -31,13 +31,13 @@ pub enum Event {
     /// No real collision before the end of the ray: what lies there arrives,
     /// times the weight.
     Pass,
-    /// A real scattering at `t` in medium `medium`: the light scattered
-    /// there arrives, times the weight.
+    /// A real scattering at `t` in a medium of asymmetry `g`: the light
+    /// scattered there arrives, times the weight.
     Scatter {
         /// Where along the ray.
         t: f32,
-        /// Which of the scene's media.
-        medium: usize,
+        /// The Henyey–Greenstein g there.
+        g: f32,
     },
     /// Absorbed: only the emission gathered on the way arrives.
     Absorbed,
@@ -55,9 +55,18 @@ pub struct Tracked {
     pub emitted: Vec3,
 }
 
+/// Where a stream's coefficients come from.
+#[derive(Clone, Copy)]
+enum Source<'a> {
+    /// A medium in a bound.
+    Volume(&'a Volume),
+    /// The homogeneous medium inside the object the ray is in.
+    Interior(&'a Interior),
+}
+
 /// One medium's stream of tentative collisions along a ray.
 struct Flight<'a> {
-    medium: usize,
+    source: Source<'a>,
     segments: Segments<'a>,
     /// The stretch the stream is in: start, end, majorant.
     at: Option<(f32, f32, f32)>,
@@ -70,7 +79,7 @@ struct Flight<'a> {
 }
 
 impl<'a> Flight<'a> {
-    fn new(medium: usize, v: &'a Volume, ray: &Ray, t_lo: f32, t_hi: f32, emission: bool) -> Option<Flight<'a>> {
+    fn new(v: &'a Volume, ray: &Ray, t_lo: f32, t_hi: f32, emission: bool) -> Option<Flight<'a>> {
         let maj = v.majorant.as_ref()?;
         let (t0, t1) = v.bound.interval(ray)?;
         let (a, b) = (t0.max(t_lo), t1.min(t_hi));
@@ -80,7 +89,15 @@ impl<'a> Flight<'a> {
         let (o, d) = v.bound.to_local_ray(ray);
         let mut segments = maj.segments(o, d, a, b, emission);
         let at = segments.next_segment();
-        Some(Flight { medium, segments, at, t: a, next: f32::INFINITY, rate: 0.0 })
+        Some(Flight { source: Source::Volume(v), segments, at, t: a, next: f32::INFINITY, rate: 0.0 })
+    }
+
+    /// The stream of a homogeneous interior from 0 to `t_hi`.
+    fn inside(m: &'a Interior, t_hi: f32) -> Flight<'a> {
+        let rate = (m.absorption + m.scattering).max_element();
+        let mut segments = Segments::uniform(rate, 0.0, t_hi);
+        let at = segments.next_segment();
+        Flight { source: Source::Interior(m), segments, at, t: 0.0, next: f32::INFINITY, rate: 0.0 }
     }
 
     /// Draws the next tentative collision past `self.t` from the uniform
@@ -105,6 +122,27 @@ impl<'a> Flight<'a> {
             self.at = self.segments.next_segment();
         }
         self.next = f32::INFINITY;
+    }
+}
+
+/// The coefficients of a stream's medium at world point `p`: `(σa, σs, ε, g)`.
+#[inline]
+fn source_coefficients(
+    scene: &Scene,
+    s: Source,
+    p: Vec3,
+    probe: &Probe,
+    st: &mut PathState,
+) -> Option<(Vec3, Vec3, Vec3, f32)> {
+    match s {
+        Source::Interior(m) => Some((m.absorption, m.scattering, m.emission, m.anisotropy)),
+        Source::Volume(v) => {
+            let g = match v.kind {
+                Kind::Medium { anisotropy, .. } => anisotropy,
+                Kind::Surface { .. } => 0.0,
+            };
+            coefficients(scene, v, p, probe, st).map(|(a, s, e)| (a, s, e, g))
+        }
     }
 }
 
@@ -137,23 +175,34 @@ fn avg(v: Vec3) -> f32 {
 }
 
 /// Delta tracking along `ray` from 0 to `t_max` (a surface, or infinity)
-/// through every medium, for a path of throughput `beta`. Without
-/// `scatter` a scattering ends the walk like an absorption (the path may
-/// not bounce again; emission still counts).
-pub fn track(scene: &Scene, ray: &Ray, t_max: f32, beta: Vec3, scatter: bool, st: &mut PathState) -> Tracked {
-    let media = &scene.volumes.media;
+/// through every medium — those in bounds, and `interior` (an index into
+/// the scene's interiors), the medium of the object the ray is inside — for
+/// a path of throughput `beta`. Without `scatter` a scattering ends the
+/// walk like an absorption (the path may not bounce again; emission still
+/// counts).
+pub fn track(
+    scene: &Scene,
+    ray: &Ray,
+    t_max: f32,
+    beta: Vec3,
+    scatter: bool,
+    interior: Option<u32>,
+    st: &mut PathState,
+) -> Tracked {
+    let vols = &scene.volumes;
     let probe = Probe { time: st.time, dir: ray.d, view: st.view, pixel: st.pixel };
     let mut flights: Vec<Flight> = Vec::new();
     let mut one: Option<Flight> = None;
-    for (i, v) in media.iter().enumerate() {
-        if let Some(mut f) = Flight::new(i, v, ray, 0.0, t_max, true) {
-            f.advance(st.sampler.next_1d());
-            if one.is_none() && flights.is_empty() {
-                one = Some(f);
-            } else {
-                flights.extend(one.take());
-                flights.push(f);
-            }
+    let inside = interior.and_then(|i| vols.interiors.get(i as usize)).map(|m| Flight::inside(m, t_max));
+    for mut f in
+        inside.into_iter().chain(vols.media.iter().filter_map(|v| Flight::new(v, ray, 0.0, t_max, true)))
+    {
+        f.advance(st.sampler.next_1d());
+        if one.is_none() && flights.is_empty() {
+            one = Some(f);
+        } else {
+            flights.extend(one.take());
+            flights.push(f);
         }
     }
     let mut weight = Vec3::ONE;
@@ -171,10 +220,9 @@ pub fn track(scene: &Scene, ray: &Ray, t_max: f32, beta: Vec3, scatter: bool, st
         if !f.next.is_finite() {
             return pass(weight, emitted);
         }
-        let (t, rate, medium) = (f.next, f.rate, f.medium);
-        let v = &media[medium];
+        let (t, rate) = (f.next, f.rate);
         let p = ray.at(t);
-        let Some((sa, ss, e)) = coefficients(scene, v, p, &probe, st) else {
+        let Some((sa, ss, e, g)) = source_coefficients(scene, f.source, p, &probe, st) else {
             return Tracked { event: Event::Absorbed, weight: Vec3::ZERO, emitted: Vec3::ZERO };
         };
         let inv = 1.0 / rate;
@@ -197,7 +245,7 @@ pub fn track(scene: &Scene, ray: &Ray, t_max: f32, beta: Vec3, scatter: bool, st
         }
         if u < pa + ps {
             weight *= ss * (inv * total / ps);
-            return Tracked { event: Event::Scatter { t, medium }, weight, emitted };
+            return Tracked { event: Event::Scatter { t, g }, weight, emitted };
         }
         weight *= sn * (inv * total / pn);
         let u = st.sampler.next_1d();
@@ -218,7 +266,7 @@ pub fn transmittance(scene: &Scene, v: &Volume, ray: &Ray, t_lo: f32, t_hi: f32,
         }
         return (-(absorption + scattering) * (rho * (b - a))).exp();
     }
-    let Some(mut f) = Flight::new(0, v, ray, t_lo, t_hi, false) else { return Vec3::ONE };
+    let Some(mut f) = Flight::new(v, ray, t_lo, t_hi, false) else { return Vec3::ONE };
     let probe = Probe { time: st.time, dir: ray.d, view: st.view, pixel: st.pixel };
     let mut tr = Vec3::ONE;
     loop {

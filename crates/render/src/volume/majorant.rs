@@ -108,6 +108,13 @@ impl Majorant {
     }
 }
 
+impl Segments<'static> {
+    /// One stretch from `t0` to `t1` with the bound `rate`.
+    pub fn uniform(rate: f32, t0: f32, t1: f32) -> Segments<'static> {
+        Segments { t: t0, t_end: t1, walk: Walk::Uniform(rate) }
+    }
+}
+
 /// The emission grid's sample at the density lattice point `i` (the two
 /// grids share their lattice when baked together; otherwise the nearest).
 fn sample_near(g: &Grid<Vec3>, density: &Grid<f32>, i: [usize; 3]) -> Vec3 {

@@ -164,6 +164,24 @@ impl Probe {
     }
 }
 
+/// A homogeneous medium filling the inside of objects (`<Media>`,
+/// `<Interior>`): the path tracer tracks it wherever a path has entered
+/// such an object through its surface.
+#[derive(Clone, Debug)]
+pub struct Interior {
+    /// σa.
+    pub absorption: Vec3,
+    /// σs.
+    pub scattering: Vec3,
+    /// Emitted radiance per unit length.
+    pub emission: Vec3,
+    /// Henyey–Greenstein g.
+    pub anisotropy: f32,
+}
+
+/// No medium inside (in [`Volumes::interior_of`]'s table).
+const NO_INTERIOR: u32 = u32::MAX;
+
 /// The scene's volumes and their scripts.
 #[derive(Debug, Default)]
 pub struct Volumes {
@@ -171,6 +189,10 @@ pub struct Volumes {
     pub media: Vec<Volume>,
     /// Hypertextures.
     pub surfaces: Vec<Volume>,
+    /// Media filling objects.
+    pub interiors: Vec<Interior>,
+    /// Per object of the description: the index of its interior, or [`NO_INTERIOR`].
+    object_interior: Vec<u32>,
     shaders: Option<ShaderSet>,
 }
 
@@ -234,7 +256,21 @@ impl Volume {
 impl Volumes {
     /// Whether the scene has no volume at all.
     pub fn is_empty(&self) -> bool {
-        self.media.is_empty() && self.surfaces.is_empty()
+        self.media.is_empty() && self.surfaces.is_empty() && self.interiors.is_empty()
+    }
+
+    /// Whether light may be absorbed or scattered between surfaces: the
+    /// scene has media in bounds or inside objects.
+    #[inline]
+    pub fn has_media(&self) -> bool {
+        !self.media.is_empty() || !self.interiors.is_empty()
+    }
+
+    /// The medium inside object `object` (an index into the description's
+    /// objects), if any.
+    #[inline]
+    pub fn interior_of(&self, object: u32) -> Option<u32> {
+        self.object_interior.get(object as usize).copied().filter(|&i| i != NO_INTERIOR)
     }
 
     fn call<R>(
@@ -291,7 +327,30 @@ impl Volumes {
         let err = |v: &VolumeDesc, msg: String| SceneError::at(&desc.file, &v.loc, msg);
         let shaders = compile_scripts(desc, images, timeout)?;
         let path_traced = desc.cameras.iter().any(|c| matches!(c.renderer, RendererDesc::PathTracing(_)));
-        let mut out = Volumes { media: Vec::new(), surfaces: Vec::new(), shaders: None };
+        let mut out = Volumes {
+            media: Vec::new(),
+            surfaces: Vec::new(),
+            interiors: desc
+                .media
+                .iter()
+                .map(|m| Interior {
+                    absorption: m.absorption,
+                    scattering: m.scattering,
+                    emission: m.emission,
+                    anisotropy: m.anisotropy,
+                })
+                .collect(),
+            object_interior: Vec::new(),
+            shaders: None,
+        };
+        if !desc.interiors.is_empty() {
+            out.object_interior = vec![NO_INTERIOR; desc.objects.len()];
+            for i in &desc.interiors {
+                if let Some(slot) = out.object_interior.get_mut(i.object) {
+                    *slot = i.medium as u32;
+                }
+            }
+        }
         let mut next_script = 0;
         for (index, v) in desc.volumes.iter().enumerate() {
             let bound = Bound::new(&v.bound, &v.transform);

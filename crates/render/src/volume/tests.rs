@@ -31,6 +31,8 @@ pub(super) fn desc(volumes: Vec<VolumeDesc>) -> Description {
         background_texture: None,
         objects: Vec::new(),
         volumes: Vec::new(),
+        media: Vec::new(),
+        interiors: Vec::new(),
         display: Default::default(),
         warnings: Vec::new(),
     };

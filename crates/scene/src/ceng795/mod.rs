@@ -16,6 +16,7 @@
 //! | `Transformations`, `VertexData`, `Objects` | see [`objects`] (and [`obj_file`] for OBJ meshes) | |
 //! | `Textures`, `TexCoordData` | see [`textures`] | none |
 //! | `Volumes` | media and hypertextures (a luster extension), see [`volumes`] | none |
+//! | `Media` | homogeneous media filling objects named by their `Interior` (a luster extension), see [`media`] | none |
 //! | `Display` | the display transform of the 8-bit images: `course`, `srgb`, `aces` or `filmic` (a luster extension, see `luster_core::tonemap::display` and docs/hdr.md) | course |
 //!
 //! Anything else gets a warning naming it, so a scene that relies on a feature
@@ -25,6 +26,7 @@ pub mod brdf;
 pub mod camera;
 pub mod lights;
 pub mod material;
+pub mod media;
 pub mod obj_file;
 pub mod objects;
 pub mod shader_map;
@@ -89,6 +91,7 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
             "Textures",
             "Objects",
             "Volumes",
+            "Media",
             "ShaderLibrary",
             "Display",
         ],
@@ -142,7 +145,12 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
     };
     let texture_ids: HashMap<&str, usize> =
         texture_maps.iter().enumerate().rev().map(|(i, m)| (m.id.as_str(), i)).collect();
-    let ((objects, emitters), obj_additions) = match root.child("Objects") {
+    let media = match root.child("Media") {
+        Some(m) => media::read_all(&r, m, &mut w)?,
+        None => Vec::new(),
+    };
+    let media_ids: HashMap<&str, usize> = media.iter().enumerate().map(|(i, m)| (m.id.as_str(), i)).collect();
+    let ((objects, emitters, interiors), obj_additions) = match root.child("Objects") {
         Some(o) => {
             let ctx = objects::Context {
                 r,
@@ -157,11 +165,12 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
                     images.len(),
                     texture_maps.len(),
                 )),
+                media: &media_ids,
             };
             let objects = objects::read_all(&ctx, o, &mut w)?;
             (objects, ctx.obj.into_inner().add)
         }
-        None => ((Vec::new(), Vec::new()), Default::default()),
+        None => ((Vec::new(), Vec::new(), Vec::new()), Default::default()),
     };
     let volumes = match root.child("Volumes") {
         Some(v) => {
@@ -206,6 +215,8 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
         texture_maps,
         objects,
         volumes,
+        media,
+        interiors,
         display,
         warnings: w.0,
     })

@@ -61,7 +61,7 @@ pub fn read(
     out: &mut Vec<ObjectDesc>,
 ) -> Result<(), SceneError> {
     let r = &ctx.r;
-    w.unknown_children(el, &["Material", "Transformations", "Faces", "MotionBlur", "Textures"]);
+    w.unknown_children(el, &["Material", "Transformations", "Faces", "MotionBlur", "Textures", "Interior"]);
     let faces = r.required(el, "Faces")?;
     for (k, _) in &faces.attrs {
         if k != "objFile" {

@@ -35,7 +35,7 @@ use super::obj_file::{self, Pending};
 use super::textures::object_textures;
 use super::transforms::compose;
 use super::Warnings;
-use crate::description::{EmitterDesc, MeshSource, ObjectDesc, Shape};
+use crate::description::{EmitterDesc, InteriorDesc, MeshSource, ObjectDesc, Shape};
 use crate::element::{Element, Reader};
 use crate::error::SceneError;
 use luster_core::math::{Quat, Transform, Vec2, Vec3};
@@ -61,6 +61,8 @@ pub struct Context<'a> {
     pub base_dir: &'a Path,
     /// What OBJ meshes add to the scene's lists.
     pub obj: RefCell<Pending>,
+    /// Medium id to index (`<Media>`), for `<Interior>`.
+    pub media: &'a HashMap<&'a str, usize>,
 }
 
 /// Reads `VertexData`: a multiple of three numbers.
@@ -82,12 +84,12 @@ struct PendingInstance {
     own: Transform,
 }
 
-/// Reads every object, resolving instances, and the emitters among them.
-pub fn read_all(
-    ctx: &Context,
-    objs: &Element,
-    w: &mut Warnings,
-) -> Result<(Vec<ObjectDesc>, Vec<EmitterDesc>), SceneError> {
+/// Every object, the emitters among them and the interiors they name.
+pub type Objects = (Vec<ObjectDesc>, Vec<EmitterDesc>, Vec<InteriorDesc>);
+
+/// Reads every object, resolving instances, the emitters among them and
+/// the media that fill them.
+pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Objects, SceneError> {
     w.unknown_children(
         objs,
         &["Mesh", "Triangle", "Sphere", "Ellipsoid", "Plane", "MeshInstance", "LightMesh", "LightSphere"],
@@ -95,12 +97,26 @@ pub fn read_all(
     let r = &ctx.r;
     let mut out: Vec<ObjectDesc> = Vec::new();
     let mut emitters = Vec::new();
+    let mut interiors = Vec::new();
     let mut pending = Vec::new();
     let mut mesh_ids: HashMap<String, usize> = HashMap::new();
     for el in &objs.children {
+        let first = out.len();
+        // The medium inside, for every object the element makes.
+        let interior = |out: &Vec<ObjectDesc>, interiors: &mut Vec<InteriorDesc>| -> Result<(), SceneError> {
+            if let Some(i) = el.child("Interior") {
+                let id = i.text.trim();
+                let medium = *ctx
+                    .media
+                    .get(id)
+                    .ok_or_else(|| r.err(i, format!("medium \"{id}\" is not defined in <Media>")))?;
+                interiors.extend((first..out.len()).map(|object| InteriorDesc { object, medium }));
+            }
+            Ok(())
+        };
         if el.name == "Mesh" && obj_file::is_obj_mesh(el) {
-            let first = out.len();
             obj_file::read(ctx, el, w, &mut out)?;
+            interior(&out, &mut interiors)?;
             register(&mut mesh_ids, el.attr("id").unwrap_or("").trim(), first, el, w);
             continue;
         }
@@ -124,7 +140,8 @@ pub fn read_all(
                 }
             }
             "Sphere" | "LightSphere" => {
-                let known = ["Material", "Transformations", "Center", "Radius", "MotionBlur", "Textures"];
+                let known =
+                    ["Material", "Transformations", "Center", "Radius", "MotionBlur", "Textures", "Interior"];
                 w.unknown_children(el, &emitter_children(el, &known));
                 let c = r.required(el, "Center")?;
                 let center = vertex(ctx, c, r.uint(c)?)?;
@@ -148,7 +165,10 @@ pub fn read_all(
                 Shape::Plane { point, normal: normal.normalize() }
             }
             "MeshInstance" => {
-                w.unknown_children(el, &["Material", "Transformations", "MotionBlur", "Textures"]);
+                w.unknown_children(
+                    el,
+                    &["Material", "Transformations", "MotionBlur", "Textures", "Interior"],
+                );
                 let base_id = el
                     .attr("baseMeshId")
                     .map(str::trim)
@@ -174,6 +194,7 @@ pub fn read_all(
                     textures: Vec::new(),
                     loc: el.loc.clone(),
                 });
+                interior(&out, &mut interiors)?;
                 continue;
             }
             _ => continue,
@@ -194,9 +215,10 @@ pub fn read_all(
             textures: textures(ctx, el)?.unwrap_or_default(),
             loc: el.loc.clone(),
         });
+        interior(&out, &mut interiors)?;
     }
     resolve_instances(ctx, &mut out, &pending, &mesh_ids, objs)?;
-    Ok((out, emitters))
+    Ok((out, emitters, interiors))
 }
 
 /// The children an object may have: `known`, plus `Radiance` for an emitter.
@@ -228,7 +250,7 @@ fn register(ids: &mut HashMap<String, usize>, id: &str, index: usize, el: &Eleme
 
 fn mesh(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, SceneError> {
     let r = &ctx.r;
-    let known = ["Material", "Transformations", "Faces", "MotionBlur", "Textures"];
+    let known = ["Material", "Transformations", "Faces", "MotionBlur", "Textures", "Interior"];
     w.unknown_children(el, &emitter_children(el, &known));
     let smooth = match el.attr("shadingMode").map(str::trim) {
         None | Some("") | Some("flat") => false,
@@ -307,7 +329,7 @@ fn ellipsoid(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, Sce
     let r = &ctx.r;
     w.unknown_children(
         el,
-        &["Material", "Transformations", "Center", "Radii", "Rotation", "MotionBlur", "Textures"],
+        &["Material", "Transformations", "Center", "Radii", "Rotation", "MotionBlur", "Textures", "Interior"],
     );
     let c = r.required(el, "Center")?;
     let center = vertex(ctx, c, r.uint(c)?)?;

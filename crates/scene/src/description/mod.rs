@@ -8,12 +8,14 @@ use std::path::PathBuf;
 
 mod lights;
 mod materials;
+mod media;
 mod objects;
 mod textures;
 mod volumes;
 
 pub use lights::*;
 pub use materials::*;
+pub use media::*;
 pub use objects::*;
 pub use textures::*;
 pub use volumes::*;
@@ -78,6 +80,10 @@ pub struct Description {
     pub objects: Vec<ObjectDesc>,
     /// Participating media and hypertextures (`Volumes`, a luster extension).
     pub volumes: Vec<VolumeDesc>,
+    /// Homogeneous media that objects' interiors name (`<Media>`).
+    pub media: Vec<MediumDesc>,
+    /// Which objects are filled by which medium (`<Interior>`).
+    pub interiors: Vec<InteriorDesc>,
     /// The display transform of the 8-bit images (`Display`, a luster
     /// extension; `course` unless the scene opts in, `srgb` for OBJ models).
     pub display: luster_core::tonemap::Display,

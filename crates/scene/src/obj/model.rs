@@ -202,6 +202,8 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         background_texture: None,
         objects,
         volumes: Vec::new(),
+        media: Vec::new(),
+        interiors: Vec::new(),
         display: view.display.unwrap_or(luster_core::tonemap::Display::Srgb),
         warnings,
     })

@@ -13,7 +13,7 @@
 //! | (none) | bounces uniform over the hemisphere, `p = 1/2π`; light only where a bounce hits an emitter |
 //! | `ImportanceSampling` | cosine-weighted bounces, `p = cos/π` |
 //! | `NextEventEstimation` | every light sampled at every hit; an emitter a bounce then hits adds nothing (it was counted already) |
-//! | `RussianRoulette` | no depth limit: a path goes on with probability `q = min(1, max(throughput))` and its estimate is divided by `q` |
+//! | `RussianRoulette` | no depth limit but [`MAX_BOUNCES`] ([`MAX_MEDIUM_BOUNCES`] in a scene with media): a path goes on with probability `q = min(1, max(throughput))` and its estimate is divided by `q` |
 //! | `MIS` (luster) | bounces drawn from the BSDF; every light sampled per hit in a scene with at most four (`AllLights`: always), else one, chosen by power ([`crate::light::pick`]; `OneLight`: always), its estimate divided by the chance of choosing it; light and bounce samples both count, weighed by the power heuristic `p_a² / (p_a² + p_b²)` with the light's density times the chance of choosing it; the environment light is sampled and hit alike |
 //!
 //! Without `RussianRoulette` a path ends after `MaxRecursionDepth` bounces,
@@ -26,6 +26,12 @@
 //! them, as in the course's images; the course's square area lights are
 //! likewise sampled only. The ambient term is left out: paths bring the
 //! light that ambient light stood in for.
+//!
+//! Through media a ray is tracked ([`tracking`]): where it really scatters
+//! first, the path goes on from there ([`medium`]: light samples weighed by
+//! the phase function, a bounce drawn from it); where it passes, from the
+//! surface it hits. Paths entering an object with an `<Interior>` carry its
+//! medium until they leave it.
 
 use std::mem::MaybeUninit;
 
@@ -36,7 +42,6 @@ use crate::integrator::tracking::{self, Event};
 use crate::light::{Light, LightSample};
 use crate::material::Material;
 use crate::render::scene::{Hit, Scene};
-use crate::volume::Kind;
 use luster_core::math::{Ray, Vec3, Vec3A};
 
 mod medium;
@@ -94,7 +99,7 @@ fn first_hit_calls(scene: &Scene, p: PathParams) -> u32 {
 /// Radiance arriving along the camera ray `ray`.
 pub fn radiance(scene: &Scene, ray: &Ray, p: &PathParams, st: &mut PathState) -> Vec3 {
     let p = *p;
-    st.tracking = true;
+    (st.tracking, st.interior) = (true, None);
     st.sampler.stratify_first(st.sampler.calls() + first_hit_calls(scene, p));
     by_variant!(p, V => li::<V>(scene, ray, 0, Vec3::ONE, Came::Direct, p, st))
 }
@@ -142,7 +147,7 @@ pub fn radiance_pair(
     sb: &mut PathState,
 ) -> [Vec3A; 2] {
     let p = *p;
-    (sa.tracking, sb.tracking) = (true, true);
+    (sa.tracking, sb.tracking, sa.interior, sb.interior) = (true, true, None, None);
     by_variant!(p, V => pair::<V>(scene, rays, p, sa, sb))
 }
 
@@ -190,6 +195,8 @@ struct Walk {
     media: bool,
     acc: Vec3,
     thr: Vec3,
+    /// The medium inside the object the walk's ray is in.
+    interior: Option<u32>,
     /// The distance travelled before the walk, given back at its end.
     entry: f32,
     n: usize,
@@ -204,9 +211,10 @@ impl Walk {
             depth,
             beta,
             came,
-            media: !scene.volumes.media.is_empty(),
+            media: scene.volumes.has_media(),
             acc: Vec3::ZERO,
             thr: Vec3::ONE,
+            interior: st.interior,
             entry: st.travelled,
             n: 0,
             pending: [MaybeUninit::uninit(); DEFERRED],
@@ -284,17 +292,17 @@ impl Walk {
         let depth = self.depth;
         let past = past_limit(scene, depth, p);
         let t_hit = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+        // What the vertex does below (light samples, recursion) starts in
+        // the walk's medium.
+        st.interior = self.interior;
         // Past the depth limit the ray only gathers light: it may not scatter.
-        let tracked = tracking::track(scene, &self.ray, t_hit, self.beta, !past, st);
+        let tracked = tracking::track(scene, &self.ray, t_hit, self.beta, !past, self.interior, st);
         self.acc += self.thr * tracked.emitted;
         self.thr *= tracked.weight;
         let beta = self.beta * tracked.weight;
         let (c, b) = match (tracked.event, hit) {
             (Event::Absorbed, _) => return Some(Vec3::ZERO),
-            (Event::Scatter { t, medium }, _) => {
-                let Kind::Medium { anisotropy: g, .. } = scene.volumes.media[medium].kind else {
-                    return Some(Vec3::ZERO);
-                };
+            (Event::Scatter { t, g }, _) => {
                 let x = self.ray.at(t);
                 let d = self.ray.d;
                 let mut c = Vec3::ZERO;
@@ -428,6 +436,29 @@ impl LightAhead {
     }
 }
 
+/// `f` run with the path's medium set to what lies past the surface at
+/// `hit`, where a ray leaving it along `d` crosses it (the ray that arrived
+/// went along `incoming`); the medium is restored after. Without interiors
+/// in the scene, `f` alone.
+#[inline(always)]
+fn across<R>(
+    scene: &Scene,
+    hit: &Hit,
+    incoming: Vec3,
+    d: Vec3,
+    st: &mut PathState,
+    f: impl FnOnce(&mut PathState) -> R,
+) -> R {
+    if scene.volumes.interiors.is_empty() || (d.dot(hit.ng) < 0.0) != (incoming.dot(hit.ng) < 0.0) {
+        return f(st);
+    }
+    let saved = st.interior;
+    st.interior = scene.medium_across(hit, d);
+    let r = f(st);
+    st.interior = saved;
+    r
+}
+
 /// Whether a vertex at `depth` lies past the path's depth limit. Only MIS
 /// traces a ray there: the last vertex's bounce, which finds the light its
 /// direction hits so that the light samples drawn at that vertex can be
@@ -440,7 +471,7 @@ impl LightAhead {
 #[inline]
 fn past_limit(scene: &Scene, depth: u32, p: PathParams) -> bool {
     if p.russian_roulette {
-        depth > if scene.volumes.media.is_empty() { MAX_BOUNCES } else { MAX_MEDIUM_BOUNCES }
+        depth > if scene.volumes.has_media() { MAX_MEDIUM_BOUNCES } else { MAX_BOUNCES }
     } else {
         depth > scene.max_depth
     }
@@ -606,7 +637,10 @@ fn closure_vertex<const V: u8>(
         let more = depth < MAX_BOUNCES && (p.russian_roulette || depth < scene.max_depth);
         if more || p.mis {
             if let Some(b) = bounce_through(scene, &at, hit.p, ng * eps, depth, beta, p, st) {
-                color += b.weight * li::<V>(scene, &b.ray, depth + 1, b.next, b.came, p, st) / b.q;
+                let l = across(scene, hit, ray.d, b.ray.d, st, |st| {
+                    li::<V>(scene, &b.ray, depth + 1, b.next, b.came, p, st)
+                });
+                color += b.weight * l / b.q;
             }
         }
     }
@@ -617,7 +651,10 @@ fn closure_vertex<const V: u8>(
         let next = beta * lobes.transparency;
         if st.spawn(next.max_element()) {
             let on = Ray::new(hit.p - ng * eps, ray.d);
-            color += lobes.transparency * li::<V>(scene, &on, depth, next, Came::Direct, p, st);
+            let l = across(scene, hit, ray.d, ray.d, st, |st| {
+                li::<V>(scene, &on, depth, next, Came::Direct, p, st)
+            });
+            color += lobes.transparency * l;
         }
     }
     color

@@ -247,8 +247,25 @@ impl Scene {
         self.prims.iter().any(|p| moves(p.motion))
             || self.lights.iter().any(light_moves)
             || self.textures.shaders.is_some()
-            || !self.volumes.media.is_empty()
-            || !self.volumes.surfaces.is_empty()
+            || !self.volumes.is_empty()
+    }
+
+    /// The medium (an index into the interiors of [`Scene::volumes`]) a ray
+    /// going along `d` through the surface at `hit` enters: the object's
+    /// interior when it goes in (against the outward geometric normal),
+    /// none when it comes out. Interiors do not nest.
+    pub fn medium_across(&self, hit: &Hit, d: Vec3) -> Option<u32> {
+        if d.dot(hit.ng) >= 0.0 {
+            return None;
+        }
+        let object = match hit.geom {
+            HitGeom::Plane(i) => self.planes.get(i as usize).map(|p| p.3),
+            HitGeom::Triangle { prim, .. } | HitGeom::Sphere { prim } | HitGeom::Ellipsoid { prim } => {
+                self.prims.get(prim as usize).map(|p| p.object)
+            }
+            HitGeom::Volume(_) => None,
+        };
+        self.volumes.interior_of(object?)
     }
 
     /// The indices a shader sees as `s.object_id` and `s.instance_id`: the

@@ -80,7 +80,7 @@ impl Scene {
     /// where light can come from anywhere a ray goes: an environment,
     /// volumes, or an infinite plane whose shader emits.
     pub(super) fn emitting_boxes(&self, bounds_of: impl Fn(&Prim) -> Aabb) -> Option<Vec<Aabb>> {
-        if self.environment.is_some() || !self.volumes.surfaces.is_empty() || !self.volumes.media.is_empty() {
+        if self.environment.is_some() || !self.volumes.is_empty() {
             return None;
         }
         let shaders = self.textures.shaders.as_ref();

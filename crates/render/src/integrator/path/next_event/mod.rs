@@ -37,7 +37,7 @@ pub(super) fn next_event(
 ) -> Vec3A {
     let vols = &scene.volumes;
     let m = at.material();
-    if at.f.is_some() && vols.surfaces.is_empty() && vols.media.is_empty() {
+    if at.f.is_some() && vols.surfaces.is_empty() && !vols.has_media() {
         if !p.mis {
             return next_event_diffuse::<false>(scene, hit, at, origin, depth, p, ahead, st);
         }
@@ -261,7 +261,7 @@ pub(super) fn shaded_sample(
         return Vec3::ZERO;
     }
     let vols = &scene.volumes;
-    let tr = if vols.surfaces.is_empty() && vols.media.is_empty() {
+    let tr = if vols.surfaces.is_empty() && !vols.has_media() {
         Vec3::ONE
     } else {
         media::shadow(scene, &r, h.t - eps, st)

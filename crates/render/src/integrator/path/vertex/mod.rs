@@ -3,7 +3,7 @@
 //! (mirrors, conductors, dielectrics) followed as the recursive tracer does.
 //! Reads the camera's `<RendererParams>` (through [`PathParams`]).
 
-use super::{li, past_limit, Bounce, Came, PathParams};
+use super::{across, li, past_limit, Bounce, Came, PathParams};
 use crate::bsdf::specular::{branch_weights, glossy, reflect, refract};
 use crate::bsdf::{fresnel, Bsdf, BsdfSample, Specular};
 use crate::integrator::PathState;
@@ -129,7 +129,10 @@ pub(super) fn specular<const V: u8>(
         if !st.spawn(next.max_element()) {
             return Vec3::ZERO;
         }
-        k * li::<V>(scene, &Ray::new(o, d), depth + 1, next, Came::Direct, p, st)
+        // A refracted ray enters or leaves the object's medium.
+        k * across(scene, hit, ray.d, d, st, |st| {
+            li::<V>(scene, &Ray::new(o, d), depth + 1, next, Came::Direct, p, st)
+        })
     };
     match m.kind {
         Specular::None => Vec3::ZERO,

@@ -1,0 +1,66 @@
+//! `<Media>`: homogeneous media (a luster extension) that fill objects named
+//! by their `<Interior>`, for the path tracer.
+//!
+//! ```xml
+//! <Media>
+//!     <Medium id="milk">
+//!         <Absorption>0.002 0.004 0.01</Absorption>
+//!         <Scattering>4 4.2 4.5</Scattering>
+//!         <Anisotropy>0.7</Anisotropy>
+//!     </Medium>
+//! </Media>
+//! <Objects>
+//!     <Mesh id="glass"><Material>glass</Material><Interior>milk</Interior>…</Mesh>
+//! </Objects>
+//! ```
+//!
+//! | element | reads | default |
+//! |---|---|---|
+//! | `Absorption`, `Scattering` | σa, σs per unit length | 1 1 1, 0 0 0 |
+//! | `Emission` | emitted radiance per unit length | 0 0 0 |
+//! | `Anisotropy` | Henyey–Greenstein g, −0.99 to 0.99 | 0 |
+
+use super::Warnings;
+use crate::description::MediumDesc;
+use crate::element::{Element, Reader};
+use crate::error::SceneError;
+use luster_core::math::Vec3;
+
+/// Reads every `Medium` of a `Media` element.
+pub fn read_all(r: &Reader, el: &Element, w: &mut Warnings) -> Result<Vec<MediumDesc>, SceneError> {
+    w.unknown_children(el, &["Medium"]);
+    let mut out: Vec<MediumDesc> = Vec::new();
+    for m in el.children.iter().filter(|c| c.name == "Medium") {
+        w.unknown_children(m, &["Absorption", "Scattering", "Emission", "Anisotropy"]);
+        let id = m.attr("id").unwrap_or("").trim().to_string();
+        if id.is_empty() {
+            return Err(r.err(m, "<Medium> has no id"));
+        }
+        if out.iter().any(|o| o.id == id) {
+            return Err(r.err(m, format!("medium \"{id}\" is defined twice")));
+        }
+        let non_negative = |name: &str, default: Vec3| -> Result<Vec3, SceneError> {
+            let c = r.vec3_or(m, name, default)?;
+            if c.min_element() < 0.0 || !c.is_finite() {
+                return Err(r.err(m.child(name).unwrap_or(m), format!("<{name}> must be finite and ≥ 0")));
+            }
+            Ok(c)
+        };
+        let anisotropy = r.float_or(m, "Anisotropy", 0.0)?;
+        if !(-0.99..=0.99).contains(&anisotropy) {
+            return Err(r.err(
+                m.child("Anisotropy").unwrap_or(m),
+                format!("<Anisotropy> must lie between -0.99 and 0.99, found {anisotropy}"),
+            ));
+        }
+        out.push(MediumDesc {
+            id,
+            absorption: non_negative("Absorption", Vec3::ONE)?,
+            scattering: non_negative("Scattering", Vec3::ZERO)?,
+            emission: non_negative("Emission", Vec3::ZERO)?,
+            anisotropy,
+            loc: m.loc.clone(),
+        });
+    }
+    Ok(out)
+}
