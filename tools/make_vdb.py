@@ -8,7 +8,7 @@ grids the VDB tests read.
                                            must read or refuse (listed below)
 
 It needs a Python with the OpenVDB module (`import openvdb`) and numpy. The
-module ships inside Blender's `bpy` wheel (`pip install bpy`); with it in a
+module ships inside Blender's `bpy` wheel (`pip install bpy`, Python 3.11); with it in a
 virtual environment `.venv`:
 
     B=.venv/lib/python3.11/site-packages/bpy
@@ -88,16 +88,24 @@ def plume():
     cx = 0.12 * np.sin(3.5 * h + 0.4)
     cz = 0.08 * np.sin(2.7 * h + 1.9)
     r = np.hypot(X - cx, Z - cz)
-    radius = 0.16 + 0.42 * h**0.8
-    noise = sum(0.5**o * smooth_noise(rng, (nx, ny, nz), 3 * 2**o) for o in range(4)) / 1.875
-    # Radial fall-off with a ragged edge; thinner towards the top and bottom.
-    edge = 1 - r / (radius * (0.75 + 0.5 * noise))
-    taper = np.clip(h / 0.06, 0, 1) * np.clip((1 - h) / 0.25, 0, 1)
-    density = np.clip(edge, 0, 1) ** 0.7 * taper * (0.35 + 0.9 * noise)
+    radius = 0.15 + 0.36 * h**0.8
+    # Fractal noise, the fine octaves weighted up so the edge breaks into wisps.
+    octaves = [(4, 1.0), (8, 0.7), (16, 0.5), (24, 0.3)]
+    noise = sum(w * smooth_noise(rng, (nx, ny, nz), c) for c, w in octaves) / sum(w for _, w in octaves)
+    puffs = smooth_noise(rng, (nx, ny, nz), 6)
+    # A radial fall-off whose edge the noise pushes in and out; thinner at the
+    # foot and fading out at the top.
+    edge = 1 - r / radius + 1.1 * (noise - 0.5)
+    taper = np.clip(h / 0.05, 0, 1) * np.clip((1 - h) / 0.35, 0, 1)
+    # Fading out over the outermost voxels keeps the wisps off the array's sides.
+    ix, iz = np.arange(nx), np.arange(nz)
+    side = np.minimum(ix, nx - 1 - ix)[:, None, None] * np.minimum(iz, nz - 1 - iz)[None, None, :]
+    window = np.clip(side / 9.0, 0, 1)
+    density = np.clip(2.5 * edge, 0, 1) * taper * window * (0.3 + 0.9 * puffs)
     density = np.where(density > 0.02, density, 0).astype(np.float32)
-    # Temperature: the core of the lowest fifth, cooling upwards.
-    core = np.clip(1 - r / (0.7 * radius), 0, 1)
-    temperature = core * np.clip(1 - h / 0.22, 0, 1) ** 1.5 * (0.6 + 0.8 * noise)
+    # Temperature: the core of the lowest third, cooling upwards.
+    core = np.clip(1 - r / (0.9 * radius), 0, 1) ** 0.5
+    temperature = 1.5 * core * np.clip(1 - h / 0.32, 0, 1) ** 1.2 * (0.5 + noise)
     temperature = np.where((temperature > 0.02) & (density > 0), temperature, 0).astype(np.float32)
     # Index (0, 0, 0) is the voxel at world (x[0], 0, z[0]).
     transform = vdb.createLinearTransform(voxel)

@@ -31,6 +31,7 @@ mod shader_context;
 mod shader_material;
 mod shaders;
 mod suite;
+mod vdb;
 mod volumes;
 mod watch;
 mod whitted_glass;
