@@ -83,6 +83,10 @@ fn check_refused(volume: &str, extra: &[(&str, Vec<u8>)], words: &[&str]) -> Opt
     (!problems.is_empty()).then(|| format!("{volume}: {}\n    stderr: {err}", problems.join("; ")))
 }
 
+/// A volume's children, the files it needs beside `grids.vdb`, and the
+/// words its error must hold.
+type Case<'a> = (String, Vec<(&'a str, Vec<u8>)>, Vec<&'a str>);
+
 /// Bytes that are not a VDB file: a fixed pseudo-random sequence.
 fn noise(n: usize) -> Vec<u8> {
     let mut x = 0x9E37_79B9_7F4A_7C15u64;
@@ -103,7 +107,7 @@ fn bad_vdb_files_and_grids_are_refused_in_one_line() {
         |file: &str, grids: &str| format!("<Volume id=\"smoke\"><VdbFile>{file}</VdbFile>{grids}</Volume>");
     let grid = |name: &str| with("grids.vdb", &format!("<DensityGrid>{name}</DensityGrid>"));
     let truncated = std::fs::read(grids()).expect("the test grids")[..5000].to_vec();
-    let cases: Vec<(String, Vec<(&str, Vec<u8>)>, Vec<&str>)> = vec![
+    let cases: Vec<Case> = vec![
         (with("no_such.vdb", ""), vec![], vec![at, "cannot read VDB file", "no_such.vdb", "no such file"]),
         (with("cut.vdb", ""), vec![("cut.vdb", truncated)], vec![at, "cut.vdb", "ends early"]),
         (
@@ -214,4 +218,16 @@ fn the_plume_example_loads_and_renders() {
     let opts = RenderOptions { spp: Some(2), ..RenderOptions::default() };
     let img = try_render_with(&scene, 0, &opts, &|_| {}).expect("the example renders");
     assert!(img.pixels.iter().all(|p| p.is_finite()));
+}
+
+#[test]
+fn the_watch_server_watches_the_vdb_file() {
+    let volume = "<Volume id=\"smoke\"><VdbFile>grids.vdb</VdbFile><DensityGrid>few</DensityGrid></Volume>";
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    std::fs::write(dir.path().join("s.xml"), scene(volume)).expect("the scene");
+    std::fs::copy(grids(), dir.path().join("grids.vdb")).expect("the test grids");
+    let desc = luster::scene::load(&dir.path().join("s.xml")).expect("the scene loads");
+    let files = luster::watch::files::scene_files(&desc);
+    let root = dir.path().canonicalize().expect("the folder");
+    assert!(files.contains(&root.join("grids.vdb")), "{files:?}");
 }

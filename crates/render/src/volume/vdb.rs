@@ -29,7 +29,7 @@ use std::io::Cursor;
 use std::ops::RangeInclusive;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::Once;
-use vdb_rs::{Map, ParseError, VdbLevel, VdbReader};
+use vdb_rs::{Map, MetadataValue, ParseError, VdbLevel, VdbReader};
 
 /// Largest VDB file read.
 pub const MAX_VDB_BYTES: u64 = 1 << 30;
@@ -72,28 +72,41 @@ struct Affine {
     translation: [f64; 3],
 }
 
-/// One grid's active voxels: `(index, edge, value)` for voxels (edge 1) and
-/// constant tiles (edge 8 or 128), with its transform.
-struct Voxels {
-    items: Vec<([i64; 3], i64, f32)>,
+/// A grid as read, with its transform and the box of its active voxels
+/// (`None` when it has none), in index space.
+struct Read {
+    grid: vdb_rs::Grid<f32>,
     xf: Affine,
+    active: Option<([i64; 3], [i64; 3])>,
 }
 
-impl Voxels {
-    /// The smallest and largest index of an active voxel, or `None` when
-    /// there is none.
-    fn index_box(&self) -> Option<([i64; 3], [i64; 3])> {
-        let mut it = self.items.iter();
-        let &(first, edge, _) = it.next()?;
-        let (mut lo, mut hi) = (first, first.map(|c| c + edge - 1));
-        for &(c, edge, _) in it {
-            for a in 0..3 {
-                lo[a] = lo[a].min(c[a]);
-                hi[a] = hi[a].max(c[a] + edge - 1);
-            }
-        }
-        Some((lo, hi))
+/// Every active value of `grid` as `(index, edge, value)`: a voxel (edge 1)
+/// or a constant tile (edge 8 or 128).
+fn active(grid: &vdb_rs::Grid<f32>) -> impl Iterator<Item = ([i64; 3], i64, f32)> + '_ {
+    grid.iter().map(|(c, value, level)| {
+        let edge = match level {
+            VdbLevel::Voxel => 1,
+            VdbLevel::Node3 => 8,
+            VdbLevel::Node4 => 128,
+        };
+        ([c.x as i64, c.y as i64, c.z as i64], edge, value)
+    })
+}
+
+/// Refuses a dense grid of `span` points of `per_point` bytes beyond [`MAX_GRID_BYTES`].
+fn check_size(span: [u64; 3], per_point: u64) -> Result<(), String> {
+    let bytes = span.iter().try_fold(per_point, |n, &s| n.checked_mul(s)).unwrap_or(u64::MAX);
+    if bytes > MAX_GRID_BYTES {
+        return Err(format!(
+            "its active voxels span {}×{}×{} voxels with padding, {:.1} GB as a dense grid, more than the {:.1} GB allowed",
+            span[0],
+            span[1],
+            span[2],
+            bytes as f64 / 1e9,
+            MAX_GRID_BYTES as f64 / 1e9
+        ));
     }
+    Ok(())
 }
 
 /// Reads `desc`'s density grid (and emission grid) onto one lattice; the
@@ -119,37 +132,23 @@ pub fn read(bytes: &[u8], density: &str, emission: Option<&str>) -> Result<Latti
                     "grids \"{density}\" and \"{name}\" have different transforms; an emission grid must share the density grid's voxels"
                 ));
             }
-            Some((name, e))
+            Some(e)
         }
         None => None,
     };
-    let (mut lo, mut hi) = d.index_box().ok_or_else(|| format!("grid \"{density}\" has no active voxels"))?;
-    if let Some((_, e)) = &e {
-        // An emission grid with no active voxel emits nothing; its voxels widen the box.
-        if let Some((elo, ehi)) = e.index_box() {
-            for a in 0..3 {
-                lo[a] = lo[a].min(elo[a]);
-                hi[a] = hi[a].max(ehi[a]);
-            }
+    let (mut lo, mut hi) = d.active.ok_or_else(|| format!("grid \"{density}\" has no active voxels"))?;
+    // An emission grid with no active voxel emits nothing; its voxels widen the box.
+    if let Some((elo, ehi)) = e.as_ref().and_then(|e| e.active) {
+        for a in 0..3 {
+            lo[a] = lo[a].min(elo[a]);
+            hi[a] = hi[a].max(ehi[a]);
         }
     }
     // One voxel of zeros beyond the active ones on every side.
     let (lo, hi) = (lo.map(|c| c - 1), hi.map(|c| c + 1));
     let span = [0, 1, 2].map(|a| (hi[a] - lo[a] + 1) as u64);
-    let points = span.iter().try_fold(1u64, |n, &s| n.checked_mul(s));
     // The grids built from the lattice: f32 density, and Vec3 emission.
-    let per_point: u64 = if e.is_some() { 16 } else { 4 };
-    let bytes_needed = points.and_then(|n| n.checked_mul(per_point)).unwrap_or(u64::MAX);
-    if bytes_needed > MAX_GRID_BYTES {
-        return Err(format!(
-            "its active voxels span {}×{}×{} voxels with padding, {:.1} GB as a dense grid, more than the {:.1} GB allowed",
-            span[0],
-            span[1],
-            span[2],
-            bytes_needed as f64 / 1e9,
-            MAX_GRID_BYTES as f64 / 1e9
-        ));
-    }
+    check_size(span, if e.is_some() { 16 } else { 4 })?;
     let dims = span.map(|s| s as usize);
     let xf = d.xf;
     let world = |i: [i64; 3]| {
@@ -163,26 +162,33 @@ pub fn read(bytes: &[u8], density: &str, emission: Option<&str>) -> Result<Latti
         bounds,
         dims,
         voxel: Vec3::from_array(xf.scale.map(|s| s as f32)),
-        density: dense(&d, lo, dims),
-        emission: e.map(|(_, e)| dense(&e, lo, dims)),
+        density: dense(&d.grid, lo, dims)?,
+        emission: match e {
+            Some(e) => Some(dense(&e.grid, lo, dims)?),
+            None => None,
+        },
     })
 }
 
-/// The samples of `v` on the lattice of `dims` points from index `lo`, x fastest.
-fn dense(v: &Voxels, lo: [i64; 3], dims: [usize; 3]) -> Vec<f32> {
+/// The samples of `grid` on the lattice of `dims` points from index `lo`,
+/// x fastest, negative values as 0.
+fn dense(grid: &vdb_rs::Grid<f32>, lo: [i64; 3], dims: [usize; 3]) -> Result<Vec<f32>, String> {
     let mut data = vec![0.0f32; dims[0] * dims[1] * dims[2]];
-    for &(c, edge, value) in &v.items {
-        // Every active voxel lies inside the lattice, which was sized from them.
-        let o = [0, 1, 2].map(|a| (c[a] - lo[a]) as usize);
-        let edge = edge as usize;
-        for z in o[2]..o[2] + edge {
-            for y in o[1]..o[1] + edge {
-                let row = (z * dims[1] + y) * dims[0];
-                data[row + o[0]..row + o[0] + edge].fill(value.max(0.0));
+    guarded(|| {
+        for (c, edge, value) in active(grid) {
+            // Every active voxel lies inside the lattice, which was sized from them.
+            let o = [0, 1, 2].map(|a| (c[a] - lo[a]) as usize);
+            let edge = edge as usize;
+            for z in o[2]..o[2] + edge {
+                for y in o[1]..o[1] + edge {
+                    let row = (z * dims[1] + y) * dims[0];
+                    data[row + o[0]..row + o[0] + edge].fill(value.max(0.0));
+                }
             }
         }
-    }
-    data
+        Ok(())
+    })?;
+    Ok(data)
 }
 
 /// The file's format version, after checking what `vdb-rs` would otherwise
@@ -207,13 +213,13 @@ fn check_header(bytes: &[u8]) -> Result<u32, String> {
     Ok(version)
 }
 
-/// The float grid `name`, its type and transform checked, read and listed.
+/// The float grid `name`, its type, transform, size and values checked.
 fn grid(
     reader: &mut VdbReader<Cursor<&[u8]>>,
     bytes: &[u8],
     version: u32,
     name: &str,
-) -> Result<Voxels, String> {
+) -> Result<Read, String> {
     let gd = reader.grid_descriptors.get(name).ok_or_else(|| format!("it has no grid named \"{name}\""))?;
     if gd.grid_type == HALF_TYPE || gd.meta_data.is_half_float() {
         return Err(format!(
@@ -234,6 +240,17 @@ fn grid(
             "grid \"{name}\" has a transform other than a scale and a translation (a rotation, shear or frustum), which is not supported"
         ));
     }
+    // The box OpenVDB records refuses a huge grid before it is decompressed;
+    // the box of the voxels read decides.
+    let recorded = |key: &str| match gd.meta_data.0.get(key) {
+        Some(MetadataValue::Vec3i(v)) => Some([v.x, v.y, v.z].map(i64::from)),
+        _ => None,
+    };
+    if let (Some(lo), Some(hi)) = (recorded("file_bbox_min"), recorded("file_bbox_max")) {
+        if (0..3).all(|a| lo[a] <= hi[a]) {
+            check_size([0, 1, 2].map(|a| (hi[a] - lo[a] + 3) as u64), 4)?;
+        }
+    }
     guarded(|| {
         let grid = reader.read_grid::<f32>(name).map_err(parse_error)?;
         let (scale, translation) = match grid.transform {
@@ -249,19 +266,18 @@ fn grid(
         {
             return Err(format!("grid \"{name}\" has a voxel size that is not positive and finite"));
         }
-        let mut items = Vec::new();
-        for (c, value, level) in grid.iter() {
+        let mut bounds: Option<([i64; 3], [i64; 3])> = None;
+        for (c, edge, value) in active(&grid) {
             if !value.is_finite() {
                 return Err(format!("grid \"{name}\" holds a value that is not finite"));
             }
-            let edge = match level {
-                VdbLevel::Voxel => 1,
-                VdbLevel::Node3 => 8,
-                VdbLevel::Node4 => 128,
-            };
-            items.push(([c.x as i64, c.y as i64, c.z as i64], edge, value));
+            let top = c.map(|i| i + edge - 1);
+            bounds = Some(match bounds {
+                Some((lo, hi)) => ([0, 1, 2].map(|a| lo[a].min(c[a])), [0, 1, 2].map(|a| hi[a].max(top[a]))),
+                None => (c, top),
+            });
         }
-        Ok(Voxels { items, xf })
+        Ok(Read { grid, xf, active: bounds })
     })
 }
 
