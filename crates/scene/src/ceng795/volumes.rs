@@ -15,7 +15,7 @@
 //!     <Volume id="plume">
 //!         <VdbFile>volumes/plume.vdb</VdbFile>
 //!         <EmissionGrid>temperature</EmissionGrid>
-//!         <Emission>4 1.2 0.2</Emission>
+//!         <Emission>3000 1000 200</Emission>
 //!     </Volume>
 //!     <Hypertexture id="fuzz">
 //!         <Box><Min>-1 -1 -1</Min><Max>1 1 1</Max></Box>
