@@ -2,9 +2,10 @@
 //!
 //! The files come from the loaded [`Description`]: the scene (or OBJ model)
 //! itself, PLY meshes, images of texture maps (an OBJ's MTL textures
-//! included), shader scripts of texture maps and volumes. Their folders are
-//! watched rather than the files, because editors save by writing a new file
-//! and renaming it over the old one, which ends a watch on the file itself.
+//! included), shader scripts of texture maps and volumes, and volumes' VDB
+//! files. Their folders are watched rather than the files, because editors
+//! save by writing a new file and renaming it over the old one, which ends a
+//! watch on the file itself.
 //! Reads are not changes (the loader's own reads would loop forever), nor are
 //! metadata-only events.
 
@@ -35,6 +36,9 @@ pub fn scene_files(desc: &Description) -> BTreeSet<PathBuf> {
     for v in &desc.volumes {
         if let Some(s) = &v.script {
             files.insert(watched_name(&s.path));
+        }
+        if let Some(f) = &v.vdb {
+            files.insert(watched_name(&f.path));
         }
     }
     files

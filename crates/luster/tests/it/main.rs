@@ -32,6 +32,7 @@ mod shader_material;
 mod shaders;
 mod suite;
 mod volpath;
+mod vdb;
 mod volumes;
 mod watch;
 mod whitted_glass;

@@ -25,6 +25,7 @@ mod surface;
 mod tests;
 #[cfg(test)]
 mod tests_cache;
+mod vdb;
 
 pub use bound::Bound;
 pub use cache::{Baking, GridCache};
@@ -353,7 +354,16 @@ impl Volumes {
         }
         let mut next_script = 0;
         for (index, v) in desc.volumes.iter().enumerate() {
-            let bound = Bound::new(&v.bound, &v.transform);
+            // A VDB file is read first: a volume without a bound is bounded by its grids.
+            let lattice = match &v.vdb {
+                Some(f) => Some(vdb::load(f).map_err(|m| SceneError::at(&desc.file, &f.loc, m))?),
+                None => None,
+            };
+            let bound = match (&v.bound, &lattice) {
+                (Some(b), _) => Bound::new(b, &v.transform),
+                (None, Some(l)) => Bound::new(&l.bound(), &v.transform),
+                (None, None) => return Err(err(v, "needs a bound: <Sphere>, <Box> or <Ellipsoid>".into())),
+            };
             let label = format!(
                 "{}[id={}]",
                 if matches!(v.kind, VolumeKind::Surface { .. }) { "Hypertexture" } else { "Volume" },
@@ -375,7 +385,10 @@ impl Volumes {
                     ));
                 }
             }
-            let step = march_step(v, &bound).map_err(|m| err(v, m))?;
+            let mut step = march_step(v, &bound).map_err(|m| err(v, m))?;
+            if let (Some(l), None) = (&lattice, v.step) {
+                step = l.world_step(&v.transform).max(bound.diagonal() / MAX_STEPS);
+            }
             let kind = match &v.kind {
                 VolumeKind::Medium { absorption, scattering, emission, anisotropy, octaves } => {
                     let glow = match (script, &shaders) {
@@ -413,6 +426,18 @@ impl Volumes {
                 march_width,
                 majorant: None,
             };
+            if let (Some(l), Some(f)) = (lattice, &v.vdb) {
+                let colour = match &v.kind {
+                    VolumeKind::Medium { emission, .. } => *emission,
+                    VolumeKind::Surface { .. } => Vec3::ZERO,
+                };
+                let (density, glow) =
+                    l.grids(v.bound.as_ref(), colour).map_err(|m| SceneError::at(&desc.file, &f.loc, m))?;
+                vol.field = Field::Grid(Arc::new(density));
+                if let (Some(g), Kind::Medium { glow: slot, .. }) = (glow, &mut vol.kind) {
+                    *slot = Glow::Grid(Arc::new(g));
+                }
+            }
             // The path tracer's tracking needs bounds on the density, which
             // only a constant or a grid has: its scripts are baked.
             let grid = match (v.grid, &v.kind) {

@@ -43,10 +43,11 @@ pub(super) fn desc(volumes: Vec<VolumeDesc>) -> Description {
 pub(super) fn surface(code: &str, radius: f32, grid: Option<u32>) -> VolumeDesc {
     VolumeDesc {
         id: "h".into(),
-        bound: BoundDesc::Sphere { center: Vec3::ZERO, radius },
+        bound: Some(BoundDesc::Sphere { center: Vec3::ZERO, radius }),
         transform: Transform::IDENTITY,
         density: 1.0,
         script: Some(ScriptDesc { path: "h.lua".into(), code: code.into(), params: Vec::new() }),
+        vdb: None,
         step: None,
         grid,
         kind: VolumeKind::Surface { material: 0, threshold: 0.5, textures: Vec::new() },

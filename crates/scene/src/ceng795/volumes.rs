@@ -12,6 +12,11 @@
 //!         <Absorption>0.2 0.2 0.2</Absorption>
 //!         <Scattering>1 1 1</Scattering>
 //!     </Volume>
+//!     <Volume id="plume">
+//!         <VdbFile>volumes/plume.vdb</VdbFile>
+//!         <EmissionGrid>temperature</EmissionGrid>
+//!         <Emission>3000 1000 200</Emission>
+//!     </Volume>
 //!     <Hypertexture id="fuzz">
 //!         <Box><Min>-1 -1 -1</Min><Max>1 1 1</Max></Box>
 //!         <Material>1</Material>
@@ -23,11 +28,13 @@
 //!
 //! | element | reads | default |
 //! |---|---|---|
-//! | bound (one of) | `Sphere` (`Center` x y z, `Radius`), `Box` (`Min`, `Max`), `Ellipsoid` (`Center`, `Radii`, optional `Rotation` = angle ax ay az) — coordinates inline, in the volume's space | required |
+//! | bound (one of) | `Sphere` (`Center` x y z, `Radius`), `Box` (`Min`, `Max`), `Ellipsoid` (`Center`, `Radii`, optional `Rotation` = angle ax ay az) — coordinates inline, in the volume's space; with a `VdbFile` it clips the grids | required, except with a `VdbFile`: the box of its grids' active voxels |
 //! | `Transformations` | named transforms, as for objects | none |
 //! | `Shader`, `Parameter` | a script defining `density(s)` (media may add `emission(s)`), read as for shader maps | none: constant density |
-//! | `Density` | the constant density, or a factor on the script's | 1 |
-//! | `StepSize` | ray-marching step, world units | 1/64 of the bound's world diagonal |
+//! | `VdbFile` (media) | an OpenVDB file (path relative to the scene's folder) whose float grid is the density, in the file's world space; not with a `Shader` | none |
+//! | `DensityGrid`, `EmissionGrid` (media, with `VdbFile`) | the density grid's name; a grid whose value times `Emission` is the emission per unit length (instead of `Emission` × density) | `density`, none |
+//! | `Density` | the constant density, or a factor on the script's or the VDB grid's | 1 |
+//! | `StepSize` | ray-marching step, world units | 1/64 of the bound's world diagonal; with a `VdbFile`, a voxel's smallest world edge |
 //! | `GridResolution` | bake the script's density (and emission) on N³ points (2 to 512, at most 1 GiB of samples) | none: exact |
 //! | `Absorption`, `Scattering` (media) | σa, σs per unit length at density 1 | 1 1 1, 0 0 0 |
 //! | `Emission` (media) | emitted radiance per unit length at density 1 | 0 0 0 |
@@ -40,7 +47,7 @@ use super::shader_map;
 use super::textures::object_textures;
 use super::transforms::compose;
 use super::Warnings;
-use crate::description::{BoundDesc, VolumeDesc, VolumeKind};
+use crate::description::{BoundDesc, VdbDesc, VolumeDesc, VolumeKind};
 use crate::element::{Element, Reader};
 use crate::error::SceneError;
 use luster_core::math::{Transform, Vec3};
@@ -87,7 +94,16 @@ pub fn read_all(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Vec<Vol
     for v in &el.children {
         let kind = match v.name.as_str() {
             "Volume" => {
-                let extra = ["Absorption", "Scattering", "Emission", "Anisotropy", "ScatteringOctaves"];
+                let extra = [
+                    "Absorption",
+                    "Scattering",
+                    "Emission",
+                    "Anisotropy",
+                    "ScatteringOctaves",
+                    "VdbFile",
+                    "DensityGrid",
+                    "EmissionGrid",
+                ];
                 w.unknown_children(v, &[&COMMON[..], &extra[..]].concat());
                 let non_negative = |name: &str, default: Vec3| -> Result<Vec3, SceneError> {
                     let c = r.vec3_or(v, name, default)?;
@@ -127,6 +143,12 @@ pub fn read_all(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Vec<Vol
                 }
             }
             "Hypertexture" => {
+                if let Some(f) = v.child("VdbFile") {
+                    return Err(r.err(
+                        f,
+                        "<VdbFile> is for media (<Volume>); a <Hypertexture> takes its density from a <Shader>",
+                    ));
+                }
                 let extra = ["Material", "Threshold", "Textures"];
                 w.unknown_children(v, &[&COMMON[..], &extra[..]].concat());
                 let m = r.required(v, "Material")?;
@@ -172,12 +194,25 @@ fn volume(ctx: &Context, v: &Element, kind: VolumeKind) -> Result<VolumeDesc, Sc
         }
         None => None,
     };
+    let vdb = vdb_file(r, v, ctx.base_dir)?;
+    if let (Some(f), Some(_)) = (&vdb, v.child("Shader")) {
+        return Err(SceneError::at(
+            r.file,
+            &f.loc,
+            "a <Volume> takes its density from a <Shader> or a <VdbFile>, not both",
+        ));
+    }
     let script = match v.child("Shader") {
         Some(_) => Some(shader_map::script(r, v, ctx.base_dir)?),
         None => None,
     };
     let grid = match v.child("GridResolution") {
         Some(g) => {
+            if vdb.is_some() {
+                return Err(
+                    r.err(g, "<GridResolution> bakes a <Shader>; a <VdbFile>'s voxels are already a grid")
+                );
+            }
             let n = r.uint(g)?;
             if !(2..=MAX_GRID).contains(&n) {
                 return Err(r.err(g, format!("<GridResolution> must be 2 to {MAX_GRID}, found {n}")));
@@ -198,10 +233,11 @@ fn volume(ctx: &Context, v: &Element, kind: VolumeKind) -> Result<VolumeDesc, Sc
     };
     Ok(VolumeDesc {
         id: v.attr("id").unwrap_or("").trim().to_string(),
-        bound: bound(r, v)?,
+        bound: bound(r, v, vdb.is_some())?,
         transform,
         density,
         script,
+        vdb,
         step,
         grid,
         kind,
@@ -209,16 +245,46 @@ fn volume(ctx: &Context, v: &Element, kind: VolumeKind) -> Result<VolumeDesc, Sc
     })
 }
 
-/// The one bound child of a volume.
-fn bound(r: &Reader, v: &Element) -> Result<BoundDesc, SceneError> {
+/// A medium's `VdbFile` with its grid names, or `None` when it has none
+/// (then naming a grid is an error).
+fn vdb_file(r: &Reader, v: &Element, base_dir: &Path) -> Result<Option<VdbDesc>, SceneError> {
+    let Some(f) = v.child("VdbFile") else {
+        return match ["DensityGrid", "EmissionGrid"].iter().find_map(|n| v.child(n)) {
+            Some(g) => {
+                Err(r.err(g, format!("<{}> names a grid of a <VdbFile>, and this volume has none", g.name)))
+            }
+            None => Ok(None),
+        };
+    };
+    let rel = f.text.trim();
+    if rel.is_empty() {
+        return Err(r.err(f, "<VdbFile> names no file"));
+    }
+    let grid = |name: &str| match v.child(name) {
+        Some(g) if g.text.trim().is_empty() => Err(r.err(g, format!("<{name}> names no grid"))),
+        Some(g) => Ok(Some(g.text.trim().to_string())),
+        None => Ok(None),
+    };
+    Ok(Some(VdbDesc {
+        path: base_dir.join(rel),
+        density_grid: grid("DensityGrid")?.unwrap_or_else(|| "density".to_string()),
+        emission_grid: grid("EmissionGrid")?,
+        loc: f.loc.clone(),
+    }))
+}
+
+/// The one bound child of a volume; `None` when it has none and `optional`
+/// (a VDB file's grids then bound it).
+fn bound(r: &Reader, v: &Element, optional: bool) -> Result<Option<BoundDesc>, SceneError> {
     let found: Vec<&Element> =
         v.children.iter().filter(|c| matches!(c.name.as_str(), "Sphere" | "Box" | "Ellipsoid")).collect();
     let b = match found[..] {
         [b] => b,
+        [] if optional => return Ok(None),
         [] => return Err(r.err(v, format!("<{}> needs a bound: <Sphere>, <Box> or <Ellipsoid>", v.name))),
         _ => return Err(r.err(found[1], format!("<{}> has more than one bound", v.name))),
     };
-    Ok(match b.name.as_str() {
+    Ok(Some(match b.name.as_str() {
         "Sphere" => {
             let re = r.required(b, "Radius")?;
             let radius = r.float(re)?;
@@ -239,5 +305,101 @@ fn bound(r: &Reader, v: &Element) -> Result<BoundDesc, SceneError> {
             let (radii, rotation) = radii_and_rotation(r, b)?;
             BoundDesc::Ellipsoid { center: r.vec3(r.required(b, "Center")?)?, radii, rotation }
         }
-    })
+    }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The volumes of `<Volumes>{inner}</Volumes>`, read beside `/scenes/s.xml`.
+    fn read(inner: &str) -> Result<Vec<VolumeDesc>, SceneError> {
+        let file = Path::new("/scenes/s.xml");
+        let el = crate::xml::parse(file, &format!("<Volumes>{inner}</Volumes>"))?;
+        let materials = HashMap::from([("m", 0)]);
+        let (textures, transforms) = (HashMap::new(), HashMap::new());
+        let ctx = Context {
+            r: Reader { file },
+            materials: &materials,
+            textures: &textures,
+            transforms: &transforms,
+            base_dir: Path::new("/scenes"),
+        };
+        read_all(&ctx, &el, &mut Warnings::default())
+    }
+
+    fn refused(inner: &str, words: &[&str]) {
+        let e = read(inner).expect_err("the volume should be refused").to_string();
+        for w in words {
+            assert!(e.contains(w), "{e:?} lacks {w:?}");
+        }
+    }
+
+    const BALL: &str = "<Sphere><Center>0 0 0</Center><Radius>1</Radius></Sphere>";
+
+    #[test]
+    fn a_vdb_file_needs_no_bound_and_names_its_grids() {
+        let v = read("<Volume id=\"p\"><VdbFile> vdb/plume.vdb </VdbFile></Volume>").unwrap();
+        let f = v[0].vdb.as_ref().unwrap();
+        assert_eq!(f.path, Path::new("/scenes/vdb/plume.vdb"));
+        assert_eq!((f.density_grid.as_str(), f.emission_grid.as_deref()), ("density", None));
+        assert!(f.loc.path.ends_with("Volume[id=p]/VdbFile"), "{}", f.loc.path);
+        assert_eq!(v[0].bound, None);
+        assert!(v[0].script.is_none());
+
+        let v = read(&format!(
+            "<Volume id=\"p\">{BALL}<VdbFile>a.vdb</VdbFile><DensityGrid>smoke</DensityGrid>\
+             <EmissionGrid>flame</EmissionGrid></Volume>"
+        ))
+        .unwrap();
+        let f = v[0].vdb.as_ref().unwrap();
+        assert_eq!((f.density_grid.as_str(), f.emission_grid.as_deref()), ("smoke", Some("flame")));
+        assert!(matches!(v[0].bound, Some(BoundDesc::Sphere { .. })));
+    }
+
+    #[test]
+    fn vdb_mistakes_are_refused() {
+        refused(
+            &format!("<Volume id=\"p\">{BALL}<VdbFile>a.vdb</VdbFile><Shader>d.lua</Shader></Volume>"),
+            &["Volume[id=p]/VdbFile", "<Shader> or a <VdbFile>, not both"],
+        );
+        refused("<Volume id=\"p\"><VdbFile> </VdbFile></Volume>", &["<VdbFile> names no file"]);
+        refused(
+            "<Volume id=\"p\"><VdbFile>a.vdb</VdbFile><EmissionGrid></EmissionGrid></Volume>",
+            &["<EmissionGrid> names no grid"],
+        );
+        refused(
+            &format!("<Volume id=\"p\">{BALL}<DensityGrid>smoke</DensityGrid></Volume>"),
+            &["Volume[id=p]/DensityGrid", "has none"],
+        );
+        refused(
+            "<Volume id=\"p\"><VdbFile>a.vdb</VdbFile><GridResolution>64</GridResolution></Volume>",
+            &["<GridResolution>", "already a grid"],
+        );
+        refused(
+            &format!(
+                "<Hypertexture id=\"h\">{BALL}<Material>m</Material><VdbFile>a.vdb</VdbFile></Hypertexture>"
+            ),
+            &["Hypertexture[id=h]/VdbFile", "for media"],
+        );
+        refused("<Volume id=\"p\"><Density>2</Density></Volume>", &["Volume[id=p]", "needs a bound"]);
+    }
+
+    #[test]
+    fn negative_coefficients_and_anisotropy_outside_the_open_interval_are_refused() {
+        for name in ["Absorption", "Scattering", "Emission"] {
+            refused(
+                &format!("<Volume id=\"v\">{BALL}<{name}>0.5 -0.1 0</{name}></Volume>"),
+                &[&format!("Volume[id=v]/{name}"), "finite and ≥ 0"],
+            );
+        }
+        for g in ["1", "-1", "1.5", "-7", "NaN"] {
+            refused(
+                &format!("<Volume id=\"v\">{BALL}<Anisotropy>{g}</Anisotropy></Volume>"),
+                &["Volume[id=v]/Anisotropy"],
+            );
+        }
+        let v = read(&format!("<Volume id=\"v\">{BALL}<Anisotropy>-0.99</Anisotropy></Volume>")).unwrap();
+        assert!(matches!(v[0].kind, VolumeKind::Medium { anisotropy, .. } if anisotropy == -0.99));
+    }
 }

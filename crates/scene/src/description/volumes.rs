@@ -1,5 +1,5 @@
-//! Volumes in the scene description: their bounds, density scripts and
-//! media.
+//! Volumes in the scene description: their bounds, density scripts or VDB
+//! files, and media.
 
 use crate::error::Loc;
 use luster_core::math::{Quat, Transform, Vec3};
@@ -45,6 +45,21 @@ pub struct ScriptDesc {
     pub params: Vec<(String, ParamValue)>,
 }
 
+/// An OpenVDB file as a medium's density (and emission) source, as a scene
+/// names it; the file is read when the scene is built for rendering.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VdbDesc {
+    /// The file's path (relative ones resolved against the scene's folder).
+    pub path: PathBuf,
+    /// The float grid read as the density (`DensityGrid`, default `density`).
+    pub density_grid: String,
+    /// The float grid that, times `Emission`, is the emitted radiance per
+    /// unit length (`EmissionGrid`); `None`: `Emission` times the density.
+    pub emission_grid: Option<String>,
+    /// Where the `VdbFile` element is.
+    pub loc: Loc,
+}
+
 /// What a volume does with light.
 #[derive(Clone, Debug)]
 pub enum VolumeKind {
@@ -78,14 +93,17 @@ pub enum VolumeKind {
 pub struct VolumeDesc {
     /// The volume's id.
     pub id: String,
-    /// The region it fills.
-    pub bound: BoundDesc,
+    /// The region it fills; `None` only with a [`VdbDesc`], whose grids'
+    /// active box is then the bound.
+    pub bound: Option<BoundDesc>,
     /// Bound to world.
     pub transform: Transform,
     /// Density multiplier (the constant density when there is no script).
     pub density: f32,
     /// The script with `density(s)` (and, for media, optionally `emission(s)`).
     pub script: Option<ScriptDesc>,
+    /// A medium's VDB file (never together with a script).
+    pub vdb: Option<VdbDesc>,
     /// Ray-marching step in world units; `None`: chosen from the bound's size.
     pub step: Option<f32>,
     /// Precompute the script's density on a grid of this many cells per edge.
