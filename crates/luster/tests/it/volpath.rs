@@ -245,8 +245,8 @@ fn emission_integrates_along_the_ray() {
         let d = 0.8 * slant(&img, i);
         // ∫₀^d ε e^{−σ s} ds with ε = Emission · ρ, σ = 0.2.
         let base = (1.0 - (-0.2 * d).exp()) / 0.2;
-        for c in 0..3 {
-            ratio[c] += f64::from(img.pixels[i][c]) / (base * (c + 1) as f64) / img.pixels.len() as f64;
+        for (c, r) in ratio.iter_mut().enumerate() {
+            *r += f64::from(img.pixels[i][c]) / (base * (c + 1) as f64) / img.pixels.len() as f64;
         }
     }
     println!("emission got / analytic: {ratio:.5?}");
