@@ -4,7 +4,7 @@
 //! unbiased estimate of the transmittance along a shadow ray (ratio tracking;
 //! Novák et al. 2014).
 //!
-//! Each medium is sampled against its [`Majorant`]: tentative collisions
+//! Each medium is sampled against its [`Majorant`](crate::volume::Majorant): tentative collisions
 //! arrive at the rate `σ̄` of the block the ray is in, and one at `x` is an
 //! absorption, a scattering or a null collision with chances proportional
 //! to the path-weighted `σa(x)`, `σs(x)` and `σn = σ̄ − σt(x)` (averaged over

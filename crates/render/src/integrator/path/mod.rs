@@ -28,7 +28,7 @@
 //! light that ambient light stood in for.
 //!
 //! Through media a ray is tracked ([`tracking`]): where it really scatters
-//! first, the path goes on from there ([`medium`]: light samples weighed by
+//! first, the path goes on from there (`medium.rs`: light samples weighed by
 //! the phase function, a bounce drawn from it); where it passes, from the
 //! surface it hits. Paths entering an object with an `<Interior>` carry its
 //! medium until they leave it.
