@@ -4,15 +4,10 @@
 //! against plain bounces through a transmitting closure, the recursive ray
 //! tracer's approximation, and bad closures as one-sentence errors.
 
+use crate::common::white_sky;
 use luster::render::{render_with, RenderOptions, RenderedImage, Scene};
 use luster::scene::Description;
 use std::path::Path;
-
-/// A constant-radiance lat-long EXR sky of radiance 1.
-fn white_sky(dir: &Path) {
-    let img = image::Rgb32FImage::from_pixel(16, 8, image::Rgb([1.0, 1.0, 1.0]));
-    image::DynamicImage::ImageRgb32F(img).save(dir.join("sky.exr")).expect("EXR written");
-}
 
 fn load(dir: &Path, text: &str, shader: &str) -> Description {
     std::fs::write(dir.join("m.lua"), shader).expect("temp shader");

@@ -1,6 +1,6 @@
 //! What the integration tests share.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The course folder beside the repository, when it is there.
 ///
@@ -76,4 +76,11 @@ pub fn run_limited(mut cmd: std::process::Command, limit: std::time::Duration) -
         std::thread::sleep(std::time::Duration::from_millis(5));
     };
     Run { code: status.and_then(|s| s.code()), stderr: reader.join().unwrap_or_default() }
+}
+
+/// Writes `sky.exr` into `dir`: a constant-radiance lat-long sky of radiance
+/// 1, for white furnaces.
+pub fn white_sky(dir: &Path) {
+    let img = image::Rgb32FImage::from_pixel(16, 8, image::Rgb([1.0, 1.0, 1.0]));
+    image::DynamicImage::ImageRgb32F(img).save(dir.join("sky.exr")).expect("EXR written");
 }

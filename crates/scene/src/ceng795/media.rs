@@ -39,28 +39,48 @@ pub fn read_all(r: &Reader, el: &Element, w: &mut Warnings) -> Result<Vec<Medium
         if out.iter().any(|o| o.id == id) {
             return Err(r.err(m, format!("medium \"{id}\" is defined twice")));
         }
-        let non_negative = |name: &str, default: Vec3| -> Result<Vec3, SceneError> {
-            let c = r.vec3_or(m, name, default)?;
-            if c.min_element() < 0.0 || !c.is_finite() {
-                return Err(r.err(m.child(name).unwrap_or(m), format!("<{name}> must be finite and ≥ 0")));
-            }
-            Ok(c)
-        };
-        let anisotropy = r.float_or(m, "Anisotropy", 0.0)?;
-        if !(-0.99..=0.99).contains(&anisotropy) {
-            return Err(r.err(
-                m.child("Anisotropy").unwrap_or(m),
-                format!("<Anisotropy> must lie between -0.99 and 0.99, found {anisotropy}"),
-            ));
-        }
+        let c = coefficients(r, m)?;
         out.push(MediumDesc {
             id,
-            absorption: non_negative("Absorption", Vec3::ONE)?,
-            scattering: non_negative("Scattering", Vec3::ZERO)?,
-            emission: non_negative("Emission", Vec3::ZERO)?,
-            anisotropy,
+            absorption: c.absorption,
+            scattering: c.scattering,
+            emission: c.emission,
+            anisotropy: c.anisotropy,
             loc: m.loc.clone(),
         });
     }
     Ok(out)
+}
+
+/// A medium's coefficients, as `<Medium>` and `<Volume>` give them.
+pub(super) struct Coefficients {
+    pub absorption: Vec3,
+    pub scattering: Vec3,
+    pub emission: Vec3,
+    pub anisotropy: f32,
+}
+
+/// Reads `Absorption`, `Scattering`, `Emission` (finite, none negative) and
+/// `Anisotropy` (−0.99 to 0.99) of `el`, with their defaults.
+pub(super) fn coefficients(r: &Reader, el: &Element) -> Result<Coefficients, SceneError> {
+    let non_negative = |name: &str, default: Vec3| -> Result<Vec3, SceneError> {
+        let c = r.vec3_or(el, name, default)?;
+        if c.min_element() < 0.0 || !c.is_finite() {
+            return Err(r.err(el.child(name).unwrap_or(el), format!("<{name}> must be finite and ≥ 0")));
+        }
+        Ok(c)
+    };
+    let anisotropy = r.float_or(el, "Anisotropy", 0.0)?;
+    if !(-0.99..=0.99).contains(&anisotropy) {
+        return Err(r.err(
+            el.child("Anisotropy").unwrap_or(el),
+            format!("<Anisotropy> must lie between -0.99 and 0.99, found {anisotropy}"),
+        ));
+    }
+    Ok(Coefficients {
+        absorption: non_negative("Absorption", Vec3::ONE)?,
+        scattering: non_negative("Scattering", Vec3::ZERO)?,
+        emission: non_negative("Emission", Vec3::ZERO)?,
+        anisotropy,
+    })
 }

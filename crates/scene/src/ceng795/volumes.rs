@@ -50,7 +50,7 @@ use super::Warnings;
 use crate::description::{BoundDesc, VdbDesc, VolumeDesc, VolumeKind};
 use crate::element::{Element, Reader};
 use crate::error::SceneError;
-use luster_core::math::{Transform, Vec3};
+use luster_core::math::Transform;
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -105,22 +105,7 @@ pub fn read_all(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Vec<Vol
                     "EmissionGrid",
                 ];
                 w.unknown_children(v, &[&COMMON[..], &extra[..]].concat());
-                let non_negative = |name: &str, default: Vec3| -> Result<Vec3, SceneError> {
-                    let c = r.vec3_or(v, name, default)?;
-                    if c.min_element() < 0.0 || !c.is_finite() {
-                        return Err(
-                            r.err(v.child(name).unwrap_or(v), format!("<{name}> must be finite and ≥ 0"))
-                        );
-                    }
-                    Ok(c)
-                };
-                let anisotropy = r.float_or(v, "Anisotropy", 0.0)?;
-                if !(-0.99..=0.99).contains(&anisotropy) {
-                    return Err(r.err(
-                        v.child("Anisotropy").unwrap_or(v),
-                        format!("<Anisotropy> must lie between -0.99 and 0.99, found {anisotropy}"),
-                    ));
-                }
+                let c = super::media::coefficients(r, v)?;
                 let octaves = match v.child("ScatteringOctaves") {
                     Some(o) => {
                         let n = r.uint(o)?;
@@ -136,10 +121,10 @@ pub fn read_all(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Vec<Vol
                 };
                 VolumeKind::Medium {
                     octaves,
-                    absorption: non_negative("Absorption", Vec3::ONE)?,
-                    scattering: non_negative("Scattering", Vec3::ZERO)?,
-                    emission: non_negative("Emission", Vec3::ZERO)?,
-                    anisotropy,
+                    absorption: c.absorption,
+                    scattering: c.scattering,
+                    emission: c.emission,
+                    anisotropy: c.anisotropy,
                 }
             }
             "Hypertexture" => {
