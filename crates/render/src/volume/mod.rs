@@ -11,10 +11,13 @@
 //! no density. Baked grids may come from a [`GridCache`] kept across builds.
 //!
 //! This module is the volumes' data and their local queries (density,
-//! emission, isosurface search). How rays gather light through them — ray
-//! marching with single scattering, shadow transmittance — is in
-//! `integrator::media`, beside the integrators. Scene parameters are
-//! listed in `scene::ceng795::volumes`.
+//! emission, isosurface search, the majorants that bound a medium's
+//! extinction), and the homogeneous media that fill objects ([`Interior`]).
+//! How rays gather light through them is beside the integrators: ray
+//! marching with single scattering for the recursive tracer in
+//! `integrator::media`, tracking for the path tracer in
+//! `integrator::tracking`. Scene parameters are listed in
+//! `scene::ceng795::volumes` and `scene::ceng795::media`.
 
 pub mod bound;
 pub mod cache;

@@ -107,13 +107,15 @@ pub fn radiance(scene: &Scene, ray: &Ray, p: &PathParams, st: &mut PathState) ->
 /// Radiance along `ray`, which is bounce `depth` of a path of throughput
 /// `beta` so far.
 ///
-/// A vertex whose bounce is the last thing it adds (no specular part, no
-/// media: most vertices) continues the loop with the bounce's ray instead of
+/// A vertex whose bounce is the last thing it adds (no specular part: most
+/// vertices) continues the loop with the bounce's ray instead of
 /// recursing: its colour, weight and `q` wait in the [`Walk`], and once the
 /// path ends they are folded back deepest first as `c + w · L / q`, the
 /// recursion's operations in its order, so the same bits. A recursive call
 /// would cost each vertex a prologue, an epilogue and its arguments through
 /// the stack. Other vertices, and a path longer than [`DEFERRED`], recurse.
+/// In a scene with media nothing waits: each vertex (a scattering too) adds
+/// its light at once, times the weights before it, so a path may be long.
 fn li<const V: u8>(
     scene: &Scene,
     ray: &Ray,
