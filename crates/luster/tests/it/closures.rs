@@ -4,7 +4,7 @@
 //! against plain bounces through a transmitting closure, the recursive ray
 //! tracer's approximation, and bad closures as one-sentence errors.
 
-use crate::common::white_sky;
+use crate::common::{two_seed_mean, white_sky};
 use luster::render::{render_with, RenderOptions, RenderedImage, Scene};
 use luster::scene::Description;
 use std::path::Path;
@@ -62,15 +62,13 @@ fn luminance(p: luster::math::Vec3) -> f64 {
 fn two_seeds(desc: &Description, spp: u32) -> (f64, f64, f64, f64) {
     let (a, b) = (render(desc, spp, 1), render(desc, spp, 2));
     let px = inner(&a);
-    let n = px.len() as f64;
     let (la, lb): (Vec<f64>, Vec<f64>) =
         px.iter().map(|&i| (luminance(a.pixels[i]), luminance(b.pixels[i]))).unzip();
-    let var = la.iter().zip(&lb).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / (2.0 * n);
-    let mean = (la.iter().sum::<f64>() + lb.iter().sum::<f64>()) / (2.0 * n);
+    let (mean, se) = two_seed_mean(&la, &lb);
     let both: Vec<f64> = la.iter().zip(&lb).map(|(x, y)| 0.5 * (x + y)).collect();
     let lo = both.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = both.iter().copied().fold(0.0, f64::max);
-    (mean, (var / (2.0 * n)).sqrt(), lo, hi)
+    (mean, se, lo, hi)
 }
 
 const MIS: &str = "<Renderer>PathTracing</Renderer><RendererParams>MIS</RendererParams>";
@@ -160,10 +158,7 @@ fn light_through_a_rough_pane_agrees_between_light_samples_and_bounces() {
         let (a, b) = (render(&desc, 256, 1), render(&desc, 256, 2));
         let (la, lb): (Vec<f64>, Vec<f64>) =
             a.pixels.iter().zip(&b.pixels).map(|(x, y)| (luminance(*x), luminance(*y))).unzip();
-        let n = la.len() as f64;
-        let var = la.iter().zip(&lb).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / (2.0 * n);
-        let mean = (la.iter().sum::<f64>() + lb.iter().sum::<f64>()) / (2.0 * n);
-        let se = (var / (2.0 * n)).sqrt();
+        let (mean, se) = two_seed_mean(&la, &lb);
         println!("{params:<20} floor {mean:.4} ± {se:.4}");
         means.push((mean, se));
     }

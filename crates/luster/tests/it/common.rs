@@ -84,3 +84,14 @@ pub fn white_sky(dir: &Path) {
     let img = image::Rgb32FImage::from_pixel(16, 8, image::Rgb([1.0, 1.0, 1.0]));
     image::DynamicImage::ImageRgb32F(img).save(dir.join("sky.exr")).expect("EXR written");
 }
+
+/// The mean of two seeds' renders of the same values `a` and `b` (pixel by
+/// pixel), and its standard error: the pixels' differences give each
+/// pixel's variance (var(a − b) = 2σ²) without assuming the pixels share
+/// one true value, and the mean of 2n estimates has error σ / sqrt(2n).
+pub fn two_seed_mean(a: &[f64], b: &[f64]) -> (f64, f64) {
+    let n = a.len() as f64;
+    let var = a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / (2.0 * n);
+    let mean = (a.iter().sum::<f64>() + b.iter().sum::<f64>()) / (2.0 * n);
+    (mean, (var / (2.0 * n)).sqrt())
+}

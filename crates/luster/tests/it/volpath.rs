@@ -6,7 +6,7 @@
 //! its integral, and light samples from inside a medium against plain
 //! phase-function bounces.
 
-use crate::common::white_sky;
+use crate::common::{two_seed_mean, white_sky};
 use luster::render::{render_with, RenderOptions, RenderedImage, Scene};
 use luster::scene::Description;
 use std::path::Path;
@@ -75,15 +75,12 @@ fn mean_two_seeds(desc: &Description, spp: u32, within: f32) -> ([f64; 3], [f64;
             (x * x + y * y).sqrt() < within
         })
         .collect();
-    let n = px.len() as f64;
     let mut mean = [0.0; 3];
     let mut se = [0.0; 3];
     for c in 0..3 {
         let (la, lb): (Vec<f64>, Vec<f64>) =
             px.iter().map(|&i| (f64::from(a.pixels[i][c]), f64::from(b.pixels[i][c]))).unzip();
-        let var = la.iter().zip(&lb).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / (2.0 * n);
-        mean[c] = (la.iter().sum::<f64>() + lb.iter().sum::<f64>()) / (2.0 * n);
-        se[c] = (var / (2.0 * n)).sqrt();
+        (mean[c], se[c]) = two_seed_mean(&la, &lb);
     }
     (mean, se)
 }
@@ -289,11 +286,9 @@ fn light_samples_in_a_medium_agree_with_bounces() {
             .map(|k| {
                 let (bx, by) = (k % 4, k / 4);
                 let px: Vec<usize> = (0..16).map(|j| (by * 4 + j / 4) * 16 + bx * 4 + j % 4).collect();
-                let n = px.len() as f64;
                 let (la, lb): (Vec<f64>, Vec<f64>) =
                     px.iter().map(|&i| (lum(a.pixels[i]), lum(b.pixels[i]))).unzip();
-                let var = la.iter().zip(&lb).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / (2.0 * n);
-                ((la.iter().sum::<f64>() + lb.iter().sum::<f64>()) / (2.0 * n), (var / (2.0 * n)).sqrt())
+                two_seed_mean(&la, &lb)
             })
             .collect()
     };

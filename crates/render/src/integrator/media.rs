@@ -135,11 +135,7 @@ pub fn media_transmittance(scene: &Scene, ray: &Ray, t_max: f32, st: &mut PathSt
         tr = (-(m.absorption + m.scattering) * t_max).exp();
     }
     for v in &scene.volumes.media {
-        tr *= if st.tracking && v.majorant.is_some() {
-            tracking::transmittance(scene, v, ray, 0.0, t_max, st)
-        } else {
-            transmittance(scene, v, ray, 0.0, t_max, st)
-        };
+        tr *= transmittance(scene, v, ray, 0.0, t_max, st);
         // Tracking's estimates are unbiased as they are (they play Russian
         // roulette themselves); cutting them off would darken.
         if !st.tracking && tr.max_element() < MIN_TRANSMITTANCE {
@@ -160,6 +156,11 @@ fn transmittance(scene: &Scene, v: &Volume, ray: &Ray, t_lo: f32, t_hi: f32, st:
     let sigma_t = absorption + scattering;
     if let Some(rho) = v.constant_density() {
         return (-sigma_t * (rho * (b - a))).exp();
+    }
+    // The path tracer's estimate must be unbiased; the recursive tracer's
+    // smooth.
+    if st.tracking && v.majorant.is_some() {
+        return tracking::ratio_tracked(scene, v, ray, a, b, st);
     }
     let n = steps(b - a, 2.0 * v.step);
     let dt = (b - a) / n as f32;

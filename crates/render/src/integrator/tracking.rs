@@ -254,18 +254,10 @@ pub fn track(
 }
 
 /// An unbiased estimate of the transmittance along `ray` from `t_lo` to
-/// `t_hi` through medium `v`: exact where its density is constant, ratio
-/// tracking elsewhere, with Russian roulette once it is small.
-pub fn transmittance(scene: &Scene, v: &Volume, ray: &Ray, t_lo: f32, t_hi: f32, st: &mut PathState) -> Vec3 {
-    let Kind::Medium { absorption, scattering, .. } = v.kind else { return Vec3::ONE };
-    if let Some(rho) = v.constant_density() {
-        let Some((t0, t1)) = v.bound.interval(ray) else { return Vec3::ONE };
-        let (a, b) = (t0.max(t_lo), t1.min(t_hi));
-        if a.partial_cmp(&b) != Some(std::cmp::Ordering::Less) {
-            return Vec3::ONE;
-        }
-        return (-(absorption + scattering) * (rho * (b - a))).exp();
-    }
+/// `t_hi` through the gridded medium `v` by ratio tracking, with Russian
+/// roulette once it is small (a constant density has a closed form,
+/// `integrator::media` takes it).
+pub fn ratio_tracked(scene: &Scene, v: &Volume, ray: &Ray, t_lo: f32, t_hi: f32, st: &mut PathState) -> Vec3 {
     let Some(mut f) = Flight::new(v, ray, t_lo, t_hi, false) else { return Vec3::ONE };
     let probe = Probe { time: st.time, dir: ray.d, view: st.view, pixel: st.pixel };
     let mut tr = Vec3::ONE;

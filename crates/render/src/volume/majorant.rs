@@ -53,6 +53,12 @@ impl Majorant {
         floor: f32,
     ) -> Majorant {
         let d = density.dims();
+        // Density and emission are baked or read on one lattice; a grid on
+        // another would make every block glow.
+        let (glows, everywhere) = match glows {
+            Some(g) if g.dims() == d => (Some(g), false),
+            other => (None, other.is_some()),
+        };
         let dims = [0, 1, 2].map(|a| (d[a] - 1).div_ceil(BLOCK));
         let bounds = density.bounds();
         let lattice = Vec3::new(d[0] as f32 - 1.0, d[1] as f32 - 1.0, d[2] as f32 - 1.0);
@@ -65,13 +71,13 @@ impl Majorant {
                 for bx in 0..dims[0] {
                     let range = |b: usize, a: usize| b * BLOCK..=((b + 1) * BLOCK).min(d[a] - 1);
                     let mut top = 0.0f32;
-                    let mut glow = false;
+                    let mut glow = everywhere;
                     for z in range(bz, 2) {
                         for y in range(by, 1) {
                             for x in range(bx, 0) {
                                 top = top.max(density.sample(x, y, z));
                                 if let Some(g) = glows {
-                                    glow |= sample_near(g, density, [x, y, z]).max_element() > 0.0;
+                                    glow |= g.sample(x, y, z).max_element() > 0.0;
                                 }
                             }
                         }
@@ -113,22 +119,6 @@ impl Segments<'static> {
     pub fn uniform(rate: f32, t0: f32, t1: f32) -> Segments<'static> {
         Segments { t: t0, t_end: t1, walk: Walk::Uniform(rate) }
     }
-}
-
-/// The emission grid's sample at the density lattice point `i` (the two
-/// grids share their lattice when baked together; otherwise the nearest).
-fn sample_near(g: &Grid<Vec3>, density: &Grid<f32>, i: [usize; 3]) -> Vec3 {
-    if g.dims() == density.dims() {
-        return g.sample(i[0], i[1], i[2]);
-    }
-    let b = density.bounds();
-    let d = density.dims();
-    let f = Vec3::new(
-        i[0] as f32 / (d[0] - 1) as f32,
-        i[1] as f32 / (d[1] - 1) as f32,
-        i[2] as f32 / (d[2] - 1) as f32,
-    );
-    g.at(b.min + b.extent() * f)
 }
 
 /// Stretches of constant bound along a ray ([`Majorant::segments`]).

@@ -121,73 +121,30 @@ fn g_over_pi(mu: f32) -> f32 {
 pub(super) mod tests {
     use super::*;
 
-    use super::super::tests::{gamma_q, Pcg};
+    use super::super::tests::{chi_square, gamma_q, Pcg};
 
     pub(in crate::bsdf::lobe) fn dir(mu: f32, phi: f32) -> Vec3 {
         let s = (1.0 - mu * mu).max(0.0).sqrt();
         Vec3::new(s * phi.cos(), s * phi.sin(), mu)
     }
 
-    /// The p-value of a chi-square test of `sample`'s directions against
-    /// `pdf`: `N` draws binned over a `(cos θ, φ)` grid plus one bin for
-    /// draws that gave nothing, against the pdf integrated over each cell on
-    /// a finer grid; bins expecting fewer than 5 are pooled.
+    /// The p-value of the shared chi-square test ([`chi_square`]) of
+    /// `sample`'s directions, drawn from a generator seeded with `seed`,
+    /// against `pdf`.
     pub(in crate::bsdf::lobe) fn chi_square_p(
         sample: impl Fn(f32, (f32, f32)) -> Option<Vec3>,
         pdf: impl Fn(Vec3) -> f32,
         seed: u64,
     ) -> f64 {
-        const NC: usize = 16;
-        const NP: usize = 32;
-        const SUB_C: usize = 16;
-        const SUB_P: usize = 8;
-        const N: usize = 200_000;
-        let tau = std::f32::consts::TAU;
-        let mut observed = vec![0f64; NC * NP + 1];
         let mut rng = Pcg(seed);
-        for _ in 0..N {
-            let uc = rng.next();
-            let u = (rng.next(), rng.next());
-            match sample(uc, u) {
-                Some(wi) if wi.z > 0.0 => {
-                    let i = ((wi.z * NC as f32) as usize).min(NC - 1);
-                    let phi = wi.y.atan2(wi.x).rem_euclid(tau);
-                    let j = ((phi / tau * NP as f32) as usize).min(NP - 1);
-                    observed[i * NP + j] += 1.0;
-                }
-                _ => observed[NC * NP] += 1.0,
-            }
-        }
-        let mut expected = vec![0f64; NC * NP + 1];
-        let cell = std::f64::consts::TAU / (NC * NP * SUB_C * SUB_P) as f64;
-        for i in 0..NC * SUB_C {
-            for j in 0..NP * SUB_P {
-                let mu = (i as f32 + 0.5) / (NC * SUB_C) as f32;
-                let phi = (j as f32 + 0.5) / (NP * SUB_P) as f32 * tau;
-                let p = pdf(dir(mu, phi)) as f64;
-                expected[(i / SUB_C) * NP + j / SUB_P] += p * cell * N as f64;
-            }
-        }
-        let inside: f64 = expected[..NC * NP].iter().sum();
-        expected[NC * NP] = (N as f64 - inside).max(0.0);
-
-        let (mut stat, mut dof, mut pool_o, mut pool_e) = (0.0, 0.0f64, 0.0, 0.0);
-        for (o, e) in observed.iter().zip(&expected) {
-            if *e < 5.0 {
-                pool_o += o;
-                pool_e += e;
-            } else {
-                stat += (o - e) * (o - e) / e;
-                dof += 1.0;
-            }
-        }
-        if pool_e >= 5.0 {
-            stat += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
-            dof += 1.0;
-        } else if pool_o > 20.0 {
-            return 0.0;
-        }
-        gamma_q((dof - 1.0) / 2.0, stat / 2.0)
+        chi_square(
+            || {
+                let uc = rng.next();
+                let u = (rng.next(), rng.next());
+                sample(uc, u)
+            },
+            pdf,
+        )
     }
 
     /// The mean of `f cos / pdf` over `n` draws from `sample`: a Monte-Carlo
@@ -218,7 +175,7 @@ pub(super) mod tests {
         assert!((gamma_q(5.0, 5.0) - 0.440_493_285_065).abs() < 1e-9);
         assert!((gamma_q(0.5, 2.0) - 0.045_500_263_896).abs() < 1e-9);
         let uniform = |_: f32, u: (f32, f32)| Some(sampling::power_cosine(0.0, u));
-        let p = chi_square_p(uniform, |w| w.z * FRAC_1_PI, 3);
+        let p = chi_square_p(uniform, |w| w.z.max(0.0) * FRAC_1_PI, 3);
         assert!(p < 1e-6, "uniform draws passed as cosine-weighted: p = {p}");
     }
 
