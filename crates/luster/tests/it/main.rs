@@ -22,6 +22,7 @@ mod golden_hw7;
 mod hdr_lights;
 mod hostile;
 mod instances;
+mod light_transforms;
 mod obj;
 mod path_tracing;
 mod perlin_space;

@@ -299,7 +299,7 @@ fn point(
         return Some((sigma_t, emitted));
     }
     let mut inscatter = total_s * scene.ambient;
-    let eps = scene.shadow_epsilon;
+    let eps = scene.offset(p, p);
     let mut light = |l: Vec3, dist: f32, e: Vec3, st: &mut PathState| {
         let tr = shadow(scene, &Ray::new(p, l), dist - eps, st);
         if tr.max_element() <= 0.0 {

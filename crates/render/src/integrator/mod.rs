@@ -163,8 +163,8 @@ fn textured<'a>(scene: &'a Scene, ray: &Ray, hit: &Hit, depth: u32, st: &mut Pat
 }
 
 /// What `light` sends to the surface point `p` with normal `n`, shadow rays
-/// leaving from `origin`: the sample, `n·wi`, and the transmittance along the
-/// shadow ray. `None` when the light is behind the surface, black or blocked.
+/// leaving from `origin` (`p` moved off the surface): the sample, `n·wi`,
+/// and the transmittance along the shadow ray. `None` when the light is behind the surface, black or blocked.
 /// Always inlined into its callers (the path tracer's light samples, the
 /// recursive tracer's per-light term): its result returned through memory
 /// would be read back in wider loads than it was stored with, a stall per
@@ -178,7 +178,7 @@ pub(crate) fn light_reaching_inline(
     n: Vec3,
     st: &mut PathState,
 ) -> Option<(LightSample, f32, Vec3)> {
-    light_reaching_from(scene, light.sample(origin, p, Some(n), st.time, &mut st.sampler)?, origin, n, st)
+    light_reaching_from(scene, light.sample(origin, p, Some(n), st.time, &mut st.sampler)?, origin, p, n, st)
 }
 
 /// [`light_reaching_inline`] for the light sample `ls` already made.
@@ -187,6 +187,7 @@ pub(crate) fn light_reaching_from(
     scene: &Scene,
     ls: LightSample,
     origin: Vec3,
+    p: Vec3,
     n: Vec3,
     st: &mut PathState,
 ) -> Option<(LightSample, f32, Vec3)> {
@@ -194,20 +195,35 @@ pub(crate) fn light_reaching_from(
     if cos <= 0.0 || is_black(ls.e) {
         return None;
     }
-    let t_max = shadow_reach(scene, &ls);
-    let tr = media::shadow(scene, &Ray::new(origin, ls.wi), t_max, st);
+    let (ray, t_max) = shadow_ray(scene, origin, p, &ls);
+    let tr = media::shadow(scene, &ray, t_max, st);
     (!is_black(tr)).then_some((ls, cos, tr))
 }
 
-/// How far the shadow ray of the light sample `ls` reaches. A point
+/// The shadow ray of the light sample `ls` drawn at `p`, leaving from
+/// `origin` (`p` moved off its surface), and how far it reaches: aimed at
+/// the sampled point itself where it is at a finite distance, so that the
+/// offset moves where the ray starts, never what the sample measured.
+#[inline(always)]
+pub(crate) fn shadow_ray(scene: &Scene, origin: Vec3, p: Vec3, ls: &LightSample) -> (Ray, f32) {
+    if !ls.dist.is_finite() {
+        return (Ray::new(origin, ls.wi), ls.dist);
+    }
+    let to = p + ls.wi * ls.dist - origin;
+    let dist = to.length();
+    let eps = scene.offset(p + ls.wi * ls.dist, origin);
+    (Ray::new(origin, to / dist), shadow_reach(&LightSample { dist, ..*ls }, eps))
+}
+
+/// How far the shadow ray of the light sample `ls` reaches, for the offset
+/// `eps` at the light's end ([`Scene::offset`]). A point
 /// source's reaches a little past it, so a light lying exactly on a surface
 /// (hw2 mirror_room puts one in the ceiling plane) is blocked by it
 /// consistently, as in the references, not by per-pixel rounding. An area
 /// light's stops short of its own plane: it is an imaginary square, not
 /// geometry, and a surface it lies on must not shadow it.
 #[inline(always)]
-pub(crate) fn shadow_reach(scene: &Scene, ls: &LightSample) -> f32 {
-    let eps = scene.shadow_epsilon;
+pub(crate) fn shadow_reach(ls: &LightSample, eps: f32) -> f32 {
     if ls.point_source {
         ls.dist + eps
     } else {

@@ -121,7 +121,7 @@ fn shade(
     let entering = ray.d.dot(hit.ng) < 0.0;
     // Normals facing the side the ray came from.
     let (n, ng) = if entering { (ns, hit.ng) } else { (-ns, -hit.ng) };
-    let eps = scene.shadow_epsilon;
+    let eps = scene.offset(hit.p, ray.o);
     let inside_dielectric = !entering && matches!(m.kind, Specular::Dielectric { .. });
     // An emitter's surface shows its radiance (hw7 object lights).
     let mut color = scene.emitted(hit, ray.d).map_or(Vec3::ZERO, |(_, l)| l);
@@ -218,7 +218,7 @@ fn closure_shade(
     st: &mut PathState,
 ) -> Vec3 {
     let ng = if entering { hit.ng } else { -hit.ng };
-    let eps = scene.shadow_epsilon;
+    let eps = scene.offset(hit.p, ray.o);
     let n = lobes.frame.normal();
     let front = hit.p + ng * eps;
     let mut color = Vec3::ZERO;
@@ -279,7 +279,7 @@ pub(crate) fn direct(
     let mut color = m.ambient * scene.ambient;
     // The winding normals, not ones flipped towards the eye: see the module doc.
     let (n, ng) = (ns, hit.ng);
-    let eps = scene.shadow_epsilon;
+    let eps = scene.offset(hit.p, ray.o);
     let origin = hit.p + ng * eps;
     // A surface that reflects no direct light (clear glass) moves past each
     // light's draw, so that later draws and the image are those of the full

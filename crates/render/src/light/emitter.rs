@@ -30,8 +30,9 @@
 //! ```
 
 use super::shell::Shell;
-use luster_core::math::{orthonormal_basis, sin_cos_turns, Transform, Vec3};
+use luster_core::math::{orthonormal_basis, sin_cos_turns, Mat3, Transform, Vec3};
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 /// Lights with at most this many triangles pick one by a linear count.
 const SCAN_TRIANGLES: usize = 32;
@@ -181,73 +182,148 @@ fn count_at_most(blocks: &[[f32; 4]], target: f32) -> usize {
     }
 }
 
-/// A sphere that emits `radiance` from its outside, in world space.
-#[derive(Clone, Copy, Debug)]
+/// A sphere that emits `radiance` from its outside, in world space; under a
+/// transform that does not scale uniformly, the ellipsoid the transform makes
+/// of it.
+#[derive(Clone, Debug)]
 pub struct LightSphere {
     /// Centre.
     pub center: Vec3,
-    /// Radius.
+    /// Radius (of the sphere of the same volume, for an ellipsoid).
     pub radius: f32,
     /// RGB radiance.
     pub radiance: Vec3,
     /// World-space translation over the shutter interval (`MotionBlur`).
     pub motion: Vec3,
+    /// The ellipsoid's map from the unit sphere, when the sphere is stretched.
+    stretch: Option<Arc<Stretch>>,
+}
+
+/// An ellipsoid as `center + L u` over unit vectors `u`. Its points are
+/// sampled as the unit sphere's cone seen from `L⁻¹ (p − center)`, mapped by
+/// `L`: a linear map takes a direction density `p'(ω')` to
+/// `p'(ω') / (|det L| |L⁻¹ ω|³)`, so the sample's density stays exact.
+#[derive(Clone, Debug)]
+struct Stretch {
+    /// `L`: the transform's linear part times the object radius.
+    l: Mat3,
+    /// `L⁻¹`.
+    inv: Mat3,
+    /// `|det L|`.
+    det: f32,
 }
 
 impl LightSphere {
-    /// From the object-space sphere and the object's transform. A transform
-    /// that does not scale uniformly makes an ellipsoid, which this light
-    /// approximates by the sphere of the same volume.
+    /// From the object-space sphere and the object's transform.
     pub fn new(center: Vec3, radius: f32, xf: &Transform, radiance: Vec3) -> LightSphere {
-        let det = xf.matrix().determinant().abs();
-        LightSphere { center: xf.point(center), radius: radius * det.cbrt(), radiance, motion: Vec3::ZERO }
-    }
-
-    /// `cos θmax` and `1 − cos θmax` of the cone the sphere fills seen from a
-    /// point at squared distance `d2` from its centre; `None` from inside.
-    #[inline]
-    fn cone(&self, d2: f32) -> Option<(f32, f32)> {
-        let sin2 = self.radius * self.radius / d2;
-        if sin2 >= 1.0 {
-            return None;
+        let m = xf.matrix();
+        let det = m.determinant().abs();
+        let a = Mat3::from_mat4(m);
+        // A rotation times a uniform scale keeps the sphere round: AᵀA = s² I.
+        let ata = a.transpose() * a;
+        let s2 = det.powf(2.0 / 3.0);
+        let off = (ata - Mat3::from_diagonal(Vec3::splat(s2)))
+            .to_cols_array()
+            .iter()
+            .fold(0f32, |m, x| m.max(x.abs()));
+        let stretch = (off > 1e-5 * s2).then(|| {
+            let l = a * radius;
+            Arc::new(Stretch { l, inv: l.inverse(), det: l.determinant().abs() })
+        });
+        LightSphere {
+            center: xf.point(center),
+            radius: radius * det.cbrt(),
+            radiance,
+            motion: Vec3::ZERO,
+            stretch,
         }
-        let cos = (1.0 - sin2).sqrt();
-        // 1 − cos written without cancellation for small, distant spheres.
-        Some((cos, sin2 / (1.0 + cos)))
     }
 
-    /// A direction from `p` into the sphere's cone from `(u1, u2)`: the unit
-    /// direction, the distance to the sphere along it, and its density.
-    pub fn sample(&self, p: Vec3, (u1, u2): (f32, f32)) -> Option<(Vec3, f32, f32)> {
-        let to_c = self.center - p;
-        let d2 = to_c.length_squared();
-        let (_, one_minus) = self.cone(d2)?;
-        let cos = 1.0 - u1 * one_minus;
-        let sin = (1.0 - cos * cos).max(0.0).sqrt();
-        let (sp, cp) = sin_cos_turns(u2);
-        let axis = to_c / d2.sqrt();
-        let (t, b) = orthonormal_basis(axis);
-        let wi = (t * (sin * cp) + b * (sin * sp) + axis * cos).normalize();
-        // Nearest root of |p + s wi − c|² = R²; at the rim the discriminant
-        // rounds to or below zero, where the tangent distance is the answer.
-        let tc = to_c.dot(wi);
-        let disc = self.radius * self.radius - (d2 - tc * tc);
-        let dist = tc - disc.max(0.0).sqrt();
-        Some((wi, dist.max(0.0), 1.0 / (2.0 * PI * one_minus)))
+    /// The same light moving by `motion` over the shutter interval.
+    pub fn moving(self, motion: Vec3) -> LightSphere {
+        LightSphere { motion, ..self }
+    }
+
+    /// A direction from `p` towards the sphere from `(u1, u2)`: the unit
+    /// direction, the distance to the sphere along it, and its density over
+    /// solid angle. A round sphere is sampled uniformly in the cone it
+    /// subtends; an ellipsoid as its unit sphere's cone (see [`Stretch`]).
+    pub fn sample(&self, p: Vec3, u: (f32, f32)) -> Option<(Vec3, f32, f32)> {
+        let Some(st) = &self.stretch else { return cone_sample(self.center, self.radius, p, u) };
+        let (w, s, pdf) = cone_sample(Vec3::ZERO, 1.0, st.inv * (p - self.center), u)?;
+        let lw = st.l * w;
+        let len = lw.length();
+        Some((lw / len, s * len, pdf * len * len * len / st.det))
     }
 
     /// Solid-angle density of direction `wi` from `p` under
-    /// [`sample`](Self::sample) (0 outside the cone).
+    /// [`sample`](Self::sample) (0 where no sample goes).
     #[inline]
     pub fn pdf(&self, p: Vec3, wi: Vec3) -> f32 {
-        let to_c = self.center - p;
-        let d2 = to_c.length_squared();
-        match self.cone(d2) {
-            Some((cos_max, one_minus)) if to_c.dot(wi) >= cos_max * d2.sqrt() * (1.0 - 1e-6) => {
-                1.0 / (2.0 * PI * one_minus)
-            }
-            _ => 0.0,
+        let Some(st) = &self.stretch else { return cone_pdf(self.center, self.radius, p, wi) };
+        let w = st.inv * wi;
+        let len = w.length();
+        if !(len > 0.0) {
+            return 0.0;
         }
+        cone_pdf(Vec3::ZERO, 1.0, st.inv * (p - self.center), w / len) / (st.det * len * len * len)
+    }
+
+    /// The surface point at `u` on the unit sphere and its outward unit
+    /// normal, at rest.
+    pub fn surface_point(&self, u: Vec3) -> (Vec3, Vec3) {
+        match &self.stretch {
+            None => (self.center + u * self.radius, u),
+            Some(st) => (self.center + st.l * u, (st.inv.transpose() * u).normalize()),
+        }
+    }
+}
+
+/// `cos θmax` and `1 − cos θmax` of the cone a sphere of radius `r` fills
+/// seen from a point at squared distance `d2` from its centre; `None` from
+/// inside.
+#[inline]
+fn cone(r: f32, d2: f32) -> Option<(f32, f32)> {
+    let sin2 = r * r / d2;
+    if sin2 >= 1.0 {
+        return None;
+    }
+    let cos = (1.0 - sin2).sqrt();
+    // 1 − cos written without cancellation for small, distant spheres.
+    Some((cos, sin2 / (1.0 + cos)))
+}
+
+/// A uniform direction from `p` in the cone the sphere `(c, r)` subtends:
+/// the unit direction, the distance to the sphere along it, its density.
+#[inline]
+fn cone_sample(c: Vec3, r: f32, p: Vec3, (u1, u2): (f32, f32)) -> Option<(Vec3, f32, f32)> {
+    let to_c = c - p;
+    let d2 = to_c.length_squared();
+    let (_, one_minus) = cone(r, d2)?;
+    let cos = 1.0 - u1 * one_minus;
+    let sin = (1.0 - cos * cos).max(0.0).sqrt();
+    let (sp, cp) = sin_cos_turns(u2);
+    let axis = to_c / d2.sqrt();
+    let (t, b) = orthonormal_basis(axis);
+    let wi = (t * (sin * cp) + b * (sin * sp) + axis * cos).normalize();
+    // Nearest root of |p + s wi − c|² = R²; at the rim the discriminant
+    // rounds to or below zero, where the tangent distance is the answer.
+    let tc = to_c.dot(wi);
+    let disc = r * r - (d2 - tc * tc);
+    let dist = tc - disc.max(0.0).sqrt();
+    Some((wi, dist.max(0.0), 1.0 / (2.0 * PI * one_minus)))
+}
+
+/// The density of `wi` from `p` under [`cone_sample`] (0 outside the cone).
+#[inline]
+fn cone_pdf(c: Vec3, r: f32, p: Vec3, wi: Vec3) -> f32 {
+    let to_c = c - p;
+    let d2 = to_c.length_squared();
+    match cone(r, d2) {
+        Some((cos_max, one_minus)) if to_c.dot(wi) >= cos_max * d2.sqrt() * (1.0 - 1e-6) => {
+            1.0 / (2.0 * PI * one_minus)
+        }
+        _ => 0.0,
     }
 }
 
@@ -281,10 +357,11 @@ pub struct ShadedLight {
 }
 
 impl ShadedLight {
-    /// A sample towards the object from `origin` (a surface point `p`
-    /// moved off its surface) at shutter `time`: unit direction, distance to
-    /// the sampled point (infinite for spheres, where any first hit on the
-    /// object is the sample), and the density over solid angle.
+    /// A sample towards the object from the point `p` at shutter `time`
+    /// (`origin`, `p` moved off its surface, tells whether a convex mesh
+    /// hides the point): unit direction, distance to the sampled point
+    /// (infinite for spheres, where any first hit on the object is the
+    /// sample), and the density over solid angle, all measured from `p`.
     #[inline]
     pub fn sample(&self, origin: Vec3, p: Vec3, time: f32, u: (f32, f32)) -> Option<(Vec3, f32, f32)> {
         match &self.shape {
@@ -294,13 +371,13 @@ impl ShadedLight {
                 if l.hides(origin, q, nq, time) {
                     return None;
                 }
-                let to = q - origin;
+                let to = q - p;
                 let dist = to.length();
                 let pdf = l.pdf(p, q, nq);
                 (pdf > 0.0 && pdf.is_finite() && dist > 0.0).then_some((to / dist, dist, pdf))
             }
             ShadedShape::Sphere(l) => {
-                let (wi, _, pdf) = l.sample(origin - l.motion * time, u)?;
+                let (wi, _, pdf) = l.sample(p - l.motion * time, u)?;
                 Some((wi, f32::INFINITY, pdf))
             }
         }
@@ -329,8 +406,7 @@ impl ShadedLight {
                         let z = 1.0 - 2.0 * u.0;
                         let r = (1.0 - z * z).max(0.0).sqrt();
                         let (sp, cp) = sin_cos_turns(u.1);
-                        let d = Vec3::new(r * cp, r * sp, z);
-                        (l.center + d * l.radius, d)
+                        l.surface_point(Vec3::new(r * cp, r * sp, z))
                     }
                 }
             })
@@ -482,6 +558,64 @@ mod tests {
                 assert!(off < 1e-5, "probe {q:?} off the surface by {off}");
             }
         }
+    }
+
+    /// A sphere under a non-uniform scale, a rotation and a shear is an
+    /// ellipsoid: its samples land on it, `pdf` gives their density, and
+    /// `Σ 1/pdf` is its solid angle, counted independently by uniform
+    /// directions that hit it.
+    #[test]
+    fn stretched_sphere_samples_cover_the_ellipsoid_with_their_density() {
+        let rot = Transform::rotation(35.0, Vec3::new(1.0, 2.0, 0.5)).expect("rotation");
+        let shear = Transform::from_rows([
+            1.0, 0.4, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.3, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        ])
+        .expect("shear");
+        let scale = Transform::scaling(Vec3::new(4.0, 0.5, 1.5)).expect("scale");
+        let xf = scale.then(&rot).then(&shear).then(&Transform::translation(Vec3::new(0.5, 3.0, -1.0)));
+        let s = LightSphere::new(Vec3::new(0.1, 0.2, 0.0), 0.7, &xf, Vec3::ONE);
+        assert!(s.stretch.is_some());
+        // On the ellipsoid: the object-space point is at the object radius.
+        let on = |q: Vec3| (xf.inv_point(q) - Vec3::new(0.1, 0.2, 0.0)).length() / 0.7;
+        let mut rng = Rng(3);
+        for p in [Vec3::ZERO, Vec3::new(4.0, 3.5, 2.0), Vec3::new(-1.0, 6.0, -3.0)] {
+            let n = 40_000;
+            let mut sum = 0.0f64;
+            for _ in 0..n {
+                let (wi, dist, pdf) = s.sample(p, (rng.next(), rng.next())).expect("outside");
+                assert!((on(p + wi * dist) - 1.0).abs() < 2e-3, "sample off the ellipsoid");
+                assert!((s.pdf(p, wi) - pdf).abs() <= 1e-3 * pdf, "pdf {} against {pdf}", s.pdf(p, wi));
+                sum += 1.0 / f64::from(pdf);
+            }
+            let got = sum / n as f64;
+            // Uniform directions: the share that hits the ellipsoid, times 4π.
+            let (mut hits, m) = (0u32, 400_000);
+            let (po, c) = (xf.inv_point(p), Vec3::new(0.1, 0.2, 0.0));
+            for _ in 0..m {
+                let z = 1.0 - 2.0 * rng.next();
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let (sp, cp) = sin_cos_turns(rng.next());
+                let d = xf.inv_vector(Vec3::new(r * cp, r * sp, z));
+                let (oc, a) = (po - c, d.length_squared());
+                let (b, cc) = (oc.dot(d), oc.length_squared() - 0.49);
+                hits += u32::from(b * b - a * cc >= 0.0 && b < 0.0);
+            }
+            let frac = f64::from(hits) / m as f64;
+            let want = 4.0 * std::f64::consts::PI * frac;
+            let se = 4.0 * std::f64::consts::PI * (frac * (1.0 - frac) / m as f64).sqrt();
+            assert!((got - want).abs() < 4.0 * se + 2e-3 * want, "solid angle {got} against {want} ± {se}");
+            // Directions that miss it have no density.
+            let away = (p - xf.point(c)).normalize();
+            assert_eq!(s.pdf(p, away), 0.0);
+        }
+        // A rotation and a uniform scale keep it round.
+        let round = LightSphere::new(
+            Vec3::ZERO,
+            1.0,
+            &Transform::scaling(Vec3::splat(2.0)).expect("s").then(&rot),
+            Vec3::ONE,
+        );
+        assert!(round.stretch.is_none() && (round.radius - 2.0).abs() < 1e-5);
     }
 
     #[test]

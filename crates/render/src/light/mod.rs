@@ -169,8 +169,8 @@ pub enum Light {
 pub struct LightSample {
     /// Unit direction towards the light.
     pub wi: Vec3,
-    /// Distance to the light along `wi` from the ray origin (infinite for
-    /// directional and environment lights).
+    /// Distance to the light along `wi` from the shading point (infinite
+    /// for directional and environment lights).
     pub dist: f32,
     /// The factor the BRDF terms are multiplied by (see the module doc).
     pub e: Vec3,
@@ -182,10 +182,12 @@ pub struct LightSample {
 }
 
 impl Light {
-    /// Light from this light at a surface point `p` (`origin` is `p` moved
-    /// off the surface, where shadow rays start; `n` the normal when there is
-    /// a surface), for a ray at shutter `time` (a moving object light is
-    /// sampled where it is then). Area and environment lights draw one 2D sample from
+    /// Light from this light at a surface point `p` (`n` the normal when
+    /// there is a surface), for a ray at shutter `time` (a moving object
+    /// light is sampled where it is then). The direction, distance and
+    /// density are measured from `p` itself; `origin`, `p` moved off the
+    /// surface where the shadow ray starts, only tells whether a convex
+    /// light mesh hides the point drawn on it. Area and environment lights draw one 2D sample from
     /// `sampler`; the others draw none, so adding them changes no other
     /// light's samples. `None` when no light arrives. Always inlined: a
     /// sample returned through memory would be read back in wide loads
@@ -230,22 +232,22 @@ impl Light {
     ) -> Option<LightSample> {
         match self {
             Light::Point(l) => {
-                let to = l.position - origin;
+                let to = l.position - p;
                 let dist = to.length();
-                let e = l.intensity / (l.position - p).length_squared();
+                let e = l.intensity / to.length_squared();
                 Some(LightSample { wi: to / dist, dist, e, point_source: true, pdf: 0.0 })
             }
             Light::Spot(l) => {
-                let to = l.position - origin;
-                let dist = to.length();
-                let from_light = p - l.position;
-                let d2 = from_light.length_squared();
-                let s = l.falloff(from_light / d2.sqrt());
+                let to = l.position - p;
+                let d2 = to.length_squared();
+                let dist = d2.sqrt();
+                let wi = to / dist;
+                let s = l.falloff(-wi);
                 if s <= 0.0 {
                     return None;
                 }
                 let e = l.intensity * (s / d2);
-                Some(LightSample { wi: to / dist, dist, e, point_source: true, pdf: 0.0 })
+                Some(LightSample { wi, dist, e, point_source: true, pdf: 0.0 })
             }
             Light::Directional { direction, radiance } => {
                 let (wi, dist) = (-*direction, f32::INFINITY);
@@ -253,20 +255,20 @@ impl Light {
             }
             Light::Area(l) => {
                 let q = l.point(sampler.next_2d());
-                let to = q - origin;
+                let to = q - p;
                 let dist = to.length();
                 let wi = to / dist;
                 let cos_light = l.normal.dot(wi).abs();
                 if cos_light == 0.0 {
                     return None;
                 }
-                let pdf = (q - p).length_squared() / (l.area * cos_light);
+                let pdf = dist * dist / (l.area * cos_light);
                 Some(LightSample { wi, dist, e: l.radiance / pdf, point_source: false, pdf })
             }
             Light::Mesh(l) => l.sample_from(origin, p, l.point(sampler.next_2d()), time),
             Light::Sphere(l) => {
-                // Moving the origin back is moving the sphere forward.
-                let (wi, dist, pdf) = l.sample(origin - l.motion * time, sampler.next_2d())?;
+                // Moving the point back is moving the sphere forward.
+                let (wi, dist, pdf) = l.sample(p - l.motion * time, sampler.next_2d())?;
                 Some(LightSample { wi, dist, e: l.radiance / pdf, point_source: false, pdf })
             }
             Light::Environment(env) => {
@@ -316,7 +318,7 @@ impl LightMesh {
         if self.hides(origin, q, nq, time) {
             return None;
         }
-        let to = q - origin;
+        let to = q - p;
         let dist = to.length();
         let wi = to / dist;
         let pdf = self.pdf(p, q, nq);

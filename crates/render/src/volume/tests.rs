@@ -13,7 +13,7 @@ pub(super) fn desc(volumes: Vec<VolumeDesc>) -> Description {
         shader_libraries: Vec::new(),
         max_recursion_depth: 1,
         background: Vec3::ZERO,
-        shadow_ray_epsilon: 1e-3,
+        shadow_ray_epsilon: Some(1e-3),
         intersection_test_epsilon: 1e-6,
         cameras: Vec::new(),
         ambient_light: Vec3::ZERO,

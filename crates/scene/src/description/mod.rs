@@ -44,8 +44,10 @@ pub struct Description {
     pub max_recursion_depth: u32,
     /// Colour of rays that hit nothing.
     pub background: Vec3,
-    /// Offset of secondary ray origins along the normal.
-    pub shadow_ray_epsilon: f32,
+    /// Offset of secondary ray origins along the normal, where the scene
+    /// sets one; `None` offsets each ray by the size of its hit point's
+    /// coordinates (scale-independent).
+    pub shadow_ray_epsilon: Option<f32>,
     /// Tolerance of intersection tests.
     pub intersection_test_epsilon: f32,
     /// One image per camera.

@@ -184,7 +184,7 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         shader_libraries: Vec::new(),
         max_recursion_depth: 6,
         background: SKY,
-        shadow_ray_epsilon: 1e-4 * radius,
+        shadow_ray_epsilon: None,
         intersection_test_epsilon: 1e-6,
         cameras: vec![camera],
         ambient_light: AMBIENT,

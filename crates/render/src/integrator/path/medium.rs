@@ -44,7 +44,7 @@ pub(super) fn next_event_phase(
         if is_black(ls.e) {
             continue;
         }
-        let tr = shadow(scene, &Ray::new(x, ls.wi), shadow_reach(scene, &ls), st);
+        let tr = shadow(scene, &Ray::new(x, ls.wi), shadow_reach(&ls, scene.offset(x, x)), st);
         if is_black(tr) {
             continue;
         }

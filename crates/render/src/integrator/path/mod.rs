@@ -69,10 +69,10 @@ pub const MAX_MEDIUM_BOUNCES: u32 = 1024;
 enum Came {
     /// From the camera or a perfectly specular bounce: in full.
     Direct,
-    /// From a random bounce whose density was `pdf` (solid angle), off a
-    /// surface whose facing shading normal was `n` (the normal the light
-    /// samples there were drawn for).
-    Bounce { pdf: f32, n: Vec3 },
+    /// From a random bounce whose density was `pdf` (solid angle), off the
+    /// surface point `from` whose facing shading normal was `n` (the point
+    /// and normal the light samples there were drawn for).
+    Bounce { pdf: f32, n: Vec3, from: Vec3 },
     /// Scattered in a medium in a direction drawn from its phase function
     /// with density `pdf` (its light samples were drawn with no normal).
     Scatter { pdf: f32 },
@@ -496,7 +496,7 @@ fn escaped(scene: &Scene, ray: &Ray, came: Came, past: bool, p: PathParams, st: 
         Came::Direct => 1.0,
         // The density of the environment's own sampler (importance, uniform
         // or cosine about the normal), as its light samples were drawn.
-        Came::Bounce { pdf, n } if p.mis => {
+        Came::Bounce { pdf, n, .. } if p.mis => {
             let pick = pick_chance(scene, p, scene.light_pick.environment_pmf());
             power_heuristic(pdf, env.sampling_pdf(Some(n), d) * pick)
         }
@@ -538,7 +538,7 @@ fn shade<const V: u8>(
     };
     let entering = ray.d.dot(hit.ng) < 0.0;
     let (n, ng) = if entering { (ns, hit.ng) } else { (-ns, -hit.ng) };
-    let eps = scene.shadow_epsilon;
+    let eps = scene.offset(hit.p, ray.o);
     let mut color = Vec3::ZERO;
     let inside_dielectric = !entering && matches!(m.kind, Specular::Dielectric { .. });
     // The light samples' first draw, made as soon as the vertex is known to
@@ -586,7 +586,7 @@ fn shade<const V: u8>(
         // Under MIS the last vertex's bounce is traced too, for emission
         // only (see [`past_limit`]).
         if more || p.mis {
-            match bounce(scene, &at, origin, depth, beta, p, st) {
+            match bounce(scene, &at, hit.p, origin, depth, beta, p, st) {
                 // Nothing follows the bounce at this vertex (see [`li`]).
                 Some(b) if defer && matches!(m.kind, Specular::None) => return Shaded::Bounce(color, b),
                 Some(b) => color += b.weight * li::<V>(scene, &b.ray, depth + 1, b.next, b.came, p, st) / b.q,
@@ -629,12 +629,12 @@ fn closure_vertex<const V: u8>(
     p: PathParams,
     st: &mut PathState,
 ) -> Vec3 {
-    let eps = scene.shadow_epsilon;
+    let eps = scene.offset(hit.p, ray.o);
     let mut color = Vec3::ZERO;
     let at = Bsdf::closure(m, lobes, ray.d);
     if !lobes.is_empty() {
         if p.next_event || p.mis {
-            color += next_event_closure(scene, hit, &at, ng, depth, p, st);
+            color += next_event_closure(scene, hit, &at, ng, eps, depth, p, st);
         }
         let more = depth < MAX_BOUNCES && (p.russian_roulette || depth < scene.max_depth);
         if more || p.mis {

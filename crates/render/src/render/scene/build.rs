@@ -105,7 +105,9 @@ impl Scene {
             environment,
             ambient: desc.ambient_light,
             background: desc.background,
-            shadow_epsilon: desc.shadow_ray_epsilon,
+            shadow_epsilon: desc.shadow_ray_epsilon.unwrap_or(0.0),
+            fixed_offset: desc.shadow_ray_epsilon.is_some(),
+            offset_floor: 0.0,
             intersection_epsilon: desc.intersection_test_epsilon,
             max_depth: desc.max_recursion_depth,
             cameras: desc
@@ -129,6 +131,7 @@ impl Scene {
         scene.emitters_alone = scene.only_emitters_shine();
         let bounds = scene.tlas.bounds();
         let radius = 0.5 * (bounds.max - bounds.min).length();
+        scene.offset_floor = if radius.is_finite() { radius / 16.0 } else { 0.0 };
         scene.light_pick = LightPick::by_power(&scene.lights, radius);
         Ok(scene)
     }
@@ -172,10 +175,9 @@ fn add_emitters(
     for e in &desc.emitters {
         let o = &desc.objects[e.object];
         let light = match &o.shape {
-            Shape::Sphere { center, radius } => Light::Sphere(LightSphere {
-                motion: o.motion,
-                ..LightSphere::new(*center, *radius, &o.transform, e.radiance)
-            }),
+            Shape::Sphere { center, radius } => {
+                Light::Sphere(LightSphere::new(*center, *radius, &o.transform, e.radiance).moving(o.motion))
+            }
             Shape::Mesh { .. } => {
                 let m = &meshes[mesh_of_object[&e.object] as usize];
                 match LightMesh::new(m.corners(), &o.transform, e.radiance) {

@@ -20,6 +20,11 @@ use crate::texture::{TexFrame, TexList, Textures};
 use crate::volume::Volumes;
 use luster_core::math::{Aabb, Ray, Transform, Vec2, Vec3};
 use luster_scene::Warning;
+
+/// Units in the last place of a hit's coordinates that a ray leaving it is
+/// offset by in a scene without a `ShadowRayEpsilon` ([`Scene::offset`]):
+/// the rounding of `o + t d` is a few of them.
+pub const OFFSET_ULPS: f32 = 32.0;
 use std::sync::Arc;
 
 mod build;
@@ -189,8 +194,14 @@ pub struct Scene {
     pub ambient: Vec3,
     /// Colour of rays that miss.
     pub background: Vec3,
-    /// Offset of secondary ray origins.
+    /// Offset of secondary ray origins, where the scene sets one
+    /// (`fixed_offset`); see [`Scene::offset`].
     pub shadow_epsilon: f32,
+    /// Whether the scene set `shadow_epsilon`.
+    pub fixed_offset: bool,
+    /// The smallest coordinate size [`Scene::offset`] scales from: a
+    /// sixteenth of the scene's radius.
+    pub offset_floor: f32,
     /// Smallest accepted hit distance.
     pub intersection_epsilon: f32,
     /// Bounces after the camera ray.
@@ -266,6 +277,23 @@ impl Scene {
             HitGeom::Volume(_) => None,
         };
         self.volumes.interior_of(object?)
+    }
+
+    /// How far off the surface a ray leaving the hit point `p` starts, for
+    /// a hit found by a ray from `o`: the scene's `ShadowRayEpsilon` where
+    /// it sets one; else [`OFFSET_ULPS`] units in the last place of the
+    /// largest coordinate involved (`p`'s, `o`'s, or a sixteenth of the
+    /// scene's radius). `p = o + t d` is rounded to a few units of that
+    /// size, so the offset clears the rounding at any scale, and a shadow
+    /// ray stopping that far short of its light ends off the light's
+    /// surface.
+    #[inline(always)]
+    pub fn offset(&self, p: Vec3, o: Vec3) -> f32 {
+        if self.fixed_offset {
+            return self.shadow_epsilon;
+        }
+        let size = p.abs().max(o.abs()).max_element().max(self.offset_floor);
+        size * (OFFSET_ULPS * f32::EPSILON)
     }
 
     /// The indices a shader sees as `s.object_id` and `s.instance_id`: the

@@ -45,10 +45,9 @@ impl Scene {
                     }
                     None => continue,
                 },
-                Geom::Sphere(s) => ShadedShape::Sphere(LightSphere {
-                    motion: p.motion,
-                    ..LightSphere::new(s.center, s.radius, &xf, Vec3::ZERO)
-                }),
+                Geom::Sphere(s) => ShadedShape::Sphere(
+                    LightSphere::new(s.center, s.radius, &xf, Vec3::ZERO).moving(p.motion),
+                ),
                 Geom::Ellipsoid(_) => continue,
             };
             found.push(ShadedLight { shape, prim: pi as u32, probed_max: 0.0 });

@@ -9,8 +9,8 @@ use super::{every_light, pick_chance, Came, LightAhead, PathParams};
 use crate::bsdf::diffuse_pdf;
 use crate::bsdf::{Bsdf, Flags};
 use crate::integrator::media;
-use crate::integrator::{is_black, light_reaching_from, shadow_reach, surface_at, PathState, Surface};
-use crate::light::{Light, LightSample, ShadedLight};
+use crate::integrator::{is_black, light_reaching_from, shadow_ray, surface_at, PathState, Surface};
+use crate::light::{Light, ShadedLight};
 use crate::render::scene::{Hit, Scene};
 use luster_core::math::{Ray, Vec3, Vec3A};
 
@@ -73,7 +73,7 @@ fn next_event_any(
         // A point drawn ahead is taken only where every light is sampled
         // (`lights` is then all of them).
         let reaching = LightAhead::sample(ahead, i, light, origin, hit.p, at.n, st)
-            .and_then(|ls| light_reaching_from(scene, ls, origin, at.n, st));
+            .and_then(|ls| light_reaching_from(scene, ls, origin, hit.p, at.n, st));
         let Some((ls, cos, tr)) = reaching else {
             continue;
         };
@@ -110,18 +110,20 @@ pub(super) fn lights_to_sample<'s>(
 /// [`next_event`] at a vertex whose material is a shader's closure: the
 /// light samples are drawn from the hit point, and a light behind the
 /// surface counts where a lobe transmits, its shadow ray leaving from the
-/// far side (`ng` is the geometric normal on the viewer's side).
+/// far side (`ng` is the geometric normal on the viewer's side, `eps` the
+/// offset off the surface).
+#[allow(clippy::too_many_arguments)]
 #[inline(never)]
 pub(super) fn next_event_closure(
     scene: &Scene,
     hit: &Hit,
     at: &Bsdf,
     ng: Vec3,
+    eps: f32,
     depth: u32,
     p: PathParams,
     st: &mut PathState,
 ) -> Vec3 {
-    let eps = scene.shadow_epsilon;
     let front = hit.p + ng * eps;
     let transmits = at.flags().contains(Flags::TRANSMISSION);
     let mut color = Vec3::ZERO;
@@ -143,17 +145,9 @@ pub(super) fn next_event_closure(
         if is_black(f) {
             continue;
         }
-        // The shadow ray aims at the sampled point from its own origin, off
-        // the surface on the light's side: the reach is measured from there.
-        let ray = if ls.dist.is_finite() {
-            let to = hit.p + ls.wi * ls.dist - origin;
-            let dist = to.length();
-            let reach = shadow_reach(scene, &LightSample { dist, ..ls });
-            (Ray::new(origin, to / dist), reach)
-        } else {
-            (Ray::new(origin, ls.wi), ls.dist)
-        };
-        let tr = media::shadow(scene, &ray.0, ray.1, st);
+        // The shadow ray leaves from the light's side of the surface.
+        let (ray, reach) = shadow_ray(scene, origin, hit.p, &ls);
+        let tr = media::shadow(scene, &ray, reach, st);
         if is_black(tr) {
             continue;
         }
@@ -201,9 +195,9 @@ fn next_event_diffuse<const MIS: bool>(
         if cos <= 0.0 || is_black(ls.e) {
             continue;
         }
-        let t_max = shadow_reach(scene, &ls);
+        let (ray, t_max) = shadow_ray(scene, origin, hit.p, &ls);
         st.stats.shadow += 1;
-        if scene.occluded(&Ray::new(origin, ls.wi), t_max, st.time) {
+        if scene.occluded(&ray, t_max, st.time) {
             continue;
         }
         if MIS {
@@ -251,10 +245,17 @@ pub(super) fn shaded_sample(
     let u = st.sampler.next_2d();
     let Some((wi, dist, pdf)) = l.sample(origin, x, st.time, u) else { return Vec3::ZERO };
     let Some((f, bsdf_pdf)) = f(wi) else { return Vec3::ZERO };
-    let r = Ray::new(origin, wi);
+    // Aimed at a mesh's sampled point from the offset origin.
+    let (r, dist) = if dist.is_finite() {
+        let to = x + wi * dist - origin;
+        let d = to.length();
+        (Ray::new(origin, to / d), d)
+    } else {
+        (Ray::new(origin, wi), dist)
+    };
     st.stats.shadow += 1;
     let Some(h) = scene.intersect(&r, st.time, false) else { return Vec3::ZERO };
-    let eps = scene.shadow_epsilon;
+    let eps = scene.offset(h.p, origin);
     // Another part of the same mesh in front of the sampled point blocks it
     // (that part is a sample of its own).
     if scene.prim_of(&h) != Some(l.prim) || (dist.is_finite() && h.t < dist * (1.0 - 1e-3) - eps) {
@@ -298,7 +299,9 @@ pub(super) fn hit_weight(
         Came::Direct => 1.0,
         Came::Bounce { pdf, .. } | Came::Scatter { pdf } if p.mis => {
             let pick = pick_chance(scene, p, scene.light_pick.pmf(li));
-            power_heuristic(pdf, pick * light_pdf(&scene.lights[li], ray.o, hit, ray.d, time))
+            // Measured from the point the light samples were drawn at.
+            let from = if let Came::Bounce { from, .. } = came { from } else { ray.o };
+            power_heuristic(pdf, pick * light_pdf(&scene.lights[li], from, hit, ray.d, time))
         }
         Came::Bounce { .. } | Came::Scatter { .. } if p.next_event => 0.0,
         Came::Bounce { .. } | Came::Scatter { .. } => 1.0,

@@ -67,7 +67,7 @@ fn the_constant_brdf_light_samples_are_the_general_ones() {
             let (n, ng) = if entering { (ns, hit.ng) } else { (-ns, -hit.ng) };
             let at = Bsdf::new(&m, n, ray.d);
             assert!(at.f.is_some() && m.traits.diffuse_only, "ray {k}: every surface is diffuse only");
-            let origin = hit.p + ng * scene.shadow_epsilon;
+            let origin = hit.p + ng * scene.offset(hit.p, ray.o);
             // The light box's point drawn ahead (as `shade` does), or in turn.
             let (mut fast, mut general, mut any) = (st.clone(), st.clone(), st);
             let ahead = LightAhead::draw(&scene, p, &mut fast);

@@ -12,14 +12,16 @@ use crate::render::scene::{Hit, Scene};
 use luster_core::math::{Ray, Vec3};
 
 /// The random bounce: a direction drawn as the variant says, its weight
-/// `f cos / p`, and Russian roulette when asked for; `None` where it brings
-/// no light (its light would count as zero). Inlined into [`shade`] (see
+/// `f cos / p`, and Russian roulette when asked for, from the surface point
+/// `from` (the ray leaves from `origin`, `from` moved off the surface);
+/// `None` where it brings no light (its light would count as zero). Inlined into [`shade`] (see
 /// there).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn bounce(
     scene: &Scene,
     bsdf: &Bsdf,
+    from: Vec3,
     origin: Vec3,
     depth: u32,
     beta: Vec3,
@@ -61,7 +63,7 @@ pub(super) fn bounce(
     if !st.spawn(next.max_element()) {
         return None;
     }
-    Some(Bounce { ray, weight, q, next, came: Came::Bounce { pdf, n: bsdf.n } })
+    Some(Bounce { ray, weight, q, next, came: Came::Bounce { pdf, n: bsdf.n, from } })
 }
 
 /// [`bounce`] off a shader closure: a lobe is always chosen, and a
@@ -102,7 +104,7 @@ pub(super) fn bounce_through(
     if !st.spawn(next.max_element()) {
         return None;
     }
-    Some(Bounce { ray, weight, q, next, came: Came::Bounce { pdf, n: bsdf.n } })
+    Some(Bounce { ray, weight, q, next, came: Came::Bounce { pdf, n: bsdf.n, from: p_hit } })
 }
 
 /// Mirror, conductor and dielectric rays, as the recursive ray tracer sends
@@ -121,7 +123,7 @@ pub(super) fn specular<const V: u8>(
     p: PathParams,
     st: &mut PathState,
 ) -> Vec3 {
-    let eps = scene.shadow_epsilon;
+    let eps = scene.offset(hit.p, ray.o);
     let cos_i = -ray.d.dot(n);
     let r = m.roughness;
     let trace = |st: &mut PathState, o: Vec3, d: Vec3, k: Vec3| -> Vec3 {

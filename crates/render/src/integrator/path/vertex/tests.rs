@@ -38,7 +38,7 @@ fn a_last_bounce_that_misses_the_emitters_brings_no_light() {
         }
         skipped += 1;
         let mut st = PathState::new(RayStats::default(), 0.0, PixelSampler::new(3, k % 8, k / 8, 0, 16));
-        let came = Came::Bounce { pdf: 0.5, n: -ray.d };
+        let came = Came::Bounce { pdf: 0.5, n: -ray.d, from: ray.o };
         let l = li::<0>(&scene, &ray, scene.max_depth, Vec3::ONE, came, p, &mut st);
         assert_eq!(l, Vec3::ZERO, "ray {k}");
     }
@@ -72,7 +72,7 @@ fn past_the_depth_limit_the_background_is_no_light() {
     let p = PathParams { mis: true, ..PathParams::default() };
     // From outside the box, away from it: the ray finds nothing.
     let ray = Ray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::Z);
-    let came = Came::Bounce { pdf: 0.5, n: Vec3::Z };
+    let came = Came::Bounce { pdf: 0.5, n: Vec3::Z, from: Vec3::ZERO };
     let mut st = PathState::new(RayStats::default(), 0.0, PixelSampler::new(3, 0, 0, 0, 16));
     let within = li::<8>(&scene, &ray, scene.max_depth, Vec3::ONE, came, p, &mut st);
     let past = li::<8>(&scene, &ray, scene.max_depth + 1, Vec3::ONE, came, p, &mut st);
