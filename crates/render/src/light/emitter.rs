@@ -154,6 +154,21 @@ impl LightMesh {
         }
         d2 / (self.area() * cos)
     }
+
+    /// The world-space box of the mesh at rest, as its lower and upper
+    /// corners (a light tree's bounds; `motion` not included).
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.tris.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &[a, e1, e2, _]| {
+            let (b, c) = (a + e1, a + e2);
+            (lo.min(a).min(b).min(c), hi.max(a).max(b).max(c))
+        })
+    }
+
+    /// Each triangle's unit normal (outward where the mesh is a convex
+    /// shell; the mesh emits from both faces either way).
+    pub fn normals(&self) -> impl Iterator<Item = Vec3> + '_ {
+        self.tris.iter().map(|t| t[3])
+    }
 }
 
 /// How many of the blocks' values are at most `target`: a compare and a
@@ -324,6 +339,13 @@ fn cone_pdf(c: Vec3, r: f32, p: Vec3, wi: Vec3) -> f32 {
             1.0 / (2.0 * PI * one_minus)
         }
         _ => 0.0,
+    }
+
+    /// The world-space box of the sphere at rest, centre ± radius, as its
+    /// lower and upper corners (`motion` not included).
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let r = Vec3::splat(self.radius);
+        (self.center - r, self.center + r)
     }
 }
 

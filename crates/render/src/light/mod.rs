@@ -37,6 +37,7 @@ pub mod emitter;
 pub mod environment;
 pub mod pick;
 mod shell;
+pub mod tree;
 
 pub use emitter::{LightMesh, LightSphere, ShadedLight, ShadedShape};
 pub use environment::Environment;
