@@ -284,6 +284,17 @@ impl LightSphere {
         cone_pdf(Vec3::ZERO, 1.0, st.inv * (p - self.center), w / len) / (st.det * len * len * len)
     }
 
+    /// The world-space box of the sphere (or ellipsoid) at rest, as its
+    /// lower and upper corners (`motion` not included). An ellipsoid
+    /// `c + L u` reaches `|row i of L|` from its centre along axis `i`.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let r = match &self.stretch {
+            None => Vec3::splat(self.radius),
+            Some(st) => Vec3::new(st.l.row(0).length(), st.l.row(1).length(), st.l.row(2).length()),
+        };
+        (self.center - r, self.center + r)
+    }
+
     /// The surface point at `u` on the unit sphere and its outward unit
     /// normal, at rest.
     pub fn surface_point(&self, u: Vec3) -> (Vec3, Vec3) {
@@ -339,13 +350,6 @@ fn cone_pdf(c: Vec3, r: f32, p: Vec3, wi: Vec3) -> f32 {
             1.0 / (2.0 * PI * one_minus)
         }
         _ => 0.0,
-    }
-
-    /// The world-space box of the sphere at rest, centre ± radius, as its
-    /// lower and upper corners (`motion` not included).
-    pub fn bounds(&self) -> (Vec3, Vec3) {
-        let r = Vec3::splat(self.radius);
-        (self.center - r, self.center + r)
     }
 }
 

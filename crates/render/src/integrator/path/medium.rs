@@ -30,7 +30,7 @@ pub(super) fn next_event_phase(
     st: &mut PathState,
 ) -> Vec3 {
     let mut color = Vec3::ZERO;
-    let Some((lights, scale)) = lights_to_sample(scene, p, st) else { return Vec3::ZERO };
+    let Some((lights, scale)) = lights_to_sample(scene, p, x, None, st) else { return Vec3::ZERO };
     let phase = |wi: Vec3| {
         let f = henyey_greenstein(wi.dot(d), g);
         Some((Vec3::splat(f), f))

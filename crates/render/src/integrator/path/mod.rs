@@ -496,12 +496,12 @@ fn escaped(scene: &Scene, ray: &Ray, came: Came, past: bool, p: PathParams, st: 
         Came::Direct => 1.0,
         // The density of the environment's own sampler (importance, uniform
         // or cosine about the normal), as its light samples were drawn.
-        Came::Bounce { pdf, n, .. } if p.mis => {
-            let pick = pick_chance(scene, p, scene.light_pick.environment_pmf());
+        Came::Bounce { pdf, n, from } if p.mis => {
+            let pick = scene.environment_light.map_or(0.0, |i| pick_chance(scene, p, i, from, Some(n)));
             power_heuristic(pdf, env.sampling_pdf(Some(n), d) * pick)
         }
         Came::Scatter { pdf } if p.mis => {
-            let pick = pick_chance(scene, p, scene.light_pick.environment_pmf());
+            let pick = scene.environment_light.map_or(0.0, |i| pick_chance(scene, p, i, ray.o, None));
             power_heuristic(pdf, env.sampling_pdf(None, d) * pick)
         }
         Came::Bounce { .. } | Came::Scatter { .. } if p.next_event => 0.0,

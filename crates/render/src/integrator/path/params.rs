@@ -6,6 +6,7 @@
 
 use crate::bsdf::Strategy;
 use crate::render::scene::Scene;
+use luster_core::math::Vec3;
 use luster_scene::description::LightSamples;
 
 /// The path tracer's switches (the course's `<RendererParams>` words).
@@ -114,15 +115,16 @@ pub(super) fn every_light(scene: &Scene, p: PathParams) -> bool {
     }
 }
 
-/// The chance that MIS's light sampling takes a light at a hit, whose
-/// chance of being chosen by power is `by_power`: 1 where every light is
-/// sampled.
+/// The chance that MIS's light sampling takes light `i` (an index into the
+/// scene's lights) at a vertex at `x` whose light samples were drawn for
+/// the normal `n`: 1 where every light is sampled, else the light tree's
+/// chance there.
 #[inline]
-pub(super) fn pick_chance(scene: &Scene, p: PathParams, by_power: f32) -> f32 {
+pub(super) fn pick_chance(scene: &Scene, p: PathParams, i: usize, x: Vec3, n: Option<Vec3>) -> f32 {
     if every_light(scene, p) {
         1.0
     } else {
-        by_power
+        scene.light_tree.pmf(i, x, n)
     }
 }
 

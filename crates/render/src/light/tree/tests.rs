@@ -100,12 +100,7 @@ fn random_lights(rng: &mut Rng, count: usize) -> Vec<Light> {
                     m.motion = motion;
                     Light::Mesh(Arc::new(m))
                 }
-                4 => Light::Sphere(LightSphere {
-                    center: c,
-                    radius: 0.1 + rng.next(),
-                    radiance: Vec3::splat(bright),
-                    motion,
-                }),
+                4 => Light::Sphere(LightSphere::new(c, 0.1 + rng.next(), &Transform::IDENTITY, Vec3::splat(bright)).moving(motion)),
                 5 => {
                     let shape = if k % 16 == 5 {
                         let mut m = random_mesh(rng, c, 2, 0.0);
@@ -113,7 +108,7 @@ fn random_lights(rng: &mut Rng, count: usize) -> Vec<Light> {
                         ShadedShape::Mesh(m)
                     } else {
                         let radius = 0.1 + rng.next();
-                        ShadedShape::Sphere(LightSphere { center: c, radius, radiance: Vec3::ZERO, motion })
+                        ShadedShape::Sphere(LightSphere::new(c, radius, &Transform::IDENTITY, Vec3::ZERO).moving(motion))
                     };
                     Light::Shaded(Arc::new(ShadedLight { shape, prim: 0, probed_max: bright }))
                 }
@@ -357,12 +352,7 @@ fn hidden_and_averted_lights_get_nothing_and_the_near_beats_the_far() {
         point(Vec3::new(0.3, 1.0, 0.0), 1.0),
         point(Vec3::new(3.0, 10.0, -1.0), 1.0),
         Light::Spot(spot(Vec3::new(1.0, 2.0, 0.0), -Vec3::Y, 5.0, 60.0, 40.0)),
-        Light::Sphere(LightSphere {
-            center: Vec3::new(-4.0, -3.0, 2.0),
-            radius: 0.5,
-            radiance: Vec3::ONE,
-            motion: Vec3::ZERO,
-        }),
+        Light::Sphere(LightSphere::new(Vec3::new(-4.0, -3.0, 2.0), 0.5, &Transform::IDENTITY, Vec3::ONE)),
     ];
     let tree = LightTree::build(&lights, 20.0);
     let pmf: Vec<f32> = (0..lights.len()).map(|i| tree.pmf(i, p, n)).collect();
@@ -405,17 +395,17 @@ fn bounds_hold_moving_lights_mesh_normals_and_both_cones() {
         let c = in_cube(&mut rng, 10.0);
         let mut mesh = random_mesh(&mut rng, c, 1 + k % 6, 1.0);
         mesh.motion = motion;
-        let sphere = LightSphere { center: c, radius: 0.1 + rng.next(), radiance: Vec3::ONE, motion };
+        let sphere = LightSphere::new(c, 0.1 + rng.next(), &Transform::IDENTITY, Vec3::ONE).moving(motion);
         let lights = [
             Light::Mesh(Arc::new(mesh.clone())),
-            Light::Sphere(sphere),
+            Light::Sphere(sphere.clone()),
             Light::Shaded(Arc::new(ShadedLight {
                 shape: ShadedShape::Mesh(mesh.clone()),
                 prim: 0,
                 probed_max: 1.0,
             })),
             Light::Shaded(Arc::new(ShadedLight {
-                shape: ShadedShape::Sphere(sphere),
+                shape: ShadedShape::Sphere(sphere.clone()),
                 prim: 0,
                 probed_max: 1.0,
             })),
@@ -490,7 +480,7 @@ fn degenerate_scenes_choose_consistently_without_nan() {
 
     let black = [
         point(at, 0.0),
-        Light::Sphere(LightSphere { center: at, radius: 1.0, radiance: Vec3::ZERO, motion: Vec3::ZERO }),
+        Light::Sphere(LightSphere::new(at, 1.0, &Transform::IDENTITY, Vec3::ZERO)),
     ];
     let tree = LightTree::build(&black, 10.0);
     assert!(us.iter().all(|&u| tree.choose(u, Vec3::ZERO, None).is_none()));

@@ -5,7 +5,8 @@ use super::{Geom, Prim, Scene};
 use crate::accel::Bvh;
 use crate::geometry::mesh::{vertex_normals, welded_vertex_normals};
 use crate::geometry::{Ellipsoid, Mesh, Plane, Sphere};
-use crate::light::{AreaLight, Environment, Light, LightMesh, LightPick, LightSphere, PointLight, SpotLight};
+use crate::light::tree::LightTree;
+use crate::light::{AreaLight, Environment, Light, LightMesh, LightSphere, PointLight, SpotLight};
 use crate::material::Material;
 use crate::render::camera::Camera;
 use crate::texture::{shader, Image, TexList, Textures};
@@ -101,7 +102,8 @@ impl Scene {
             materials: desc.materials.iter().map(Material::from_desc).collect(),
             lights,
             emitters,
-            light_pick: LightPick::default(),
+            light_tree: LightTree::default(),
+            environment_light: None,
             environment,
             ambient: desc.ambient_light,
             background: desc.background,
@@ -132,7 +134,8 @@ impl Scene {
         let bounds = scene.tlas.bounds();
         let radius = 0.5 * (bounds.max - bounds.min).length();
         scene.offset_floor = if radius.is_finite() { radius / 16.0 } else { 0.0 };
-        scene.light_pick = LightPick::by_power(&scene.lights, radius);
+        scene.light_tree = LightTree::build(&scene.lights, radius);
+        scene.environment_light = scene.lights.iter().position(|l| matches!(l, Light::Environment(_)));
         Ok(scene)
     }
 }

@@ -13,7 +13,8 @@
 use crate::accel::triangle::WatertightRay;
 use crate::accel::{Bvh, TriHit};
 use crate::geometry::{Ellipsoid, Mesh, Plane, Sphere};
-use crate::light::{Environment, Light, LightPick};
+use crate::light::tree::LightTree;
+use crate::light::{Environment, Light};
 use crate::material::Material;
 use crate::render::camera::Camera;
 use crate::texture::{TexFrame, TexList, Textures};
@@ -188,8 +189,11 @@ pub struct Scene {
     pub environment: Option<Arc<Environment>>,
     /// How many of [`lights`](Self::lights) are emitting objects.
     pub emitters: usize,
-    /// The chance the MIS path tracer samples each light, by power.
-    pub light_pick: LightPick,
+    /// Which light the MIS path tracer samples at a point when it samples
+    /// one.
+    pub light_tree: LightTree,
+    /// The environment's index in `lights`.
+    pub environment_light: Option<usize>,
     /// Ambient light.
     pub ambient: Vec3,
     /// Colour of rays that miss.

@@ -64,7 +64,7 @@ fn next_event_any(
     st: &mut PathState,
 ) -> Vec3A {
     let mut color = Vec3::ZERO;
-    let Some((lights, scale)) = lights_to_sample(scene, p, st) else { return Vec3A::ZERO };
+    let Some((lights, scale)) = lights_to_sample(scene, p, hit.p, Some(at.n), st) else { return Vec3A::ZERO };
     for (i, light) in lights.iter().enumerate() {
         if let Light::Shaded(l) = light {
             color += shaded_sample(scene, l, hit.p, &surface(at, p), origin, depth, scale, p, st);
@@ -85,19 +85,22 @@ fn next_event_any(
     color.into()
 }
 
-/// The lights a vertex samples and the scale of each one's estimate. MIS
-/// takes every light of a scene with few ([`every_light`]), else one per
-/// hit, chosen by power (scaled by one over its chance): a shadow ray per
-/// hit whatever the number of lights. The course's variant samples them
-/// all. `None` where the chosen light cannot be chosen.
+/// The lights a vertex at `x` (normal `n`, on a surface) samples and the
+/// scale of each one's estimate. MIS takes every light of a scene with few
+/// ([`every_light`]), else one per hit, chosen by the light tree for that
+/// point (scaled by one over its chance): a shadow ray per hit whatever the
+/// number of lights. The course's variant samples them all. `None` where
+/// no light is chosen.
 #[inline(always)]
 pub(super) fn lights_to_sample<'s>(
     scene: &'s Scene,
     p: PathParams,
+    x: Vec3,
+    n: Option<Vec3>,
     st: &mut PathState,
 ) -> Option<(&'s [Light], f32)> {
     if p.mis && !every_light(scene, p) {
-        let (i, pick) = scene.light_pick.choose(st.sampler.next_1d());
+        let (i, pick) = scene.light_tree.choose(st.sampler.next_1d(), x, n)?;
         if pick <= 0.0 {
             return None;
         }
@@ -127,7 +130,7 @@ pub(super) fn next_event_closure(
     let front = hit.p + ng * eps;
     let transmits = at.flags().contains(Flags::TRANSMISSION);
     let mut color = Vec3::ZERO;
-    let Some((lights, scale)) = lights_to_sample(scene, p, st) else { return Vec3::ZERO };
+    let Some((lights, scale)) = lights_to_sample(scene, p, hit.p, Some(at.n), st) else { return Vec3::ZERO };
     for light in lights {
         if let Light::Shaded(l) = light {
             color += shaded_sample(scene, l, hit.p, &surface(at, p), front, depth, scale, p, st);
@@ -298,9 +301,9 @@ pub(super) fn hit_weight(
     match came {
         Came::Direct => 1.0,
         Came::Bounce { pdf, .. } | Came::Scatter { pdf } if p.mis => {
-            let pick = pick_chance(scene, p, scene.light_pick.pmf(li));
             // Measured from the point the light samples were drawn at.
-            let from = if let Came::Bounce { from, .. } = came { from } else { ray.o };
+            let (from, n) = if let Came::Bounce { from, n, .. } = came { (from, Some(n)) } else { (ray.o, None) };
+            let pick = pick_chance(scene, p, li, from, n);
             power_heuristic(pdf, pick * light_pdf(&scene.lights[li], from, hit, ray.d, time))
         }
         Came::Bounce { .. } | Came::Scatter { .. } if p.next_event => 0.0,
