@@ -178,13 +178,15 @@ pub(crate) fn light_reaching_inline(
     n: Vec3,
     st: &mut PathState,
 ) -> Option<(LightSample, f32, Vec3)> {
-    light_reaching_from(scene, light.sample(origin, p, Some(n), st.time, &mut st.sampler)?, origin, p, n, st)
+    let ls = light.sample(origin, p, Some(n), st.time, &mut st.sampler)?;
+    light_reaching_from(scene, light, ls, origin, p, n, st)
 }
 
 /// [`light_reaching_inline`] for the light sample `ls` already made.
 #[inline(always)]
 pub(crate) fn light_reaching_from(
     scene: &Scene,
+    light: &Light,
     ls: LightSample,
     origin: Vec3,
     p: Vec3,
@@ -195,24 +197,39 @@ pub(crate) fn light_reaching_from(
     if cos <= 0.0 || is_black(ls.e) {
         return None;
     }
-    let (ray, t_max) = shadow_ray(scene, origin, p, &ls);
+    let (ray, t_max) = shadow_ray(scene, light, origin, p, &ls, st.time);
     let tr = media::shadow(scene, &ray, t_max, st);
     (!is_black(tr)).then_some((ls, cos, tr))
 }
 
-/// The shadow ray of the light sample `ls` drawn at `p`, leaving from
-/// `origin` (`p` moved off its surface), and how far it reaches: aimed at
-/// the sampled point itself where it is at a finite distance, so that the
-/// offset moves where the ray starts, never what the sample measured.
+/// The shadow ray of the light sample `ls` of `light` drawn at `p` for a
+/// ray at shutter `time`, leaving from `origin` (`p` moved off its
+/// surface), and how far it reaches: aimed at the sampled point itself
+/// where it is at a finite distance, so that the offset moves where the ray
+/// starts, never what the sample measured. Seen from the offset origin, a
+/// point near a sphere light's rim may lie just behind it: the ray then
+/// stops where it enters the sphere.
 #[inline(always)]
-pub(crate) fn shadow_ray(scene: &Scene, origin: Vec3, p: Vec3, ls: &LightSample) -> (Ray, f32) {
+pub(crate) fn shadow_ray(
+    scene: &Scene,
+    light: &Light,
+    origin: Vec3,
+    p: Vec3,
+    ls: &LightSample,
+    time: f32,
+) -> (Ray, f32) {
     if !ls.dist.is_finite() {
         return (Ray::new(origin, ls.wi), ls.dist);
     }
-    let to = p + ls.wi * ls.dist - origin;
-    let dist = to.length();
-    let eps = scene.offset(p + ls.wi * ls.dist, origin);
-    (Ray::new(origin, to / dist), shadow_reach(&LightSample { dist, ..*ls }, eps))
+    let q = p + ls.wi * ls.dist;
+    let to = q - origin;
+    let mut dist = to.length();
+    let d = to / dist;
+    if let Light::Sphere(s) = light {
+        dist = s.entry(origin - s.motion * time, d).map_or(dist, |t| t.min(dist));
+    }
+    let eps = scene.offset(q, origin);
+    (Ray::new(origin, d), shadow_reach(&LightSample { dist, ..*ls }, eps))
 }
 
 /// How far the shadow ray of the light sample `ls` reaches, for the offset

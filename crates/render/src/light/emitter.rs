@@ -295,6 +295,21 @@ impl LightSphere {
         (self.center - r, self.center + r)
     }
 
+    /// Where the ray from `o` along the unit `d` enters the sphere (at
+    /// rest), if it does: a shadow ray aimed from a surface's offset origin
+    /// at a point sampled from the surface itself may pass through the
+    /// sphere's rim first, and must stop there, not be blocked by it.
+    pub fn entry(&self, o: Vec3, d: Vec3) -> Option<f32> {
+        let (oc, d) = match &self.stretch {
+            None => ((o - self.center) / self.radius, d / self.radius),
+            Some(st) => (st.inv * (o - self.center), st.inv * d),
+        };
+        // |oc + t d|² = 1, nearest root.
+        let (a, b, c) = (d.length_squared(), oc.dot(d), oc.length_squared() - 1.0);
+        let disc = b * b - a * c;
+        (disc >= 0.0 && c > 0.0).then(|| (-b - disc.sqrt()) / a).filter(|t| *t > 0.0)
+    }
+
     /// The surface point at `u` on the unit sphere and its outward unit
     /// normal, at rest.
     pub fn surface_point(&self, u: Vec3) -> (Vec3, Vec3) {
@@ -386,8 +401,8 @@ impl ShadedLight {
     /// A sample towards the object from the point `p` at shutter `time`
     /// (`origin`, `p` moved off its surface, tells whether a convex mesh
     /// hides the point): unit direction, distance to the sampled point
-    /// (infinite for spheres, where any first hit on the object is the
-    /// sample), and the density over solid angle, all measured from `p`.
+    /// (on a sphere, any first hit on the object counts as the sample), and
+    /// the density over solid angle, all measured from `p`.
     #[inline]
     pub fn sample(&self, origin: Vec3, p: Vec3, time: f32, u: (f32, f32)) -> Option<(Vec3, f32, f32)> {
         match &self.shape {
@@ -402,10 +417,7 @@ impl ShadedLight {
                 let pdf = l.pdf(p, q, nq);
                 (pdf > 0.0 && pdf.is_finite() && dist > 0.0).then_some((to / dist, dist, pdf))
             }
-            ShadedShape::Sphere(l) => {
-                let (wi, _, pdf) = l.sample(p - l.motion * time, u)?;
-                Some((wi, f32::INFINITY, pdf))
-            }
+            ShadedShape::Sphere(l) => l.sample(p - l.motion * time, u),
         }
     }
 

@@ -7,7 +7,7 @@
 //! |---|---|---|
 //! | `MaxRecursionDepth` | reflection/refraction bounces, at most [`MAX_RECURSION_DEPTH`] | 6 |
 //! | `BackgroundColor` | RGB of rays that miss | 0 0 0 |
-//! | `ShadowRayEpsilon` | offset of secondary ray origins | 32 units in the last place of the hit's coordinates |
+//! | `ShadowRayEpsilon` | offset of secondary ray origins; `auto`: 32 units in the last place of the hit's coordinates (`Scene::offset`) | 1e-3 (the course's images depend on it) |
 //! | `IntersectionTestEpsilon` | intersection tolerance | 1e-6 |
 //! | `Cameras/Camera` | see [`camera`] | required |
 //! | `Lights` (ambient, point, area, directional, spot, environment) | see [`lights`] | none |
@@ -255,11 +255,11 @@ fn max_recursion_depth(r: &Reader, root: &Element) -> Result<u32, SceneError> {
     })
 }
 
-/// `<ShadowRayEpsilon>` (`None` when absent) and `<IntersectionTestEpsilon>`,
-/// neither negative.
+/// `<ShadowRayEpsilon>` (the course's 1e-3 when absent, `None` for `auto`)
+/// and `<IntersectionTestEpsilon>`, neither negative.
 fn epsilons(r: &Reader, root: &Element) -> Result<(Option<f32>, f32), SceneError> {
-    let given = root.child("ShadowRayEpsilon").is_some();
-    let shadow_ray_epsilon = r.float_or(root, "ShadowRayEpsilon", 0.0)?;
+    let auto = root.child("ShadowRayEpsilon").is_some_and(|e| e.text.trim().eq_ignore_ascii_case("auto"));
+    let shadow_ray_epsilon = if auto { 0.0 } else { r.float_or(root, "ShadowRayEpsilon", 1e-3)? };
     let intersection_test_epsilon = r.float_or(root, "IntersectionTestEpsilon", 1e-6)?;
     for (name, v) in
         [("ShadowRayEpsilon", shadow_ray_epsilon), ("IntersectionTestEpsilon", intersection_test_epsilon)]
@@ -268,7 +268,7 @@ fn epsilons(r: &Reader, root: &Element) -> Result<(Option<f32>, f32), SceneError
             return Err(r.err(root.child(name).unwrap_or(root), format!("<{name}> must not be negative")));
         }
     }
-    Ok((given.then_some(shadow_ray_epsilon), intersection_test_epsilon))
+    Ok(((!auto).then_some(shadow_ray_epsilon), intersection_test_epsilon))
 }
 
 /// `<ShaderLibrary>` folders, relative to the scene file's folder.

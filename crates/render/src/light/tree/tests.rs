@@ -100,7 +100,10 @@ fn random_lights(rng: &mut Rng, count: usize) -> Vec<Light> {
                     m.motion = motion;
                     Light::Mesh(Arc::new(m))
                 }
-                4 => Light::Sphere(LightSphere::new(c, 0.1 + rng.next(), &Transform::IDENTITY, Vec3::splat(bright)).moving(motion)),
+                4 => Light::Sphere(
+                    LightSphere::new(c, 0.1 + rng.next(), &Transform::IDENTITY, Vec3::splat(bright))
+                        .moving(motion),
+                ),
                 5 => {
                     let shape = if k % 16 == 5 {
                         let mut m = random_mesh(rng, c, 2, 0.0);
@@ -108,7 +111,9 @@ fn random_lights(rng: &mut Rng, count: usize) -> Vec<Light> {
                         ShadedShape::Mesh(m)
                     } else {
                         let radius = 0.1 + rng.next();
-                        ShadedShape::Sphere(LightSphere::new(c, radius, &Transform::IDENTITY, Vec3::ZERO).moving(motion))
+                        ShadedShape::Sphere(
+                            LightSphere::new(c, radius, &Transform::IDENTITY, Vec3::ZERO).moving(motion),
+                        )
                     };
                     Light::Shaded(Arc::new(ShadedLight { shape, prim: 0, probed_max: bright }))
                 }
@@ -478,10 +483,7 @@ fn degenerate_scenes_choose_consistently_without_nan() {
         assert_eq!(one.pmf(0, p - Vec3::X, Some(Vec3::X)), 1.0);
     }
 
-    let black = [
-        point(at, 0.0),
-        Light::Sphere(LightSphere::new(at, 1.0, &Transform::IDENTITY, Vec3::ZERO)),
-    ];
+    let black = [point(at, 0.0), Light::Sphere(LightSphere::new(at, 1.0, &Transform::IDENTITY, Vec3::ZERO))];
     let tree = LightTree::build(&black, 10.0);
     assert!(us.iter().all(|&u| tree.choose(u, Vec3::ZERO, None).is_none()));
     assert_eq!(tree.pmf(0, Vec3::ZERO, None) + tree.pmf(1, Vec3::ZERO, None), 0.0);

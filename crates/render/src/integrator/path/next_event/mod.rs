@@ -10,7 +10,7 @@ use crate::bsdf::diffuse_pdf;
 use crate::bsdf::{Bsdf, Flags};
 use crate::integrator::media;
 use crate::integrator::{is_black, light_reaching_from, shadow_ray, surface_at, PathState, Surface};
-use crate::light::{Light, ShadedLight};
+use crate::light::{Light, ShadedLight, ShadedShape};
 use crate::render::scene::{Hit, Scene};
 use luster_core::math::{Ray, Vec3, Vec3A};
 
@@ -73,7 +73,7 @@ fn next_event_any(
         // A point drawn ahead is taken only where every light is sampled
         // (`lights` is then all of them).
         let reaching = LightAhead::sample(ahead, i, light, origin, hit.p, at.n, st)
-            .and_then(|ls| light_reaching_from(scene, ls, origin, hit.p, at.n, st));
+            .and_then(|ls| light_reaching_from(scene, light, ls, origin, hit.p, at.n, st));
         let Some((ls, cos, tr)) = reaching else {
             continue;
         };
@@ -149,7 +149,7 @@ pub(super) fn next_event_closure(
             continue;
         }
         // The shadow ray leaves from the light's side of the surface.
-        let (ray, reach) = shadow_ray(scene, origin, hit.p, &ls);
+        let (ray, reach) = shadow_ray(scene, light, origin, hit.p, &ls, st.time);
         let tr = media::shadow(scene, &ray, reach, st);
         if is_black(tr) {
             continue;
@@ -198,7 +198,7 @@ fn next_event_diffuse<const MIS: bool>(
         if cos <= 0.0 || is_black(ls.e) {
             continue;
         }
-        let (ray, t_max) = shadow_ray(scene, origin, hit.p, &ls);
+        let (ray, t_max) = shadow_ray(scene, light, origin, hit.p, &ls, st.time);
         st.stats.shadow += 1;
         if scene.occluded(&ray, t_max, st.time) {
             continue;
@@ -248,20 +248,17 @@ pub(super) fn shaded_sample(
     let u = st.sampler.next_2d();
     let Some((wi, dist, pdf)) = l.sample(origin, x, st.time, u) else { return Vec3::ZERO };
     let Some((f, bsdf_pdf)) = f(wi) else { return Vec3::ZERO };
-    // Aimed at a mesh's sampled point from the offset origin.
-    let (r, dist) = if dist.is_finite() {
-        let to = x + wi * dist - origin;
-        let d = to.length();
-        (Ray::new(origin, to / d), d)
-    } else {
-        (Ray::new(origin, wi), dist)
-    };
+    // Aimed at the sampled point from the offset origin.
+    let to = x + wi * dist - origin;
+    let d = to.length();
+    let (r, dist) = (Ray::new(origin, to / d), d);
     st.stats.shadow += 1;
     let Some(h) = scene.intersect(&r, st.time, false) else { return Vec3::ZERO };
     let eps = scene.offset(h.p, origin);
     // Another part of the same mesh in front of the sampled point blocks it
-    // (that part is a sample of its own).
-    if scene.prim_of(&h) != Some(l.prim) || (dist.is_finite() && h.t < dist * (1.0 - 1e-3) - eps) {
+    // (that part is a sample of its own); a sphere's rim may come first.
+    let mesh = matches!(l.shape, ShadedShape::Mesh(_));
+    if scene.prim_of(&h) != Some(l.prim) || (mesh && h.t < dist * (1.0 - 1e-3) - eps) {
         return Vec3::ZERO;
     }
     let vols = &scene.volumes;
@@ -302,7 +299,8 @@ pub(super) fn hit_weight(
         Came::Direct => 1.0,
         Came::Bounce { pdf, .. } | Came::Scatter { pdf } if p.mis => {
             // Measured from the point the light samples were drawn at.
-            let (from, n) = if let Came::Bounce { from, n, .. } = came { (from, Some(n)) } else { (ray.o, None) };
+            let (from, n) =
+                if let Came::Bounce { from, n, .. } = came { (from, Some(n)) } else { (ray.o, None) };
             let pick = pick_chance(scene, p, li, from, n);
             power_heuristic(pdf, pick * light_pdf(&scene.lights[li], from, hit, ray.d, time))
         }
