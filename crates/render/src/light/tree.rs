@@ -14,7 +14,7 @@
 //! | spot | its position | its axis | 0 | coverage/2 | no |
 //! | square area | its corners | its normal | 0 | π/2 | yes |
 //! | mesh | its triangles | mean normal | widest normal | π/2 | yes |
-//! | sphere | centre ± radius | any | π | π/2 | no |
+//! | sphere | its box (an ellipsoid's when stretched) | any | π | π/2 | no |
 //! | emissive shader | as its shape, with the largest emission probed | | | | |
 //!
 //! Boxes of a moving (`MotionBlur`) mesh or sphere cover both ends of the
