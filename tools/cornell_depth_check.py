@@ -59,6 +59,8 @@ def main():
     ap.add_argument("--variant", default="llvm_ad_rgb")
     ap.add_argument("--work", default="/tmp/cornell_depth")
     ap.add_argument("--only", choices=["mitsuba", "luster"], default=None)
+    ap.add_argument("--epsilon", default=None,
+                    help="a <ShadowRayEpsilon> for luster's copy of the scene (e.g. auto; the course's file sets none)")
     a = ap.parse_args()
     os.makedirs(a.work, exist_ok=True)
     sys.path.insert(0, ANCHORS)
@@ -79,6 +81,10 @@ def main():
                     else:
                         scene = os.path.join(a.work, f"luster_d{d}.xml")
                         write_luster_xml(scene, a.spp, res=a.res, depth=d, image=os.path.basename(out))
+                        if a.epsilon:
+                            text = open(scene).read().replace(
+                                "<Scene>", f"<Scene><ShadowRayEpsilon>{a.epsilon}</ShadowRayEpsilon>", 1)
+                            open(scene, "w").write(text)
                         cmd = [a.luster, "render", scene, "-o", a.work, "-q", "-t", "2", "--seed", str(seed)]
                         subprocess.run(cmd, check=True)
                 imgs[(r, seed)] = load_exr(out) if os.path.exists(out) else None

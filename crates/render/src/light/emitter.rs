@@ -278,7 +278,7 @@ impl LightSphere {
         let Some(st) = &self.stretch else { return cone_pdf(self.center, self.radius, p, wi) };
         let w = st.inv * wi;
         let len = w.length();
-        if !(len > 0.0) {
+        if len.is_nan() || len <= 0.0 {
             return 0.0;
         }
         cone_pdf(Vec3::ZERO, 1.0, st.inv * (p - self.center), w / len) / (st.det * len * len * len)

@@ -1,10 +1,6 @@
-//! Which light the MIS path tracer samples at a hit when it samples one (a
-//! scene with more than four lights, or `OneLight`; with fewer it samples
-//! them all): chosen with probability proportional to its emitted power, so
-//! a bright lamp gets its shadow rays and a dim fill light few (pbrt's
-//! "power light sampler"). The chance of the choice enters every MIS weight, so the
-//! estimate is unbiased for any positive choice of probabilities; power
-//! only lowers the variance.
+//! Each light's emitted power, which the light tree ([`super::tree`]) ranks
+//! lights by, and [`LightPick`], a choice by power alone (pbrt's "power
+//! light sampler"), the baseline the tree's tests compare against.
 //!
 //! Power by light, with `L` the radiance (mean of its RGB components), `I`
 //! the intensity, `A` the area and `r` the radius of the scene's bounds:
@@ -20,8 +16,9 @@
 //! | emissive shader | as its shape, with the largest emission the probes found |
 //!
 //! The course's variants sample every light at every hit and never pick;
-//! only luster's `MIS` mode uses this table. Where the powers cannot rank the
-//! lights (all zero, or one infinite) the choice is uniform.
+//! only luster's `MIS` mode, through the tree, uses this table. Where the
+//! powers cannot rank the lights (all zero, or one infinite) [`LightPick`]'s
+//! choice is uniform.
 
 use super::{Light, ShadedShape};
 use luster_core::math::Vec3;
