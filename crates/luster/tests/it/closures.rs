@@ -5,21 +5,15 @@
 //! tracer's approximation, and bad closures as one-sentence errors.
 
 use crate::common::{two_seed_mean, white_sky};
-use luster::render::{render_with, RenderOptions, RenderedImage, Scene};
+use luster::render::RenderedImage;
 use luster::scene::Description;
 use std::path::Path;
 
 fn load(dir: &Path, text: &str, shader: &str) -> Description {
-    std::fs::write(dir.join("m.lua"), shader).expect("temp shader");
-    let p = dir.join("s.xml");
-    std::fs::write(&p, text).expect("temp file");
-    luster::scene::load(&p).expect("scene loads")
+    crate::common::load_with(dir, text, &[("m.lua", shader)])
 }
 
-fn render(desc: &Description, spp: u32, seed: u32) -> RenderedImage {
-    let scene = Scene::build(desc).expect("scene builds");
-    render_with(&scene, 0, &RenderOptions { spp: Some(spp), seed, ..Default::default() }, &|_| {})
-}
+use crate::common::render_spp as render;
 
 /// A unit sphere at the origin, its material the closure of `m.lua`, seen
 /// from +z under the white sky, by `renderer`.

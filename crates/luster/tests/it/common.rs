@@ -95,3 +95,23 @@ pub fn two_seed_mean(a: &[f64], b: &[f64]) -> (f64, f64) {
     let mean = (a.iter().sum::<f64>() + b.iter().sum::<f64>()) / (2.0 * n);
     (mean, (var / (2.0 * n)).sqrt())
 }
+
+/// Writes `files` (name, text) and the scene `text` as `s.xml` into `dir`,
+/// and loads the scene.
+#[allow(dead_code)]
+pub fn load_with(dir: &Path, text: &str, files: &[(&str, &str)]) -> luster::scene::Description {
+    for (name, body) in files {
+        std::fs::write(dir.join(name), body).expect("temp file");
+    }
+    let p = dir.join("s.xml");
+    std::fs::write(&p, text).expect("temp file");
+    luster::scene::load(&p).expect("scene loads")
+}
+
+/// The first camera's image of `desc` at `spp` samples per pixel and `seed`.
+#[allow(dead_code)]
+pub fn render_spp(desc: &luster::scene::Description, spp: u32, seed: u32) -> luster::render::RenderedImage {
+    use luster::render::{render_with, RenderOptions, Scene};
+    let scene = Scene::build(desc).expect("scene builds");
+    render_with(&scene, 0, &RenderOptions { spp: Some(spp), seed, ..Default::default() }, &|_| {})
+}

@@ -12,7 +12,6 @@
 //! directional, square area, environment).
 
 use crate::common::two_seed_mean;
-use luster::render::{render_with, RenderOptions, RenderedImage, Scene};
 use luster::scene::Description;
 use std::path::Path;
 
@@ -82,16 +81,10 @@ fn path_tracer(params: &str) -> String {
 }
 
 fn load(dir: &Path, text: &str) -> Description {
-    std::fs::write(dir.join("glow.lua"), GLOW).expect("temp shader");
-    let p = dir.join("s.xml");
-    std::fs::write(&p, text).expect("temp file");
-    luster::scene::load(&p).expect("scene loads")
+    crate::common::load_with(dir, text, &[("glow.lua", GLOW)])
 }
 
-fn render(desc: &Description, spp: u32, seed: u32) -> RenderedImage {
-    let scene = Scene::build(desc).expect("scene builds");
-    render_with(&scene, 0, &RenderOptions { spp: Some(spp), seed, ..Default::default() }, &|_| {})
-}
+use crate::common::render_spp as render;
 
 /// Each block's mean luminance and its standard error, from two seeds.
 fn blocks(desc: &Description, spp: u32) -> Vec<(f64, f64)> {

@@ -3,23 +3,10 @@
 //! with the analytic irradiance in the path tracer, shows as itself in the
 //! recursive ray tracer, and a roughness output widens a highlight.
 
-use luster::render::{render_with, RenderOptions, RenderedImage, Scene};
+use luster::render::{RenderedImage, Scene};
 use luster::scene::Description;
-use std::path::Path;
 
-fn load(dir: &Path, text: &str, shaders: &[(&str, &str)]) -> Description {
-    for (name, code) in shaders {
-        std::fs::write(dir.join(name), code).expect("temp shader");
-    }
-    let p = dir.join("s.xml");
-    std::fs::write(&p, text).expect("temp file");
-    luster::scene::load(&p).expect("scene loads")
-}
-
-fn render(desc: &Description, spp: u32, seed: u32) -> RenderedImage {
-    let scene = Scene::build(desc).expect("scene builds");
-    render_with(&scene, 0, &RenderOptions { spp: Some(spp), seed, ..Default::default() }, &|_| {})
-}
+use crate::common::{load_with as load, render_spp as render};
 
 /// A diffuse floor (albedo 0.5, normalized Phong: `ρ/π`) under a sphere of
 /// radius 0.5 centred 2 above the origin whose only light is a shader's

@@ -7,23 +7,10 @@
 //! phase-function bounces.
 
 use crate::common::{two_seed_mean, white_sky};
-use luster::render::{render_with, RenderOptions, RenderedImage, Scene};
+use luster::render::RenderedImage;
 use luster::scene::Description;
-use std::path::Path;
 
-fn load(dir: &Path, text: &str, files: &[(&str, &str)]) -> Description {
-    for (name, body) in files {
-        std::fs::write(dir.join(name), body).expect("temp file");
-    }
-    let p = dir.join("s.xml");
-    std::fs::write(&p, text).expect("temp file");
-    luster::scene::load(&p).expect("scene loads")
-}
-
-fn render(desc: &Description, spp: u32, seed: u32) -> RenderedImage {
-    let scene = Scene::build(desc).expect("scene builds");
-    render_with(&scene, 0, &RenderOptions { spp: Some(spp), seed, ..Default::default() }, &|_| {})
-}
+use crate::common::{load_with as load, render_spp as render};
 
 const MIS: &str = "<Renderer>PathTracing</Renderer><RendererParams>MIS RussianRoulette</RendererParams>";
 

@@ -149,9 +149,14 @@ pub(crate) fn chi_square(mut draw: impl FnMut() -> Option<Vec3>, pdf: impl Fn(Ve
     expected.push(0.0);
     let inside: f64 = expected[..bins].iter().sum();
     expected[bins] = (CHI_N as f64 - inside).max(0.0);
+    chi_square_p(&observed, &expected)
+}
 
+/// The chi-square p-value of `observed` counts against `expected` ones;
+/// bins expecting fewer than 5 are pooled into one.
+pub(crate) fn chi_square_p(observed: &[f64], expected: &[f64]) -> f64 {
     let (mut stat, mut dof, mut pool_o, mut pool_e) = (0.0, 0usize, 0.0, 0.0);
-    for (o, e) in observed.iter().zip(&expected) {
+    for (o, e) in observed.iter().zip(expected) {
         if *e < 5.0 {
             pool_o += o;
             pool_e += e;
@@ -164,7 +169,7 @@ pub(crate) fn chi_square(mut draw: impl FnMut() -> Option<Vec3>, pdf: impl Fn(Ve
         stat += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
         dof += 1;
     } else if pool_o > 20.0 {
-        // Many samples where the density says there are none.
+        // Many samples where the expectation says there are none.
         return 0.0;
     }
     gamma_q((dof.max(2) - 1) as f64 / 2.0, stat / 2.0)

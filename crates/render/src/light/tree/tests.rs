@@ -4,7 +4,7 @@
 //! what they bound (moving lights, mesh normals, cone unions).
 
 use super::*;
-use crate::bsdf::lobe::tests::{gamma_q, sidak};
+use crate::bsdf::lobe::tests::{chi_square_p, sidak};
 use crate::light::test_rng::Rng;
 use crate::light::{AreaLight, Environment, LightPick, PointLight, ShadedLight, SpotLight};
 use crate::texture::Image;
@@ -251,28 +251,6 @@ fn chances_sum_to_one_less_the_dead_ends_and_match_a_full_walk() {
         })
         .sum();
     assert!(floor / 500.0 < 0.01, "dead ends take {} of the choices on a floor", floor / 500.0);
-}
-
-/// The chi-square p-value of counts of `choose` (the last bin: nothing)
-/// against the expected counts; bins expecting fewer than 5 are pooled.
-fn chi_square_p(observed: &[f64], expected: &[f64]) -> f64 {
-    let (mut stat, mut dof, mut pool_o, mut pool_e) = (0.0, 0usize, 0.0, 0.0);
-    for (o, e) in observed.iter().zip(expected) {
-        if *e < 5.0 {
-            pool_o += o;
-            pool_e += e;
-        } else {
-            stat += (o - e) * (o - e) / e;
-            dof += 1;
-        }
-    }
-    if pool_e >= 5.0 {
-        stat += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
-        dof += 1;
-    } else if pool_o > 20.0 {
-        return 0.0;
-    }
-    gamma_q((dof.max(2) - 1) as f64 / 2.0, stat / 2.0)
 }
 
 /// Stratified draws of `choose` land on each light as often as its pmf
