@@ -262,7 +262,9 @@ impl LightSphere {
     /// A direction from `p` towards the sphere from `(u1, u2)`: the unit
     /// direction, the distance to the sphere along it, and its density over
     /// solid angle. A round sphere is sampled uniformly in the cone it
-    /// subtends; an ellipsoid as its unit sphere's cone (see [`Stretch`]).
+    /// subtends; an ellipsoid as its unit sphere's cone mapped onto it, the
+    /// density divided by `|det L| |L⁻¹ ω|³` (`L` its map from the unit
+    /// sphere).
     pub fn sample(&self, p: Vec3, u: (f32, f32)) -> Option<(Vec3, f32, f32)> {
         let Some(st) = &self.stretch else { return cone_sample(self.center, self.radius, p, u) };
         let (w, s, pdf) = cone_sample(Vec3::ZERO, 1.0, st.inv * (p - self.center), u)?;
