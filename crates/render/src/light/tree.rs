@@ -162,37 +162,49 @@ impl LightBounds {
     /// smallest angle between `n` and a direction into the box's bounding
     /// sphere.
     pub fn importance(&self, p: Vec3, n: Option<Vec3>) -> f32 {
-        let pc = self.bounds.center();
-        let to_p = p - pc;
+        self.importance_from(&Sphere::of(self), p, n)
+    }
+
+    /// [`importance`](Self::importance) with the box's bounding sphere and
+    /// `sin θo` worked out ahead (a node keeps them: a choice evaluates
+    /// two nodes a level).
+    #[inline]
+    fn importance_from(&self, s: &Sphere, p: Vec3, n: Option<Vec3>) -> f32 {
+        let (r, r2) = (s.radius, s.radius * s.radius);
+        let to_p = p - s.center;
         let dist2 = to_p.length_squared();
         // A NaN or infinitely far point (`max` below would drop a NaN).
         if !dist2.is_finite() {
             return 0.0;
         }
-        let r = 0.5 * self.bounds.extent().length();
-        let d2 = dist2.max(r * r);
-        let wi = to_p.normalize_or_zero();
+        let d2 = dist2.max(r2);
+        let inv_d = if dist2 > 0.0 { dist2.sqrt().recip() } else { 0.0 };
+        let wi = to_p * inv_d;
         // The cone of directions from `p` into the box's bounding sphere,
         // everything from inside it.
-        let (cos_b, sin_b) = if dist2 <= r * r {
+        let (cos_b, sin_b) = if dist2 <= r2 {
             (-1.0, 0.0)
         } else {
-            let sin2 = r * r / dist2;
-            ((1.0 - sin2).max(0.0).sqrt(), sin2.sqrt())
+            let sin_b = r * inv_d;
+            (safe_sqrt(1.0 - sin_b * sin_b), sin_b)
         };
-        let mut cos_w = self.w.dot(wi);
-        if self.two_sided {
-            cos_w = cos_w.abs();
-        }
-        let sin_w = safe_sqrt(1.0 - cos_w * cos_w);
-        let sin_o = safe_sqrt(1.0 - self.cos_theta_o * self.cos_theta_o);
-        let (cos_x, sin_x) = angle_less((cos_w, sin_w), (self.cos_theta_o, sin_o));
-        let (cos_p, _) = angle_less((cos_x, sin_x), (cos_b, sin_b));
+        // Lights that shine every way (θo = π) face every point.
+        let cos_p = if self.cos_theta_o <= -1.0 {
+            1.0
+        } else {
+            let mut cos_w = self.w.dot(wi);
+            if self.two_sided {
+                cos_w = cos_w.abs();
+            }
+            let sin_w = safe_sqrt(1.0 - cos_w * cos_w);
+            let (cos_x, sin_x) = angle_less((cos_w, sin_w), (self.cos_theta_o, s.sin_theta_o));
+            angle_less((cos_x, sin_x), (cos_b, sin_b)).0
+        };
         let cos_e = self.cos_theta_e;
         if cos_p <= cos_e {
             return 0.0;
         }
-        let mut v = self.phi * ((cos_p - cos_e) / (1.0 - cos_e)) / d2;
+        let mut v = self.phi * ((cos_p - cos_e) * s.inv_one_minus_cos_e) / d2;
         if let Some(n) = n {
             // A box wholly behind the surface sends nothing: tested on the
             // box itself, tighter than the sphere's cone below, so a node
@@ -343,8 +355,46 @@ enum Slot {
 struct Node {
     /// Bounds of every light under it.
     bounds: LightBounds,
+    /// Its box's bounding sphere and `sin θo`.
+    sphere: Sphere,
     /// What it is.
     kind: Kind,
+}
+
+impl Node {
+    fn new(bounds: LightBounds, kind: Kind) -> Node {
+        Node { bounds, sphere: Sphere::of(&bounds), kind }
+    }
+
+    /// [`LightBounds::importance`] of the node.
+    #[inline]
+    fn importance(&self, p: Vec3, n: Option<Vec3>) -> f32 {
+        self.bounds.importance_from(&self.sphere, p, n)
+    }
+}
+
+/// What [`LightBounds::importance`] derives from the bounds alone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Sphere {
+    /// The box's centre.
+    center: Vec3,
+    /// Half its diagonal.
+    radius: f32,
+    /// `sin θo`.
+    sin_theta_o: f32,
+    /// `1 / (1 − cos θe)`.
+    inv_one_minus_cos_e: f32,
+}
+
+impl Sphere {
+    fn of(b: &LightBounds) -> Sphere {
+        Sphere {
+            center: b.bounds.center(),
+            radius: 0.5 * b.bounds.extent().length(),
+            sin_theta_o: safe_sqrt(1.0 - b.cos_theta_o * b.cos_theta_o),
+            inv_one_minus_cos_e: 1.0 / (1.0 - b.cos_theta_e),
+        }
+    }
 }
 
 /// A leaf or an interior node.
@@ -408,12 +458,12 @@ impl LightTree {
     fn build_node(&mut self, items: &mut [(usize, LightBounds)], trail: u64, depth: u32) -> LightBounds {
         let at = self.nodes.len();
         if let [(i, b)] = items {
-            self.nodes.push(Node { bounds: *b, kind: Kind::Leaf(*i) });
+            self.nodes.push(Node::new(*b, Kind::Leaf(*i)));
             self.slots[*i] = Slot::Tree { trail, depth };
             return *b;
         }
         // A placeholder until the children's bounds are known.
-        self.nodes.push(Node { bounds: items[0].1, kind: Kind::Leaf(items[0].0) });
+        self.nodes.push(Node::new(items[0].1, Kind::Leaf(items[0].0)));
         let mid = split(items, depth);
         let (first, second) = items.split_at_mut(mid);
         let a = self.build_node(first, trail, depth + 1);
@@ -421,7 +471,7 @@ impl LightTree {
         debug_assert!(depth < 64, "the bit trail holds 64 levels");
         let b = self.build_node(second, trail | 1 << depth, depth + 1);
         let bounds = a.union(&b);
-        self.nodes[at] = Node { bounds, kind: Kind::Interior(second_at) };
+        self.nodes[at] = Node::new(bounds, Kind::Interior(second_at));
         bounds
     }
 
@@ -429,8 +479,13 @@ impl LightTree {
     /// `(p, n)`: the tree gets nothing where its root's importance is zero.
     #[inline]
     fn shares(&self, p: Vec3, n: Option<Vec3>) -> (f32, f32) {
-        let lit = self.nodes.first().is_some_and(|r| r.bounds.importance(p, n) > 0.0);
-        match (self.infinite.is_empty(), lit) {
+        let root = self.nodes.first();
+        // Without infinite lights an interior root's importance decides
+        // nothing the walk would not: where it is 0, so are its children's.
+        if self.infinite.is_empty() && root.is_some_and(|r| matches!(r.kind, Kind::Interior(_))) {
+            return (0.0, 1.0);
+        }
+        match (self.infinite.is_empty(), root.is_some_and(|r| r.importance(p, n) > 0.0)) {
             (true, true) => (0.0, 1.0),
             (true, false) => (0.0, 0.0),
             (false, true) => (self.infinite_share, self.tree_share),
@@ -442,8 +497,8 @@ impl LightTree {
     /// `second`) at `(p, n)`; `None` where neither child can be chosen.
     #[inline]
     fn first_share(&self, at: usize, second: usize, p: Vec3, n: Option<Vec3>) -> Option<f32> {
-        let i0 = self.nodes[at + 1].bounds.importance(p, n);
-        let i1 = self.nodes[second].bounds.importance(p, n);
+        let i0 = self.nodes[at + 1].importance(p, n);
+        let i1 = self.nodes[second].importance(p, n);
         let sum = i0 + i1;
         (sum > 0.0).then(|| i0 / sum)
     }
