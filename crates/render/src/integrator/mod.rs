@@ -222,14 +222,21 @@ pub(crate) fn shadow_ray(
         return (Ray::new(origin, ls.wi), ls.dist);
     }
     let q = p + ls.wi * ls.dist;
-    let to = q - origin;
-    let mut dist = to.length();
-    let d = to / dist;
+    let (ray, mut dist) = aimed(origin, q);
+    let d = ray.d;
     if let Light::Sphere(s) = light {
         dist = s.entry(origin - s.motion * time, d).map_or(dist, |t| t.min(dist));
     }
     let eps = scene.offset(q, origin);
-    (Ray::new(origin, d), shadow_reach(&LightSample { dist, ..*ls }, eps))
+    (ray, shadow_reach(&LightSample { dist, ..*ls }, eps))
+}
+
+/// The ray from `origin` towards `target`, and the distance between them.
+#[inline(always)]
+pub(crate) fn aimed(origin: Vec3, target: Vec3) -> (Ray, f32) {
+    let to = target - origin;
+    let dist = to.length();
+    (Ray::new(origin, to / dist), dist)
 }
 
 /// How far the shadow ray of the light sample `ls` reaches, for the offset

@@ -35,13 +35,12 @@
 pub mod distribution;
 pub mod emitter;
 pub mod environment;
-pub mod pick;
+pub mod power;
 mod shell;
 pub mod tree;
 
 pub use emitter::{LightMesh, LightSphere, ShadedLight, ShadedShape};
 pub use environment::Environment;
-pub use pick::LightPick;
 
 use crate::render::sampler::PixelSampler;
 use luster_core::math::{orthonormal_basis, Vec3};

@@ -1,10 +1,9 @@
 //! A light BVH ("light tree"): one of many lights chosen by its estimated contribution at a point.
 //!
-//! The spatially aware alternative to [`LightPick`](super::LightPick)'s
-//! choice by power (Conty Estevez and Kulla 2018, "Importance Sampling of
+//! The spatially aware alternative to a choice by power alone (Conty Estevez and Kulla 2018, "Importance Sampling of
 //! Many Lights with Adaptive Tree Splitting"; pbrt-v4's `BVHLightSampler`).
 //! Every bounded light gets a [`LightBounds`]: a world box, its power `φ`
-//! ([`pick::power`]), and a cone of emission — the normals lie within `θo`
+//! ([`power::power`]), and a cone of emission — the normals lie within `θo`
 //! of an axis `w`, and each point emits within `θe` of its normal (or of
 //! `±w` when two-sided):
 //!
@@ -49,7 +48,7 @@
 //! the unit normal of the side that receives light; pass `None` where light
 //! may arrive from behind (a transmitting BSDF, a medium).
 
-use super::{pick, Light, LightMesh, LightSphere, ShadedShape};
+use super::{power, Light, LightMesh, LightSphere, ShadedShape};
 use luster_core::math::{Aabb, Vec3};
 use std::f32::consts::PI;
 
@@ -73,7 +72,7 @@ const CONE_MARGIN: f32 = 1e-5;
 pub struct LightBounds {
     /// World box (covering the whole motion of a moving light).
     pub bounds: Aabb,
-    /// Emitted power ([`pick::power`]), summed over the lights.
+    /// Emitted power ([`power::power`]), summed over the lights.
     pub phi: f32,
     /// Unit axis of the cone of emitter normals.
     pub w: Vec3,
@@ -89,7 +88,7 @@ impl LightBounds {
     /// The bounds of a light in a scene of bounds radius `scene_radius` (for
     /// the power); `None` for directional and environment lights.
     pub fn of(light: &Light, scene_radius: f32) -> Option<LightBounds> {
-        let phi = pick::power(light, scene_radius);
+        let phi = power::power(light, scene_radius);
         let all_round = |bounds| LightBounds {
             bounds,
             phi,
@@ -423,7 +422,7 @@ pub struct LightTree {
 
 impl LightTree {
     /// The tree over `lights` in a scene whose bounds have radius
-    /// `scene_radius` (for the powers of [`pick::power`]). Deterministic:
+    /// `scene_radius` (for the powers of [`power::power`]). Deterministic:
     /// the same lights give the same tree.
     pub fn build(lights: &[Light], scene_radius: f32) -> LightTree {
         let mut slots = vec![Slot::Absent; lights.len()];

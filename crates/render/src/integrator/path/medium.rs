@@ -18,7 +18,7 @@ use std::f32::consts::PI;
 
 /// The light that the lights send from `x` towards `-d` (`d` the direction
 /// the path arrived along), scattered by a medium of asymmetry `g`: one
-/// sample of each light (or of one chosen by power), shadowed by surfaces
+/// sample of each light (or of one chosen by the light tree), shadowed by surfaces
 /// and attenuated by media.
 pub(super) fn next_event_phase(
     scene: &Scene,

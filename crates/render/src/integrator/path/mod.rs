@@ -14,7 +14,7 @@
 //! | `ImportanceSampling` | cosine-weighted bounces, `p = cos/π` |
 //! | `NextEventEstimation` | every light sampled at every hit; an emitter a bounce then hits adds nothing (it was counted already) |
 //! | `RussianRoulette` | no depth limit but [`MAX_BOUNCES`] ([`MAX_MEDIUM_BOUNCES`] in a scene with media): a path goes on with probability `q = min(1, max(throughput))` and its estimate is divided by `q` |
-//! | `MIS` (luster) | bounces drawn from the BSDF; every light sampled per hit in a scene with at most four (`AllLights`: always), else one, chosen by power ([`crate::light::pick`]; `OneLight`: always), its estimate divided by the chance of choosing it; light and bounce samples both count, weighed by the power heuristic `p_a² / (p_a² + p_b²)` with the light's density times the chance of choosing it; the environment light is sampled and hit alike |
+//! | `MIS` (luster) | bounces drawn from the BSDF; every light sampled per hit in a scene with at most four (`AllLights`: always), else one, chosen by the light tree for the point ([`crate::light::tree`]; `OneLight`: always), its estimate divided by the chance of choosing it; light and bounce samples both count, weighed by the power heuristic `p_a² / (p_a² + p_b²)` with the light's density times the chance of choosing it; the environment light is sampled and hit alike |
 //!
 //! Without `RussianRoulette` a path ends after `MaxRecursionDepth` bounces,
 //! as the course's reflections do. Mirrors, conductors and dielectrics are

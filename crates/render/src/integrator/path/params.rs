@@ -97,7 +97,7 @@ macro_rules! by_variant {
 pub(super) use by_variant;
 
 /// Under MIS, a scene with at most this many lights has every one sampled
-/// at every hit ([`LightSamples::Auto`]); with more, one is chosen by power.
+/// at every hit ([`LightSamples::Auto`]); with more, one is chosen by the light tree.
 /// One light sample per hit leaves the noise of the choice: on the Cornell
 /// box of `tools/mitsuba_cornell_check.py` (a point light and a light box)
 /// sampling both removes most of the variance for little more time
@@ -105,7 +105,7 @@ pub(super) use by_variant;
 /// every hit, so the count is kept small.
 const EVERY_LIGHT_UP_TO: usize = 4;
 
-/// Whether MIS samples every light at a hit rather than one chosen by power.
+/// Whether MIS samples every light at a hit rather than one chosen by the light tree.
 #[inline]
 pub(super) fn every_light(scene: &Scene, p: PathParams) -> bool {
     match p.lights {

@@ -95,7 +95,7 @@ impl Environment {
     }
 
     /// The radiance averaged over all directions (each texel weighed by its
-    /// solid angle), for choosing lights by power.
+    /// solid angle), for the light tree's power of the light.
     pub fn mean_radiance(&self) -> Vec3 {
         let (mut sum, mut omega) = (Vec3::ZERO, 0.0f32);
         for y in 0..self.height {

@@ -6,7 +6,7 @@
 use super::*;
 use crate::bsdf::lobe::tests::{chi_square_p, sidak};
 use crate::light::test_rng::Rng;
-use crate::light::{AreaLight, Environment, LightPick, PointLight, ShadedLight, SpotLight};
+use crate::light::{AreaLight, Environment, PointLight, ShadedLight, SpotLight};
 use crate::texture::Image;
 use luster_core::math::{orthonormal_basis, Transform};
 use luster_scene::description::{EnvMapping, EnvSampling};
@@ -228,7 +228,7 @@ fn chances_sum_to_one_less_the_dead_ends_and_match_a_full_walk() {
         }
         // Black lights are left out.
         for (i, l) in lights.iter().enumerate() {
-            if pick::power(l, 30.0) == 0.0 {
+            if power::power(l, 30.0) == 0.0 {
                 assert_eq!((tree.slots[i], tree.pmf(i, Vec3::ZERO, None)), (Slot::Absent, 0.0));
             }
         }
@@ -262,7 +262,8 @@ fn choices_follow_the_pmf() {
     let mut lights = random_lights(&mut rng, 120);
     lights.push(environment());
     let tree = LightTree::build(&lights, 30.0);
-    let by_power = LightPick::by_power(&lights, 30.0);
+    let powers: Vec<f64> = lights.iter().map(|l| f64::from(power::power(l, 30.0))).collect();
+    let total_power: f64 = powers.iter().sum();
     const N: usize = 100_000;
     const CASES: usize = 8;
     let len = lights.len();
@@ -289,9 +290,9 @@ fn choices_follow_the_pmf() {
         let pv = chi_square_p(&observed, &expected);
         assert!(pv > sidak(CASES), "case {case} at {p:?} {n:?}: p-value {pv}");
         // The test can fail: these draws do not follow the power pmf.
-        let mut power: Vec<f64> = (0..len).map(|i| f64::from(by_power.pmf(i)) * N as f64).collect();
-        power.push(0.0);
-        assert!(chi_square_p(&observed, &power) < 1e-6, "case {case}: the tree chose by power");
+        let mut by_power: Vec<f64> = powers.iter().map(|w| w / total_power * N as f64).collect();
+        by_power.push(0.0);
+        assert!(chi_square_p(&observed, &by_power) < 1e-6, "case {case}: the tree chose by power");
     }
 }
 

@@ -9,7 +9,7 @@ use super::{every_light, pick_chance, Came, LightAhead, PathParams};
 use crate::bsdf::diffuse_pdf;
 use crate::bsdf::{Bsdf, Flags};
 use crate::integrator::media;
-use crate::integrator::{is_black, light_reaching_from, shadow_ray, surface_at, PathState, Surface};
+use crate::integrator::{aimed, is_black, light_reaching_from, shadow_ray, surface_at, PathState, Surface};
 use crate::light::{Light, ShadedLight, ShadedShape};
 use crate::render::scene::{Hit, Scene};
 use luster_core::math::{Ray, Vec3, Vec3A};
@@ -249,9 +249,7 @@ pub(super) fn shaded_sample(
     let Some((wi, dist, pdf)) = l.sample(origin, x, st.time, u) else { return Vec3::ZERO };
     let Some((f, bsdf_pdf)) = f(wi) else { return Vec3::ZERO };
     // Aimed at the sampled point from the offset origin.
-    let to = x + wi * dist - origin;
-    let d = to.length();
-    let (r, dist) = (Ray::new(origin, to / d), d);
+    let (r, dist) = aimed(origin, x + wi * dist);
     st.stats.shadow += 1;
     let Some(h) = scene.intersect(&r, st.time, false) else { return Vec3::ZERO };
     let eps = scene.offset(h.p, origin);
