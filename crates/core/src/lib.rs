@@ -8,4 +8,5 @@
 pub mod file;
 pub mod image;
 pub mod math;
+pub mod text;
 pub mod tonemap;
