@@ -8,5 +8,6 @@
 pub mod file;
 pub mod image;
 pub mod math;
+pub mod memory;
 pub mod text;
 pub mod tonemap;

@@ -19,7 +19,7 @@ pub mod bench;
 pub mod cluster;
 pub mod watch;
 
-pub use luster_core::{file, image, math, tonemap};
+pub use luster_core::{file, image, math, memory, text, tonemap};
 pub use luster_qa::{conformance, fuzzing, metrics, report};
 pub use luster_render::{accel, bsdf, film, geometry, integrator, light, material, render, texture, volume};
 pub use luster_scene as scene;

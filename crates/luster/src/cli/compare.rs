@@ -40,7 +40,7 @@ pub struct Args {
 /// Compares, prints, and returns the exit code.
 pub fn run(args: &Args) -> ExitCode {
     let fail = |msg: String| {
-        eprintln!("error: {msg}");
+        super::report("error", &msg);
         ExitCode::from(2)
     };
     let (reference, test) =

@@ -10,6 +10,13 @@ macro_rules! say {
     }};
 }
 
+/// Prints `kind: msg` on stderr (`error`, `warning`), with what a user or a
+/// file controls made printable and capped (`luster::text::shown`): a name
+/// or a shader's message cannot drive the terminal or forge lines.
+fn report(kind: &str, msg: &dyn std::fmt::Display) {
+    eprintln!("{kind}: {}", luster::text::shown(&msg.to_string(), false));
+}
+
 mod args;
 mod compare;
 mod merge;
@@ -282,7 +289,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     if let Err(e) = signal::remove_temporaries_on_signal() {
-        eprintln!("warning: Ctrl-C will not remove half-written images: {e}");
+        report("warning", &format_args!("Ctrl-C will not remove half-written images: {e}"));
     }
     match cli.command {
         Command::Render {
@@ -354,7 +361,7 @@ fn main() -> ExitCode {
         Command::Bench { plys, threads, reps } => match luster::bench::run(&plys, &threads, reps) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
-                eprintln!("error: {e:#}");
+                report("error", &format_args!("{e:#}"));
                 ExitCode::from(2)
             }
         },

@@ -32,7 +32,7 @@ pub fn run(
     let mut failed = 0;
     for s in scenes {
         if let Err(e) = pool.install(|| render_scene(s, outdir, quiet, opts, build, view, frame)) {
-            eprintln!("error: {e:#}");
+            super::report("error", &format_args!("{e:#}"));
             failed += 1;
         }
     }
@@ -62,15 +62,16 @@ fn render_scene(
     // A model's --size already made its camera; --scale and --crop apply to both.
     super::reframe::apply(&mut desc, if obj { None } else { frame.0 }, &frame.1)
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    check_memory(path, &desc)?;
     for w in &desc.warnings {
-        eprintln!("warning: {}: {w}", path.display());
+        super::report("warning", &format_args!("{}: {w}", path.display()));
     }
     // While the scene loads (an image decoding alone, say), a free worker
     // writes the first camera's film memory.
     let reserve = desc.cameras.first().map(|c| FilmReserve::start(c.resolution.0, c.resolution.1));
     let scene = Scene::build_with(&desc, build)?;
     for w in &scene.warnings {
-        eprintln!("warning: {}: {w}", path.display());
+        super::report("warning", &format_args!("{}: {w}", path.display()));
     }
     let plans = scene
         .cameras
@@ -91,7 +92,7 @@ fn render_scene(
                 .unwrap_or_else(|_| ProgressStyle::default_bar())
                 .progress_chars("=> "),
         );
-        bar.set_message(cam.image_name.clone());
+        bar.set_message(luster::text::shown(&cam.image_name, false).into_owned());
         let t = Instant::now();
         let reserve = if i == 0 { reserve.as_ref() } else { None };
         let img = render::try_render_reserved(&scene, i, opts, &|n| bar.inc(n), reserve);
@@ -109,7 +110,10 @@ fn render_scene(
         let written = write_outputs(&img.film, outdir, plan)
             .with_context(|| format!("rendering {}", path.display()))?;
         if !quiet {
-            let names: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
+            let names: Vec<String> = written
+                .iter()
+                .map(|p| luster::text::shown(&p.display().to_string(), false).into_owned())
+                .collect();
             println!(
                 "{}  {}x{}  {} spp  {:.2} s render (+{:.2} s load and build)  {:.1} Mrays/s  {} triangles",
                 names.join(" + "),
@@ -124,4 +128,25 @@ fn render_scene(
         }
     }
     Ok(())
+}
+
+/// Refuses a scene whose films and images cannot fit in the memory this
+/// process may still take (`ulimit -v`, its cgroup's limit), before any
+/// of it is rendered: an allocation failing midway would abort.
+fn check_memory(path: &Path, desc: &luster::scene::Description) -> anyhow::Result<()> {
+    let needed = luster::film::memory_needed(desc.cameras.iter().map(|c| c.resolution));
+    match luster::memory::headroom() {
+        Some(left) if needed > left => {
+            let largest =
+                desc.cameras.iter().map(|c| c.resolution).max_by_key(|&(w, h)| u64::from(w) * u64::from(h));
+            let (w, h) = largest.unwrap_or((0, 0));
+            anyhow::bail!(
+                "{}: its images (the largest {w}x{h}) need about {} of memory, more than the {} this process may still use (its ulimit -v or cgroup limit)",
+                path.display(),
+                luster::memory::describe(needed),
+                luster::memory::describe(left)
+            )
+        }
+        _ => Ok(()),
+    }
 }

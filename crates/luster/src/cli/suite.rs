@@ -38,7 +38,7 @@ pub struct Args {
 /// Runs the suite and returns the exit code.
 pub fn run(args: &Args) -> ExitCode {
     let fail = |msg: String| {
-        eprintln!("error: {msg}");
+        super::report("error", &msg);
         ExitCode::from(2)
     };
     if !args.dir.is_dir() {
@@ -154,7 +154,9 @@ fn progress(r: &CaseResult, n: usize, total: usize, width: usize) {
     } else {
         format!("  [{} warning{}]", r.warnings.len(), if r.warnings.len() == 1 { "" } else { "s" })
     };
-    say!("[{n:>width$}/{total}] {:<44} {:>7.2} s  {what}{warn}", r.case.label(), r.seconds);
+    let label = r.case.label();
+    let (label, what) = (luster::text::shown(&label, false), luster::text::shown(&what, false));
+    say!("[{n:>width$}/{total}] {:<44} {:>7.2} s  {what}{warn}", label, r.seconds);
 }
 
 fn first_line(s: &str) -> &str {

@@ -34,7 +34,7 @@ pub fn run(a: &Args) -> ExitCode {
     match tonemap(a) {
         Ok(()) => ExitCode::SUCCESS,
         Err(msg) => {
-            eprintln!("error: {msg}");
+            super::report("error", &msg);
             ExitCode::from(2)
         }
     }

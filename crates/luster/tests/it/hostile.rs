@@ -13,6 +13,7 @@
 mod cases;
 use crate::common;
 mod kit;
+mod terminal;
 
 use cases::all_cases;
 use common::{run_limited, Run};
@@ -154,4 +155,55 @@ fn suite_survives_a_symlink_loop() {
     }
     let rendered = std::fs::read_dir(root.path().join("out")).map(|rd| rd.count()).unwrap_or(0);
     assert!(rendered >= 1, "the one scene should be rendered once; stderr: {}", run.stderr);
+}
+
+/// A legal film too large for the memory the process may use (`ulimit -v`)
+/// is refused up front with a sentence, not by an allocation abort midway.
+#[test]
+fn a_film_beyond_the_memory_limit_is_refused_up_front() {
+    use std::os::unix::process::CommandExt;
+    let root = tempfile::tempdir().expect("a temporary folder");
+    let scene = xml("", "").replace("<ImageResolution>8 8", "<ImageResolution>32768 4096");
+    std::fs::write(root.path().join("s.xml"), scene).expect("the scene");
+    std::fs::create_dir(root.path().join("out")).expect("the output folder");
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_luster"));
+    cmd.args(["render", "-q", "--threads", "2", "-o", "out", "s.xml"]).current_dir(root.path());
+    // SAFETY: setrlimit is async-signal-safe; nothing else runs between fork and exec.
+    unsafe {
+        cmd.pre_exec(|| {
+            let limit = libc::rlimit { rlim_cur: 2 << 30, rlim_max: 2 << 30 };
+            if libc::setrlimit(libc::RLIMIT_AS, &limit) == 0 {
+                Ok(())
+            } else {
+                Err(std::io::Error::last_os_error())
+            }
+        });
+    }
+    let run = run_limited(cmd, TIMEOUT);
+    let err = run.stderr.trim_end();
+    assert_eq!(run.code, Some(2), "stderr: {err}");
+    assert_eq!(err.lines().count(), 1, "one error line expected: {err}");
+    for word in ["error: ", "s.xml", "32768x4096", "memory"] {
+        assert!(err.contains(word), "the error lacks {word:?}: {err}");
+    }
+    for crash in CRASH_TEXT {
+        assert!(!err.contains(crash), "crashed: {err}");
+    }
+    assert!(entries(&root.path().join("out")).is_empty());
+}
+
+/// A model whose file name holds control characters renders to an image
+/// named without them.
+#[test]
+fn a_model_named_with_control_characters_gets_a_clean_image_name() {
+    let root = tempfile::tempdir().expect("a temporary folder");
+    let name = "m\nx\u{1b}[2J.obj";
+    std::fs::write(root.path().join(name), "v 0 0 -3\nv 1 0 -3\nv 0 1 -3\nf 1 2 3\n").expect("the model");
+    let args: Vec<String> = ["render", "-q", "--threads", "2", "--size", "8x8", "-o", "out", name]
+        .iter()
+        .map(|a| a.to_string())
+        .collect();
+    let run = luster(&args, root.path());
+    assert_eq!(run.code, Some(0), "stderr: {}", run.stderr);
+    assert_eq!(entries(&root.path().join("out")), vec![PathBuf::from("m_x_[2J.png")]);
 }

@@ -147,6 +147,24 @@ impl<'a> Tile<'a> {
     }
 }
 
+/// Bytes per pixel of the files written from a film beside it: an 8-bit
+/// copy and its encoder's buffers, or a float copy for an HDR file.
+const OUTPUT_BYTES_PER_PIXEL: u64 = 16;
+
+/// Bytes a render of cameras of these sizes needs beyond the scene itself:
+/// every finished [`Film`] (kept until all are written) and, for the largest
+/// camera, its tiles' sums and the files written from it. What a render
+/// checks against the memory it may use before it starts.
+pub fn memory_needed(sizes: impl IntoIterator<Item = (u32, u32)>) -> u64 {
+    let (mut films, mut largest) = (0u64, 0u64);
+    for (w, h) in sizes {
+        let n = u64::from(w) * u64::from(h);
+        films += n * std::mem::size_of::<Vec3>() as u64;
+        largest = largest.max(n);
+    }
+    films + largest * (std::mem::size_of::<[f32; 4]>() as u64 + OUTPUT_BYTES_PER_PIXEL)
+}
+
 /// A finished image in linear radiance, row-major, top row first.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Film {

@@ -91,10 +91,14 @@ impl Shared {
         if self.stop.load(Ordering::Relaxed) {
             return;
         }
-        let mut store = Vec::with_capacity(n);
+        // Memory written ahead is a gain, not a need: when it cannot be had,
+        // the render allocates (or reports) it itself.
+        let mut store = Vec::new();
         let mut pixels = Vec::new();
-        if fill(&mut store, n, [0.0; 4], &self.stop) {
-            pixels.reserve_exact(n);
+        if store.try_reserve_exact(n).is_ok()
+            && fill(&mut store, n, [0.0; 4], &self.stop)
+            && pixels.try_reserve_exact(n).is_ok()
+        {
             fill(&mut pixels, n, Vec3::ZERO, &self.stop);
         }
         *slot = Some(FilmMemory { store: Some(store), pixels: Some(pixels) });

@@ -343,6 +343,9 @@ fn check_image_name(r: &Reader, el: &Element, name: &str) -> Result<(), SceneErr
     if name.is_empty() {
         return Err(r.err(el, "<ImageName> is empty"));
     }
+    if let Some(problem) = luster_core::text::file_name_problem(name) {
+        return Err(r.err(el, format!("<ImageName> {problem}")));
+    }
     let p = Path::new(name);
     if p.is_absolute() || p.has_root() {
         return Err(r.err(

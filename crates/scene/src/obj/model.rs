@@ -108,6 +108,10 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
     let elevation = view.elevation.clamp(-89.0, 89.0);
     let eye = center + direction(view.azimuth, elevation) * distance;
     let stem = path.file_stem().map_or_else(|| "model".into(), |s| s.to_string_lossy().into_owned());
+    // The image is named after the model; what could not name a file safely
+    // (a newline, an escape) becomes `_`.
+    let stem: String =
+        stem.chars().map(|c| if luster_core::text::is_unsafe(c) || c == '\\' { '_' } else { c }).collect();
     let file_name = path.file_name().map_or_else(|| stem.clone(), |s| s.to_string_lossy().into_owned());
     let loc = super::at(path, 0);
     let camera = CameraDesc {

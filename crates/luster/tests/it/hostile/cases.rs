@@ -438,6 +438,7 @@ pub fn all_cases() -> Vec<Case> {
         leaks(),
         images(),
         command_line(),
+        super::terminal::names(),
     ]
     .into_iter()
     .flatten()
