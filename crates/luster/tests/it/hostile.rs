@@ -13,6 +13,7 @@
 mod cases;
 use crate::common;
 mod kit;
+mod shaders2;
 
 use cases::all_cases;
 use common::{run_limited, Run};
