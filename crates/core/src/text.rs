@@ -69,6 +69,19 @@ pub fn cap(s: Cow<'_, str>, max: usize) -> Cow<'_, str> {
     }
 }
 
+/// A token of a file for an error message: quoted when it looks like a word
+/// or a number (`"Kd"`, `"0,3"`), otherwise only its length, so an error about
+/// a file that is not what it should be (`mtllib /etc/passwd`, a private key
+/// named as a shader) never shows what the file holds.
+pub fn shown_token(tok: &str) -> String {
+    let wordlike = |c: char| c.is_ascii_alphanumeric() || "_.+-,".contains(c);
+    if !tok.is_empty() && tok.len() <= 24 && tok.chars().all(wordlike) {
+        format!("\"{tok}\"")
+    } else {
+        format!("a token of {} characters", tok.chars().count())
+    }
+}
+
 /// Whether `name` may name a file luster writes (a relative path whose
 /// folders are `/`-separated): not empty, no control or format characters
 /// (a newline in a file name forges lines in every listing and script that
@@ -103,6 +116,14 @@ mod tests {
         assert_eq!(printable("evil\u{202e}gnp.exe", false), "evil\\u{202e}gnp.exe");
         assert_eq!(printable("\u{9b}31m", false), "\\u{9b}31m");
         assert_eq!(printable("grüße", false), "grüße");
+    }
+
+    #[test]
+    fn tokens_that_could_be_secrets_are_not_quoted() {
+        assert_eq!(shown_token("0,3"), "\"0,3\"");
+        assert_eq!(shown_token("map_Kd"), "\"map_Kd\"");
+        assert_eq!(shown_token("root:x:0:0:root:/root:/bin/bash"), "a token of 31 characters");
+        assert_eq!(shown_token("b3BlbnNzaC1rZXktdjEAAAAABG5vbmUAAAAEbm9uZQ"), "a token of 42 characters");
     }
 
     #[test]

@@ -141,9 +141,11 @@ pub(super) fn threads_parser() -> clap::builder::RangedU64ValueParser<usize> {
     clap::builder::RangedU64ValueParser::<usize>::new().range(1..=MAX_THREADS)
 }
 
-/// A rayon pool of `threads` workers (all cores when `None`).
+/// A rayon pool of `threads` workers (all cores when `None`), with the
+/// stack shaders need: the scene is built and shaded on these workers.
 pub(super) fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool, ExitCode> {
-    rayon::ThreadPoolBuilder::new().num_threads(threads.unwrap_or(0)).build().map_err(|e| {
+    let builder = rayon::ThreadPoolBuilder::new().num_threads(threads.unwrap_or(0));
+    builder.stack_size(luster::shader::STACK_SIZE).build().map_err(|e| {
         eprintln!("error: cannot start worker threads: {e}");
         ExitCode::from(2)
     })

@@ -85,6 +85,7 @@ impl Session {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(opts.threads.unwrap_or(0))
             .thread_name(|i| format!("watch-render-{i}"))
+            .stack_size(luster_shading::shader::STACK_SIZE)
             .build()
             .map_err(|e| format!("cannot start worker threads: {e}"))?;
         let driver = driver::Driver {
@@ -100,6 +101,7 @@ impl Session {
         let spawn = |name: &str, f: Box<dyn FnOnce() + Send>| {
             std::thread::Builder::new()
                 .name(name.into())
+                .stack_size(luster_shading::shader::STACK_SIZE)
                 .spawn(f)
                 .map_err(|e| format!("cannot start a thread: {e}"))
         };

@@ -14,6 +14,7 @@ mod cases;
 use crate::common;
 mod kit;
 mod terminal;
+mod shaders2;
 
 use cases::all_cases;
 use common::{run_limited, Run};

@@ -55,7 +55,10 @@ pub fn run_cases(
 ) -> Result<Vec<CaseResult>, rayon::ThreadPoolBuildError> {
     let jobs = opts.jobs.max(1).min(cases.len().max(1));
     let pools = (0..jobs)
-        .map(|_| rayon::ThreadPoolBuilder::new().num_threads(opts.threads.max(1)).build())
+        .map(|_| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(opts.threads.max(1));
+            pool.stack_size(luster_shading::shader::STACK_SIZE).build()
+        })
         .collect::<Result<Vec<_>, _>>()?;
     let next = AtomicUsize::new(0);
     let finished = AtomicUsize::new(0);

@@ -495,8 +495,8 @@ fn compile_scripts(
         None
     } else {
         Some(ShaderSet::with_modules(sources, timeout, images, desc.module_search_path()).map_err(|e| {
-            // The set names the failing shader; find its volume for the location.
-            let at = owners.iter().find(|(_, n)| *n == e.shader).map_or(owners[0].0, |o| o.0);
+            // The error names the failing script's index; its volume gives the location.
+            let at = e.source.and_then(|i| owners.get(i)).map_or(owners[0].0, |o| o.0);
             err(&desc.volumes[at], e.to_string())
         })?)
     })

@@ -8,6 +8,11 @@
 //! each state keeps its wrappers on the stack of a Lua thread of its own,
 //! and a call is one `lua_pushvalue` and one `lua_pcall` there.
 //!
+//! A call's message handler (kept in slot 1) appends the stack traceback to
+//! a string error, as mlua's calls do: when the error was raised inside the
+//! runtime's own Lua (a library function that recursed too deeply), the
+//! traceback holds the script line that called it (`error.rs`).
+//!
 //! Errors keep their meaning: a string error (what `error` in a script, the
 //! timeout and the result checks raise) becomes `RuntimeError` or, when the
 //! allocator failed, `MemoryError`; any other error value (a Rust callback's
@@ -19,8 +24,8 @@
 //!
 //! `l` is the state of a Lua thread that `_thread` references, so it lives
 //! as long as the [`Caller`], which its `ThreadState` drops before the `Lua`
-//! (field order). Only this module touches that thread's stack: slots
-//! `1..=base` hold the kept functions, and every call leaves the top at
+//! (field order). Only this module touches that thread's stack: slot 1
+//! holds the message handler and slots `2..=base` the kept functions, and every call leaves the top at
 //! `base` again. A state and its caller are used by one OS thread only
 //! (`threads.rs`), and never re-entrantly: no built-in calls back into Rust
 //! shading.
@@ -32,6 +37,15 @@ use mlua::{Function, Lua, Thread, Value};
 
 /// Free stack slots kept above the functions: a call needs one.
 const HEADROOM: c_int = 8;
+
+/// The message handler of every call (see the module doc).
+unsafe extern "C-unwind" fn traceback(l: *mut lua::lua_State) -> c_int {
+    if lua::lua_type(l, 1) == lua::LUA_TSTRING && lua::lua_checkstack(l, lua::LUA_TRACEBACK_STACK) != 0 {
+        let msg = lua::lua_tostring(l, 1);
+        lua::luaL_traceback(l, l, msg, 1);
+    }
+    1
+}
 
 /// Where a function kept by a [`Caller`] sits on its stack.
 #[derive(Clone, Copy, Debug)]
@@ -50,7 +64,7 @@ impl Caller {
     /// A caller on a new thread of `lua`, with room for `capacity` functions.
     pub(crate) fn new(lua: &Lua, capacity: usize) -> mlua::Result<Caller> {
         let mut l: *mut lua::lua_State = std::ptr::null_mut();
-        let room = c_int::try_from(capacity).unwrap_or(c_int::MAX).saturating_add(HEADROOM);
+        let room = c_int::try_from(capacity).unwrap_or(c_int::MAX).saturating_add(HEADROOM + 1);
         let mut grown = false;
         // SAFETY: the closure runs protected on `lua`'s own state with room
         // for one value (exec_raw checks it); the new thread is left there
@@ -61,12 +75,15 @@ impl Caller {
                 // A fresh thread's stack is small; grow it once, here, where
                 // an allocation failure cannot unwind through a call.
                 grown = lua::lua_checkstack(l, room) != 0;
+                if grown {
+                    lua::lua_pushcfunction(l, traceback);
+                }
             })?
         };
         if l.is_null() || !grown {
             return Err(mlua::Error::MemoryError("no stack for the shader call thread".into()));
         }
-        Ok(Caller { l, base: 0, room, _thread: thread })
+        Ok(Caller { l, base: 1, room, _thread: thread })
     }
 
     /// Keeps `f` on the stack for [`Caller::call`].
@@ -94,7 +111,7 @@ impl Caller {
         // and the headroom leaves space for the pushed copy.
         unsafe {
             lua::lua_pushvalue(self.l, slot.0);
-            lua::lua_pcall(self.l, 0, 0, 0)
+            lua::lua_pcall(self.l, 0, 0, 1)
         }
     }
 

@@ -1,7 +1,17 @@
 //! Shader errors: one type for load-time and call-time failures, naming the
 //! shader and, where Lua knows it, the script's `file:line`.
+//!
+//! A message may hold text the script or its file controls (a script's own
+//! `error(...)`, the token a syntax error stopped at), and it reaches a
+//! terminal: every message is escaped and capped
+//! ([`luster_core::text::shown`]), and a syntax error names the token it
+//! stopped at only when that looks like a word, a number or Lua punctuation
+//! ([`near_token`]), so pointing a shader at a file that is not one (a
+//! private key) never shows what the file holds.
 
 use std::fmt;
+
+use luster_core::text::{shown, shown_token};
 use std::time::Duration;
 
 /// What went wrong, for callers that react differently (the renderer may stop
@@ -43,12 +53,29 @@ pub struct ShaderError {
     pub message: String,
     /// The object being shaded, when the caller knows it.
     pub object: Option<String>,
+    /// The index, in the list the set was built from, of the script at
+    /// fault, when the error came from compiling or loading it.
+    pub source: Option<usize>,
 }
 
 impl ShaderError {
-    /// An error of `kind` in `shader`, without a location.
+    /// An error of `kind` in `shader`, without a location. The message and
+    /// the name are escaped and capped for a terminal.
     pub fn new(kind: ShaderErrorKind, shader: &str, message: impl Into<String>) -> ShaderError {
-        ShaderError { kind, shader: shader.to_string(), message: message.into(), object: None }
+        let message = message.into();
+        ShaderError {
+            kind,
+            shader: shown(shader, false).into_owned(),
+            message: shown(&message, false).into_owned(),
+            object: None,
+            source: None,
+        }
+    }
+
+    /// The same error, naming the script at fault by its index.
+    pub(crate) fn with_source(mut self, index: usize) -> ShaderError {
+        self.source = Some(index);
+        self
     }
 
     /// The same error, naming the object being shaded (e.g. `Mesh[id=3]`).
@@ -69,11 +96,13 @@ impl ShaderError {
     ) -> ShaderError {
         let err = root_cause(err);
         let text = match err {
-            mlua::Error::RuntimeError(m) => first_part(m),
-            other => first_part(&other.to_string()),
+            mlua::Error::RuntimeError(m) => in_script(m),
+            other => in_script(&other.to_string()),
         };
         let (kind, message) = match err {
-            mlua::Error::SyntaxError { message, .. } => (ShaderErrorKind::Syntax, first_part(message)),
+            mlua::Error::SyntaxError { message, .. } => {
+                (ShaderErrorKind::Syntax, near_token(&first_part(message)))
+            }
             mlua::Error::MemoryError(m) => {
                 (ShaderErrorKind::Memory, format!("ran out of memory ({})", first_part(m)))
             }
@@ -119,10 +148,103 @@ fn without_prelude_location(text: String) -> String {
     }
 }
 
-/// The message without the stack traceback mlua appends.
+/// Where the runtime's own code reports errors from: the prelude, and the
+/// trampolines that call the entry wrappers.
+const RUNTIME_SOURCES: [&str; 2] = ["luster/prelude.lua", "luster"];
+
+/// The message of an error, without the stack traceback the message handler
+/// appended, and located in the script: an error raised inside the runtime's
+/// own Lua (a library function that recursed too deeply, a comparison
+/// inside `table.sort`), or a stack overflow raised where no line is known,
+/// takes the line of the script's innermost frame in the traceback.
+fn in_script(text: &str) -> String {
+    let (msg, trace) = match text.split_once("\nstack traceback:") {
+        Some((m, t)) => (m.trim_end(), Some(t)),
+        None => (text.trim_end(), None),
+    };
+    // Messages that LuaJIT or the runtime raise with no line (a coroutine's
+    // error travels out of it as it was raised).
+    const UNLOCATED: [&str; 3] = ["stack overflow", "error in error handling", "coroutines nested too deep"];
+    let bare = runtime_location(msg)
+        .map(|(_, rest)| rest)
+        .or_else(|| UNLOCATED.iter().any(|w| msg.starts_with(w)).then_some(msg));
+    let located = match (bare, trace.and_then(script_frame)) {
+        (Some(rest), Some(at)) => format!("{at}: {rest}"),
+        _ => msg.to_string(),
+    };
+    in_words(located)
+}
+
+/// LuaJIT's "stack overflow" in the author's terms: a script recursed too
+/// deeply (Lua's stack, not the process's, is full; nothing crashed).
+fn in_words(message: String) -> String {
+    const LUAJIT: &str = "stack overflow";
+    let at = match runtime_location(&message) {
+        Some((loc, _)) => loc.len() + 2,
+        None => message.find(": ").filter(|&i| message[i + 2..].starts_with(LUAJIT)).map_or(0, |i| i + 2),
+    };
+    if !message[at..].starts_with(LUAJIT) {
+        return message;
+    }
+    format!("{}recursion too deep: Lua's stack is full{}", &message[..at], &message[at + LUAJIT.len()..])
+}
+
+/// `(location, rest)` when `msg` starts with a location in the runtime's
+/// own code (`luster/prelude.lua:120: rest`).
+fn runtime_location(msg: &str) -> Option<(&str, &str)> {
+    RUNTIME_SOURCES.iter().find_map(|src| {
+        let after = msg.strip_prefix(src)?.strip_prefix(':')?;
+        let (line, rest) = after.split_once(": ")?;
+        (!line.is_empty() && line.bytes().all(|b| b.is_ascii_digit()))
+            .then_some((&msg[..src.len() + 1 + line.len()], rest))
+    })
+}
+
+/// The innermost frame of a traceback that is a line of a script
+/// (`\tx.lua:3: in function 'f'` gives `x.lua:3`), skipping C functions and
+/// the runtime's own frames.
+fn script_frame(trace: &str) -> Option<&str> {
+    trace.lines().map(str::trim_start).find_map(|line| {
+        let (at, _) = line.split_once(": in ")?;
+        let (src, number) = at.rsplit_once(':')?;
+        let script = !number.is_empty()
+            && number.bytes().all(|b| b.is_ascii_digit())
+            && src != "[C]"
+            && !RUNTIME_SOURCES.contains(&src);
+        script.then_some(at)
+    })
+}
+
+/// The message without the stack traceback mlua appends (the caller caps
+/// it: [`ShaderError::new`]).
 fn first_part(s: &str) -> String {
     let s = s.split("\nstack traceback:").next().unwrap_or(s);
     s.trim_end().to_string()
+}
+
+/// LuaJIT's syntax errors end with `near 'TOKEN'`, the text it stopped at:
+/// for a file that is not Lua, a piece of that file (an unfinished string
+/// holds the rest of its line). The token is kept when it is one a script
+/// would show anyway: a word or number of at most 24 characters
+/// ([`luster_core::text::shown_token`]'s rule), Lua punctuation, `<eof>`, or
+/// LuaJIT's escape of one control byte (`<\27>`); otherwise only its length.
+pub(crate) fn near_token(message: &str) -> String {
+    const NEAR: &str = " near '";
+    let Some(at) = message.find(NEAR) else { return message.to_string() };
+    let Some(token) = message[at + NEAR.len()..].strip_suffix('\'') else { return message.to_string() };
+    let punctuation = |t: &str| t.len() <= 3 && t.chars().all(|c| "+-*/%^#=~<>(){}[];:,.".contains(c));
+    let escaped_byte = |t: &str| {
+        t.strip_prefix("<\\")
+            .and_then(|r| r.strip_suffix('>'))
+            .is_some_and(|d| !d.is_empty() && d.len() <= 3 && d.bytes().all(|b| b.is_ascii_digit()))
+    };
+    let word = shown_token(token);
+    let shown = if word.starts_with('"') || punctuation(token) || token == "<eof>" || escaped_byte(token) {
+        format!("near '{token}'")
+    } else {
+        format!("near {word}")
+    };
+    format!("{}{}", &message[..at + 1], shown)
 }
 
 impl fmt::Display for ShaderError {

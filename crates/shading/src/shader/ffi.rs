@@ -27,6 +27,12 @@
 //!   that owns the state, so there is no concurrent access.
 //! * `texture` receives the address of the state's image sampler, which the
 //!   state owns for as long as its Lua lives (`state.rs`).
+//! * The shader clock ([`epoch_now`]) is a static of atomics that the
+//!   watchdog thread stores to; compiled Lua reads it with plain aligned
+//!   8-byte loads, which are single-copy atomic on the targets LuaJIT's JIT
+//!   supports, so a reader sees an old or a new value, never a torn one.
+//! * `find` receives two Lua strings with their lengths, as the prelude
+//!   passes them.
 //! * The built-ins are called by LuaJIT with arguments the trusted prelude
 //!   passes; the only pointers they receive are scratch records the prelude
 //!   allocated (user scripts never see the raw function pointers). Each built-in
@@ -34,9 +40,10 @@
 
 use std::ffi::c_void;
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use std::sync::OnceLock;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use super::closure::{Closure, Node, NodeKind, MAX_NODES};
 use super::{Entry, ImageSampler, MaterialOutputs, SampleFilter};
@@ -157,15 +164,17 @@ fn closure_of(m: &MaterialOut) -> Option<Closure> {
     Some(c)
 }
 
-/// The per-call deadline (`luster_clock`). `start_ns == 0` means "not started":
-/// the first check of a call starts it, so a call that never reaches a check
-/// never reads the clock.
+/// The per-call deadline (`luster_clock`), in periods of the watchdog's
+/// clock ([`epoch`]): a call has run past its limit once the clock reads
+/// more than `start + limit`. `depth` counts the coroutines the call has
+/// resumed inside one another (the prelude's bound on native recursion).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Clock {
-    pub start_ns: u64,
-    pub timeout_ns: u64,
-    pub expired: i32,
+    pub start: f64,
+    pub limit: f64,
+    pub depth: i32,
+    pub pad: i32,
 }
 
 /// The Voronoi scratch record (`luster_cell`).
@@ -199,14 +208,17 @@ pub(crate) struct Builtins {
     ridged: extern "C" fn(f64, f64, f64, i32, f64, f64, f64) -> f64,
     voronoi3: extern "C" fn(f64, f64, f64, u32, f64, *mut CellOut),
     voronoi2: extern "C" fn(f64, f64, u32, f64, *mut CellOut),
-    clock_check: extern "C" fn(*mut Clock) -> i32,
+    find: extern "C" fn(*const u8, i32, i32, *const u8, i32) -> i32,
+    magic: extern "C" fn(*const u8, i32) -> i32,
+    epoch: *const AtomicU64,
     course_noise: extern "C" fn(f64, f64, f64) -> f64,
     texture: extern "C" fn(*const c_void, i32, f64, f64, i32, *mut Vec3) -> i32,
     course_perlin: extern "C" fn(f64, f64, f64, f64, i32, i32) -> f64,
 }
 
-// SAFETY: the record is immutable after construction and holds only function
-// pointers, which are fine to share between threads.
+// SAFETY: the record is immutable after construction and holds function
+// pointers and the address of a static of atomics, all fine to share
+// between threads.
 unsafe impl Sync for Builtins {}
 
 /// The one process-wide built-in table; its address is handed to every state.
@@ -227,7 +239,9 @@ pub(crate) static BUILTINS: Builtins = Builtins {
     ridged,
     voronoi3,
     voronoi2,
-    clock_check,
+    find,
+    magic,
+    epoch: EPOCH_CLOCK.as_ptr(),
     course_noise,
     texture,
     course_perlin,
@@ -384,33 +398,101 @@ extern "C" fn texture(ctx: *const c_void, index: i32, u: f64, v: f64, filter: i3
     }
 }
 
-/// Nanoseconds since the first call in this process, never 0 (0 is "unset").
-pub(crate) fn now_ns() -> u64 {
-    static EPOCH: OnceLock<Instant> = OnceLock::new();
-    let ns = EPOCH.get_or_init(Instant::now).elapsed().as_nanos();
-    u64::try_from(ns).unwrap_or(u64::MAX).max(1)
+/// `string.find` of literal text: where `p[..m]` first occurs in
+/// `s[from..n]`, as a byte index into `s`, or -1. Linear in `n` and `m`
+/// (`memchr`'s two-way search), where LuaJIT's own search compares the
+/// whole pattern at every occurrence of its first byte (quadratic on
+/// `"aaaa…"`), out of the time limit's reach.
+extern "C" fn find(s: *const u8, from: i32, n: i32, p: *const u8, m: i32) -> i32 {
+    let (Ok(from), Ok(n), Ok(m)) = (usize::try_from(from), usize::try_from(n), usize::try_from(m)) else {
+        return -1;
+    };
+    if s.is_null() || p.is_null() || from > n {
+        return -1;
+    }
+    // SAFETY: the prelude passes two Lua strings with their lengths (`#s`,
+    // `#p`); LuaJIT hands a string to a `const char *` parameter as a
+    // pointer to its bytes, which live for the call.
+    let (s, p) = unsafe { (std::slice::from_raw_parts(s, n), std::slice::from_raw_parts(p, m)) };
+    memchr::memmem::find(&s[from..], p).map_or(-1, |i| i32::try_from(from + i).unwrap_or(-1))
 }
 
-/// Called by the prelude's `tick` every few thousand loop iterations or
-/// function entries: 1 once the call has run past its timeout. Sticky until
-/// Rust resets the clock for the next call, so a script that catches the
-/// timeout error with `pcall` is stopped again at its next tick.
-extern "C" fn clock_check(c: *mut Clock) -> i32 {
-    if c.is_null() {
+/// Whether `p[..m]` holds a character that is magic in Lua patterns
+/// (`^$*+?.()[]%-`): 1 or 0. A scan of a byte table, where a Lua pattern
+/// class would take a hundred times longer on a long pattern, in C.
+extern "C" fn magic(p: *const u8, m: i32) -> i32 {
+    const MAGIC: [bool; 256] = {
+        let mut t = [false; 256];
+        let chars = b"^$*+?.()[]%-";
+        let mut i = 0;
+        while i < chars.len() {
+            t[chars[i] as usize] = true;
+            i += 1;
+        }
+        t
+    };
+    let Ok(m) = usize::try_from(m) else { return 0 };
+    if p.is_null() {
         return 0;
     }
-    // SAFETY: `c` is the state's `luster_clock` cdata (see the module doc).
-    let c = unsafe { &mut *c };
-    if c.expired != 0 {
-        return 1;
-    }
-    let now = now_ns();
-    if c.start_ns == 0 {
-        c.start_ns = now;
-    } else if now.saturating_sub(c.start_ns) > c.timeout_ns {
-        c.expired = 1;
-    }
-    c.expired
+    // SAFETY: the prelude passes a Lua string and its length (`find`'s).
+    let p = unsafe { std::slice::from_raw_parts(p, m) };
+    i32::from(p.iter().any(|&b| MAGIC[usize::from(b)]))
+}
+
+/// How often the watchdog advances the shader clock. A call is stopped
+/// between one and two periods after its limit (plus scheduling delay).
+pub(crate) const EPOCH_PERIOD: Duration = Duration::from_millis(5);
+
+/// The shader clock: whole [`EPOCH_PERIOD`] periods since the watchdog started,
+/// as the bits of an `f64` (Lua reads a double without boxing it). Four
+/// copies, which the prelude's tick reads in turn: a load whose address
+/// changes every tick is one the JIT cannot hoist out of a loop (LuaJIT
+/// ignores `volatile` on FFI loads).
+static EPOCH_CLOCK: [AtomicU64; 4] = [const { AtomicU64::new(0) }; 4];
+
+/// The shader clock now, in [`EPOCH_PERIOD`] periods.
+#[inline(always)]
+pub(crate) fn epoch_now() -> f64 {
+    f64::from_bits(EPOCH_CLOCK[0].load(Ordering::Relaxed))
+}
+
+/// Starts the watchdog thread that advances the shader clock, once per
+/// process; false when it cannot run (no thread could be started), and then
+/// no shader may run, since nothing would stop it.
+///
+/// The watchdog makes the time limit independent of what the shader does:
+/// the tick that instrumented code runs in every loop and function reads
+/// the clock directly (no count of ticks between reads), and after every
+/// call Rust compares it with the call's start, so a single slow library
+/// call that overran is reported as a timeout too.
+pub(crate) fn start_watchdog() -> bool {
+    static STARTED: OnceLock<bool> = OnceLock::new();
+    *STARTED.get_or_init(|| {
+        std::thread::Builder::new()
+            .name("shader-clock".into())
+            .stack_size(64 * 1024)
+            .spawn(|| {
+                let t0 = Instant::now();
+                loop {
+                    std::thread::sleep(EPOCH_PERIOD);
+                    // From the elapsed time, not a count of wake-ups, so a
+                    // late wake-up never slows the clock.
+                    let periods = (t0.elapsed().as_nanos() / EPOCH_PERIOD.as_nanos()) as f64;
+                    for copy in &EPOCH_CLOCK {
+                        copy.store(periods.to_bits(), Ordering::Relaxed);
+                    }
+                }
+            })
+            .is_ok()
+    })
+}
+
+/// A time limit in [`EPOCH_PERIOD`] periods, rounded up, plus one: the clock
+/// a call starts from may be one period behind (the watchdog wakes late), and
+/// a call is never stopped before its limit.
+pub(crate) fn limit_periods(timeout: Duration) -> f64 {
+    (timeout.as_nanos() as f64 / EPOCH_PERIOD.as_nanos() as f64).ceil() + 1.0
 }
 
 /// Rust's handle on one state's shared records (see the module doc for why the
@@ -435,7 +517,7 @@ impl IoBlock {
         out: usize,
         material: usize,
         clock: usize,
-        timeout_ns: u64,
+        limit: f64,
     ) -> Option<IoBlock> {
         fn ok<T>(a: usize) -> bool {
             a != 0 && a % std::mem::align_of::<T>() == 0
@@ -457,7 +539,7 @@ impl IoBlock {
             clock: clock as *mut Clock,
         };
         // SAFETY: see the module doc; no Lua code runs during this write.
-        unsafe { (*block.clock).timeout_ns = timeout_ns }
+        unsafe { (*block.clock).limit = limit }
         Some(block)
     }
 
@@ -483,8 +565,8 @@ impl IoBlock {
     #[inline]
     unsafe fn arm(&self) {
         (*self.out).bad = 0;
-        (*self.clock).start_ns = 0;
-        (*self.clock).expired = 0;
+        (*self.clock).start = epoch_now();
+        (*self.clock).depth = 0;
     }
 
     /// Writes the shading point and arms the clock for one `DecalMode
@@ -564,9 +646,13 @@ impl IoBlock {
         self.out().bad != 0
     }
 
-    /// Whether the last call was stopped by its deadline.
+    /// Whether the last call ran past its deadline: whether it was
+    /// stopped, or finished late (a slow library call can overrun between
+    /// two ticks), which counts as a timeout too.
+    #[inline(always)]
     pub(crate) fn timed_out(&self) -> bool {
         // SAFETY: see the module doc; the Lua call has returned.
-        unsafe { (*self.clock).expired != 0 }
+        let (start, limit) = unsafe { ((*self.clock).start, (*self.clock).limit) };
+        epoch_now() - start > limit
     }
 }

@@ -25,8 +25,8 @@
 //! Every unbounded computation in Lua code passes one of these points, so a
 //! script cannot run long without ticking. The tick is a local of the chunk
 //! (`local __luster_tick = ...;` on the first line), bound to the trusted
-//! prelude's `tick`; it decrements a counter and reads the clock only every
-//! few thousand ticks, which the JIT compiles to a few instructions. Nothing is
+//! prelude's `tick`; it compares the watchdog's clock with the call's start,
+//! which the JIT compiles to a few instructions. Nothing is
 //! inserted on a new line, so line numbers in messages are the user's. Names
 //! starting with `__luster` are refused, so a script cannot shadow or replace
 //! the tick.

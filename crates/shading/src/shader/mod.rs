@@ -47,9 +47,13 @@
 //! `require`, `debug`, `ffi`, `jit`, `load*`, `dofile`, `getfenv`/`setfenv`,
 //! `newproxy` or `string.dump`; the string metatable is hidden. A call that
 //! runs past its timeout is stopped by checks inserted into every loop and
-//! function (`instrument.rs`), which also work inside JIT-compiled code. What is
-//! not bounded: a single call into a C library function (`string.find` with a
-//! pathological pattern on a long string) runs to its end before the next check.
+//! function (`instrument.rs`), which also work inside JIT-compiled code and
+//! read a clock that a watchdog thread keeps (`ffi.rs`); a call that returns
+//! after its limit is a timeout too. Every library function a script reaches
+//! has a bounded cost (pattern functions take literal patterns and search in
+//! linear time, `table.sort` is O(n log n), `prelude.lua` has the rest), and
+//! none calls back into Lua from C, so no recursion of a script grows the
+//! native stack beyond what [`STACK_SIZE`] holds (`docs/robustness.md`).
 
 mod call;
 pub mod closure;
@@ -72,6 +76,8 @@ mod tests;
 mod tests_author;
 #[cfg(test)]
 mod tests_closure;
+#[cfg(test)]
+mod tests_limits;
 #[cfg(test)]
 mod tests_modules;
 #[cfg(test)]
@@ -107,6 +113,15 @@ pub fn debug_pixel() -> Option<[u32; 2]> {
     let p = DEBUG_PIXEL.load(Ordering::Relaxed);
     (p != u64::MAX).then_some([(p >> 32) as u32, p as u32])
 }
+
+/// The native stack a thread that runs shaders is started with (the render
+/// and watch workers, the threads that build scenes). Lua code itself uses
+/// none of it (LuaJIT runs Lua calls, metamethods and `pcall` on its own
+/// stack, whose overflow is a Lua error), but the parser, the JIT and a
+/// chain of coroutines resumed inside one another do, and so does the
+/// renderer around them; `docs/robustness.md` gives the measured worst
+/// cases, which this leaves a wide margin over.
+pub const STACK_SIZE: usize = 16 * 1024 * 1024;
 
 /// The default per-call time limit: generous, since a shader that needs it is
 /// broken, and a false stop would lose a render.

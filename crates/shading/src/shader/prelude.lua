@@ -33,7 +33,7 @@ typedef struct {
   luster_node nodes[32];
 } luster_material;
 typedef struct { double gen; int32_t index; } luster_closure;
-typedef struct { uint64_t start_ns, timeout_ns; int32_t expired; } luster_clock;
+typedef struct { double start, limit; int32_t depth, pad; } luster_clock;
 typedef struct { double f1, f2, px, py, pz, id; } luster_cell;
 typedef struct {
   double (*perlin1)(double);
@@ -52,7 +52,9 @@ typedef struct {
   double (*ridged)(double, double, double, int32_t, double, double, double);
   void (*voronoi3)(double, double, double, uint32_t, double, luster_cell *);
   void (*voronoi2)(double, double, uint32_t, double, luster_cell *);
-  int32_t (*clock_check)(luster_clock *);
+  int32_t (*find)(const char *, int32_t, int32_t, const char *, int32_t);
+  int32_t (*magic)(const char *, int32_t);
+  const double *epoch;
   double (*course_noise)(double, double, double);
   int32_t (*texture)(const void *, int32_t, double, double, int32_t, luster_vec3 *);
   double (*course_perlin)(double, double, double, double, int32_t, int32_t);
@@ -73,25 +75,29 @@ local cell = ffi.new("luster_cell")
 
 ---------------------------------------------------------------------------
 -- The deadline. Instrumented user code calls tick() in every loop body and
--- function entry (see instrument.rs); the clock is read every TICKS ticks.
--- A clock read is far dearer than a tick: spread over TICKS ticks it is cheap,
--- while a loop whose body makes slow library calls (string.rep of megabytes)
--- still overshoots the deadline by well under a second.
+-- function entry (see instrument.rs). Each tick reads the shader clock, which
+-- a watchdog thread advances (ffi.rs), and compares it with the call's start:
+-- no count of ticks between reads, so a loop whose every iteration makes a
+-- slow library call is stopped as promptly as an empty one. The clock has
+-- four copies, read in turn: the JIT would hoist a load from one fixed
+-- address out of a compiled loop (it ignores volatile), never to see it
+-- change.
 ---------------------------------------------------------------------------
-local TICKS = 256
-local budget = TICKS
-local clock_check = B.clock_check
+local epoch = B.epoch
+local turn = 0
+local STOPPED = "stopped: the shader ran past its time limit"
 local function tick()
-  budget = budget - 1
-  if budget <= 0 then
-    if clock_check(clock) ~= 0 then
-      -- Stay at 0 so that every later tick of this call fails too, even if
-      -- the script catches this error with pcall.
-      budget = 0
-      error("stopped: the shader ran past its time limit", 2)
-    end
-    budget = TICKS
-  end
+  turn = band(turn + 1, 3)
+  -- Once past, every later tick of this call fails too, even if the script
+  -- catches this error with pcall.
+  if epoch[turn] - clock.start > clock.limit then error(STOPPED, 2) end
+end
+-- The same check in the runtime's own loops (sort, gsub, ...), which are not
+-- instrumented; the error names the line that called the library function
+-- (level 3: the caller of the function that ticks).
+local function lib_tick()
+  turn = band(turn + 1, 3)
+  if epoch[turn] - clock.start > clock.limit then error(STOPPED, 3) end
 end
 
 ---------------------------------------------------------------------------
@@ -535,42 +541,397 @@ end
 local MAX_REP = 16 * 1024 * 1024
 local rep = string.rep
 local function safe_rep(s, n, sep)
+  local count = tonumber(n)
   local len = #tostring(s) + (sep and #tostring(sep) or 0)
-  if type(n) == "number" and n > 0 and len * n > MAX_REP then
-    error(format("string.rep: result of %.0f bytes is over the %d-byte limit", len * n, MAX_REP), 2)
+  if count and count > 0 and len * count > MAX_REP then
+    error(format("string.rep: result of %.0f bytes is over the %d-byte limit", len * count, MAX_REP), 2)
   end
   return rep(s, n, sep)
 end
 -- Lua patterns backtrack inside C, where the time limit cannot reach:
 -- string.find(string.rep("a", 1e5), ".-.-.-.-b") runs for hours. So the
--- pattern functions take only literal patterns (no magic character), whose
--- matching is bounded by the lengths of subject and pattern; string.find with
--- plain = true takes anything. See docs/robustness.md.
-local MAGIC = "[%^%$%*%+%?%.%(%)%[%]%%%-]"
+-- pattern functions take only literal patterns (no magic character), and
+-- search with a linear-time substring search in Rust (B.find): LuaJIT's own
+-- search of literal text compares the whole pattern at every occurrence of
+-- its first byte, quadratic on "aaaa...". gsub is Lua here too, so that a
+-- replacement function is called from Lua (its recursion is bounded by Lua's
+-- stack, not the native one) and a long replacement is checked against the
+-- clock. See docs/shaders.md.
 local real_find = string.find
+local sub, byte = string.sub, string.byte
+local concat = table.concat
+local find_c, magic_c = B.find, B.magic
 local function literal(fname, pattern)
-  if type(pattern) == "string" and real_find(pattern, MAGIC) then
+  if type(pattern) == "string" and magic_c(pattern, #pattern) ~= 0 then
     error(format("string.%s: patterns with magic characters (^$*+?.()[]%%-) are not available in shaders, "
       .. "since matching them can run unboundedly long; use a literal pattern or string.find(s, p, 1, true)",
       fname), 3)
   end
 end
-local function guard(fname, real)
-  return function(s, pattern, ...)
-    literal(fname, pattern)
-    return real(s, pattern, ...)
-  end
+-- LuaJIT takes a number where a string is expected (as tostring writes it),
+-- and a numeric string where a number is.
+local function as_text(v)
+  if type(v) == "number" then return tostring(v) end
+  return v
+end
+local function as_number(v)
+  if type(v) == "string" then return tonumber(v) or v end
+  return v
+end
+-- A number as LuaJIT's library functions read an integer argument: a C
+-- cast to int32_t, which the vendored build compiles to a 64-bit truncation
+-- keeping the low 32 bits (NaN and magnitudes from 2^63 up give 0).
+local function to_int(x)
+  if not (x > -9223372036854775808 and x < 9223372036854775808) then return 0 end
+  local t = (x >= 0 and floor(x) or -floor(-x)) % 4294967296
+  if t >= 2147483648 then t = t - 4294967296 end
+  return t
+end
+-- The 0-based byte where a search of a string of n bytes starts, from `init`
+-- as LuaJIT reads it: 1-based, negative counting from the end, clamped to
+-- the string.
+local function start_of(init, n)
+  if init == nil then return 0 end
+  local st = to_int(init)
+  if st < 0 then st = st + n else st = st - 1 end
+  if st < 0 then return 0 end
+  if st > n then return n end
+  return st
+end
+-- LuaJIT's pattern matcher (match, gmatch, gsub; not find) ends a pattern at
+-- its first zero byte, as Lua 5.1 did.
+local function to_nul(p)
+  local z = find_c(p, 0, #p, "\0", 1)
+  if z < 0 then return p end
+  return sub(p, 1, z)
+end
+local function find_text(s, p, init)
+  local m = #p
+  local q = find_c(s, start_of(init, #s), #s, p, m)
+  if q < 0 then return nil end
+  return q + 1, q + m
 end
 local real_match, real_gmatch, real_gsub = string.match, string.gmatch, string.gsub
 string.find = function(s, pattern, init, plain)
+  s, pattern, init = as_text(s), as_text(pattern), as_number(init)
   if not plain then literal("find", pattern) end
+  if type(s) == "string" and type(pattern) == "string" and (init == nil or type(init) == "number") then
+    return find_text(s, pattern, init)
+  end
+  -- LuaJIT's own function reports the bad argument.
   return real_find(s, pattern, init, plain)
 end
-string.match = guard("match", real_match)
-string.gmatch = guard("gmatch", real_gmatch)
-string.gsub = guard("gsub", real_gsub)
+string.match = function(s, pattern, init)
+  s, pattern, init = as_text(s), as_text(pattern), as_number(init)
+  literal("match", pattern)
+  if type(s) == "string" and type(pattern) == "string" and (init == nil or type(init) == "number") then
+    -- A literal pattern has no captures: the match is the pattern itself.
+    pattern = to_nul(pattern)
+    if find_text(s, pattern, init) then return pattern end
+    return nil
+  end
+  return real_match(s, pattern, init)
+end
+string.gmatch = function(s, pattern)
+  s, pattern = as_text(s), as_text(pattern)
+  literal("gmatch", pattern)
+  if type(s) ~= "string" or type(pattern) ~= "string" then return real_gmatch(s, pattern) end
+  pattern = to_nul(pattern)
+  local n, m, pos = #s, #pattern, 0
+  return function()
+    if pos > n then return nil end
+    local q = find_c(s, pos, n, pattern, m)
+    if q < 0 then
+      pos = n + 1
+      return nil
+    end
+    -- After an empty match, the next search starts one byte further.
+    pos = q + (m == 0 and 1 or m)
+    return pattern
+  end
+end
+-- A replacement string cut at its escapes: text, and WHOLE for "%0" or
+-- "%1" (the whole match: a literal pattern has no captures), or BAD_CAPTURE
+-- for "%2" to "%9". "%x" is x; a final "%" is a zero byte, as in LuaJIT.
+local WHOLE, BAD_CAPTURE = {}, {}
+local function parse_replacement(r)
+  local parts, n, i = {}, #r, 0
+  while true do
+    local q = find_c(r, i, n, "%", 1)
+    if q < 0 then
+      parts[#parts + 1] = sub(r, i + 1, n)
+      return parts
+    end
+    parts[#parts + 1] = sub(r, i + 1, q)
+    local c = byte(r, q + 2)
+    if c == nil then
+      parts[#parts + 1] = "\0"
+    elseif c == 48 or c == 49 then
+      parts[#parts + 1] = WHOLE
+    elseif c >= 50 and c <= 57 then
+      parts[#parts + 1] = BAD_CAPTURE
+    else
+      parts[#parts + 1] = string.char(c)
+    end
+    i = q + 2
+  end
+end
+string.gsub = function(s, pattern, repl, max_n)
+  s, pattern, max_n = as_text(s), as_text(pattern), as_number(max_n)
+  literal("gsub", pattern)
+  local kind = type(repl)
+  if type(s) ~= "string" or type(pattern) ~= "string" or (max_n ~= nil and type(max_n) ~= "number")
+    or (kind ~= "string" and kind ~= "number" and kind ~= "table" and kind ~= "function") then
+    -- LuaJIT's own function reports the bad argument.
+    return real_gsub(s, pattern, repl, max_n)
+  end
+  pattern = to_nul(pattern)
+  local n, m = #s, #pattern
+  local limit = max_n == nil and n + 1 or to_int(max_n)
+  local parts = (kind == "string" or kind == "number") and parse_replacement(as_text(repl))
+  -- The result in pieces; every 4096 pieces are joined into one chunk, so the
+  -- pieces never outnumber the result's bytes by much.
+  local pieces, np, chunks = {}, 0, {}
+  local function add(piece)
+    np = np + 1
+    pieces[np] = piece
+    if np == 4096 then
+      chunks[#chunks + 1] = concat(pieces, "", 1, np)
+      np = 0
+    end
+  end
+  local src, count = 0, 0
+  while count < limit do
+    lib_tick()
+    local q = find_c(s, src, n, pattern, m)
+    if q < 0 then break end
+    if q > src then add(sub(s, src + 1, q)) end
+    count = count + 1
+    local whole = sub(s, q + 1, q + m)
+    if parts then
+      for i = 1, #parts do
+        local part = parts[i]
+        if part == WHOLE then
+          add(whole)
+        elseif part == BAD_CAPTURE then
+          error("invalid capture index", 2)
+        else
+          add(part)
+        end
+      end
+    else
+      local v
+      if kind == "table" then v = repl[whole] else v = repl(whole) end
+      if not v then
+        v = whole
+      elseif type(v) == "number" then
+        v = tostring(v)
+      elseif type(v) ~= "string" then
+        error(format("invalid replacement value (a %s)", type(v)), 2)
+      end
+      add(v)
+    end
+    if m > 0 then
+      src = q + m
+    elseif q < n then
+      -- An empty match: the byte after it is kept, and the search moves on.
+      add(sub(s, q + 1, q + 1))
+      src = q + 1
+    else
+      src = n
+      break
+    end
+  end
+  add(sub(s, src + 1, n))
+  chunks[#chunks + 1] = concat(pieces, "", 1, np)
+  return concat(chunks), count
+end
+-- %s of a table or an FFI value calls its __tostring from C, where a
+-- __tostring that formats itself would recurse on the native stack, which no
+-- Lua limit bounds. Such arguments go through tostring first, in Lua, where
+-- the recursion is Lua's own (a stack overflow error).
+local real_format = string.format
+local function plain_value(v)
+  local t = type(v)
+  return t == "string" or t == "number"
+end
+string.format = function(fmt, ...)
+  local n = select("#", ...)
+  local args
+  for i = 1, n do
+    local v = select(i, ...)
+    if not plain_value(v) then
+      args = { ... }
+      break
+    end
+    if i >= 8 then
+      args = { ... }
+      break
+    end
+  end
+  if not args then return real_format(fmt, ...) end
+  for i = 1, n do
+    if not plain_value(args[i]) then args[i] = tostring(args[i]) end
+  end
+  return real_format(fmt, unpack(args, 1, n))
+end
 string.dump = nil
 string.rep = safe_rep
+
+-- table.sort: LuaJIT's quicksort is quadratic on adversarial input and runs
+-- in C, beyond the clock; its comparator (or __lt) is called from C, so a
+-- comparator that sorts recurses on the native stack. This heap sort is
+-- O(n log n) whatever the input, checks the clock, and calls the comparator
+-- from Lua. Like LuaJIT's, it reads and writes the table raw and is not stable.
+local function less(a, b)
+  local ta, tb = type(a), type(b)
+  if ta == tb and (ta == "number" or ta == "string") then return a < b end
+  -- Level 4: the line that called table.sort (less <- sift <- sort).
+  if ta ~= tb then error(format("attempt to compare %s with %s", ta, tb), 4) end
+  if ta ~= "table" and ta ~= "cdata" and ta ~= "userdata" then
+    error(format("attempt to compare two %s values", ta), 4)
+  end
+  return a < b
+end
+local function sift(t, i, n, lt)
+  local v = rawget(t, i)
+  while true do
+    local c = 2 * i
+    if c > n then break end
+    local cv = rawget(t, c)
+    if c < n then
+      local right = rawget(t, c + 1)
+      if lt(cv, right) then c, cv = c + 1, right end
+    end
+    if not lt(v, cv) then break end
+    rawset(t, i, cv)
+    i = c
+  end
+  rawset(t, i, v)
+end
+local function safe_sort(t, comp)
+  if type(t) ~= "table" then
+    error(format("bad argument #1 to 'sort' (table expected, got %s)", typename(t)), 2)
+  end
+  if comp ~= nil and type(comp) ~= "function" then
+    error(format("bad argument #2 to 'sort' (function expected, got %s)", typename(comp)), 2)
+  end
+  local lt, n = comp or less, #t
+  for i = floor(n / 2), 1, -1 do
+    lib_tick()
+    sift(t, i, n, lt)
+  end
+  for last = n, 2, -1 do
+    lib_tick()
+    local top = rawget(t, 1)
+    rawset(t, 1, rawget(t, last))
+    rawset(t, last, top)
+    sift(t, 1, last - 1, lt)
+  end
+end
+-- table.move, foreach and foreachi are Lua inside LuaJIT but not
+-- instrumented: table.move({}, 1, 2^31 - 2, 1) would copy nils for seconds.
+-- These check the clock at every element.
+local function int_arg(fname, k, v)
+  local x = as_number(v)
+  if type(x) ~= "number" then
+    error(format("bad argument #%d to '%s' (number expected, got %s)", k, fname, typename(v)), 3)
+  end
+  return to_int(x)
+end
+local function table_arg(fname, k, v)
+  if type(v) ~= "table" then
+    error(format("bad argument #%d to '%s' (table expected, got %s)", k, fname, typename(v)), 3)
+  end
+end
+local function safe_move(a1, f, e, t, a2)
+  table_arg("move", 1, a1)
+  f, e, t = int_arg("move", 2, f), int_arg("move", 3, e), int_arg("move", 4, t)
+  if a2 == nil then a2 = a1 end
+  table_arg("move", 5, a2)
+  if e >= f then
+    local d = t - f
+    if t > e or t <= f or a2 ~= a1 then
+      for i = f, e do
+        lib_tick()
+        a2[i + d] = a1[i]
+      end
+    else
+      for i = e, f, -1 do
+        lib_tick()
+        a2[i + d] = a1[i]
+      end
+    end
+  end
+  return a2
+end
+local function safe_foreachi(t, f)
+  table_arg("foreachi", 1, t)
+  for i = 1, #t do
+    lib_tick()
+    local r = f(i, t[i])
+    if r ~= nil then return r end
+  end
+end
+local function safe_foreach(t, f)
+  table_arg("foreach", 1, t)
+  for k, v in next, t do
+    lib_tick()
+    local r = f(k, v)
+    if r ~= nil then return r end
+  end
+end
+-- table.concat converts numbers one by one in C: 2^22 items take well under
+-- a second; more is refused.
+local MAX_CONCAT = 4 * 1024 * 1024
+local function safe_concat(t, sep, i, j)
+  if type(t) == "table" then
+    local first = tonumber(i) or 1
+    local last = tonumber(j) or #t
+    if last - first >= MAX_CONCAT then
+      error(format("table.concat: %.0f items are over the limit of %d", last - first + 1, MAX_CONCAT), 2)
+    end
+  end
+  return concat(t, sep, i, j)
+end
+-- Coroutines: every resume nests a native call frame (LuaJIT's vm_resume),
+-- and every coroutine has a Lua stack of its own, so no Lua limit bounds
+-- coroutines resumed inside one another. The clock record counts them per
+-- call (Rust resets it), up to Lua 5.1's C call limit.
+local MAX_NESTED_COROUTINES = 200
+local real_resume, real_create = coroutine.resume, coroutine.create
+local function nest(level)
+  local d = clock.depth
+  if d >= MAX_NESTED_COROUTINES then
+    error(format("coroutines nested too deep: more than %d resumed inside one another (Lua's C call limit)",
+      MAX_NESTED_COROUTINES), level + 1)
+  end
+  clock.depth = d + 1
+end
+local function unnest(...)
+  clock.depth = clock.depth - 1
+  return ...
+end
+local function safe_resume(co, ...)
+  -- A bad argument is LuaJIT's error, raised before anything nests.
+  if type(co) ~= "thread" then return real_resume(co, ...) end
+  nest(2)
+  return unnest(real_resume(co, ...))
+end
+local function rethrow(ok, ...)
+  if not ok then error((...), 0) end
+  return ...
+end
+local function safe_wrap(f)
+  if type(f) ~= "function" then
+    error(format("bad argument #1 to 'wrap' (function expected, got %s)", typename(f)), 2)
+  end
+  local co = real_create(f)
+  return function(...)
+    nest(2)
+    return rethrow(unnest(real_resume(co, ...)))
+  end
+end
 getmetatable("").__metatable = false
 
 local function copy(t, drop)
@@ -711,8 +1072,11 @@ local function make_env(shader_name, params)
   env.string = copy(string)
   setmetatable(env.string, removed("string.", { dump = "it would expose compiled code" }))
   env.table = copy(table)
+  env.table.sort, env.table.move, env.table.concat = safe_sort, safe_move, safe_concat
+  env.table.foreach, env.table.foreachi = safe_foreach, safe_foreachi
   env.bit = copy(bit)
   env.coroutine = copy(coroutine)
+  env.coroutine.resume, env.coroutine.wrap = safe_resume, safe_wrap
   env.print = function(...)
     local n = select("#", ...)
     local parts = { ... }

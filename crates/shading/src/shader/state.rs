@@ -8,6 +8,7 @@ use std::cell::Cell;
 use std::sync::Arc;
 use std::time::Duration;
 
+use luster_core::text::shown;
 use mlua::{Function, LightUserData, Lua, LuaOptions, StdLib, Table};
 
 use super::call::Caller;
@@ -65,6 +66,8 @@ impl ThreadState {
         let log = lua
             .create_function(|_, (name, text, x, y): (String, String, i64, i64)| {
                 // The top level runs at pixel -1: its prints always show.
+                // What a script prints reaches a terminal: escaped and capped.
+                let (name, text) = (shown(&name, false), shown(&text, false));
                 match super::debug_pixel() {
                     Some([dx, dy]) if x >= 0 && (x != i64::from(dx) || y != i64::from(dy)) => {}
                     Some(_) if x >= 0 => eprintln!("[shader {name} at pixel {x},{y}] {text}"),
@@ -119,7 +122,10 @@ impl ThreadState {
             }
         }
         let addr = |k: &str| api.get::<f64>(k).map(|a| a as usize).map_err(internal);
-        let timeout_ns = u64::try_from(timeout.as_nanos()).unwrap_or(u64::MAX);
+        if !ffi::start_watchdog() {
+            let msg = "shader runtime: cannot start the thread that enforces the time limit";
+            return Err(ShaderError::new(ShaderErrorKind::Internal, "(prelude)", msg));
+        }
         let io = IoBlock::new(
             addr("shade")?,
             addr("shade_b")?,
@@ -127,7 +133,7 @@ impl ThreadState {
             addr("out")?,
             addr("material")?,
             addr("clock")?,
-            timeout_ns,
+            ffi::limit_periods(timeout),
         )
         .ok_or_else(|| {
             ShaderError::new(ShaderErrorKind::Internal, "(prelude)", "shader runtime: bad record addresses")
@@ -161,8 +167,8 @@ impl ThreadState {
         let tick: Function = api.get("tick").map_err(internal)?;
         let makers =
             Makers { env: make_env, entry: make_entry, height3: make_height3, material: make_material };
-        for src in sources {
-            state.add(src, &makers, &tick)?;
+        for (index, src) in sources.iter().enumerate() {
+            state.add(src, &makers, &tick).map_err(|e| e.with_source(index))?;
         }
         Ok(state)
     }
@@ -178,8 +184,8 @@ impl ThreadState {
             ShaderErrorKind::Timeout,
             shader,
             format!(
-                "stopped: the shader ran past its time limit and caught the error ({:.3} s per call; \
-                 the limit is set with --shader-timeout)",
+                "stopped: the shader ran past its time limit and caught the error, or one library call \
+                 outran it ({:.3} s per call; the limit is set with --shader-timeout)",
                 self.timeout.as_secs_f64()
             ),
         ))

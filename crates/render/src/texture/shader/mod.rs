@@ -94,17 +94,13 @@ pub fn compile_with_modules(
     let make = |sources: Vec<ShaderSource>| {
         ShaderSet::with_modules(sources, timeout, images.clone(), module_dirs.clone())
     };
-    let set = match make(sources.clone()) {
+    let set = match make(sources) {
         Ok(set) => set,
-        // The set reports the first script that fails; compile them one by
-        // one to find its map (a script used twice may fail with one map's
-        // parameters only). Only the error path pays for this.
+        // The error names the script at fault by its index, which is its
+        // map's (running the scripts again to find it would spend a
+        // top level's time limit twice).
         Err(e) => {
-            let map = sources
-                .iter()
-                .zip(&maps)
-                .find(|(s, _)| make(vec![(*s).clone()]).is_err())
-                .map_or(maps[0], |(_, &m)| m);
+            let map = e.source.and_then(|i| maps.get(i)).copied().unwrap_or(maps[0]);
             return Err(MapError { map, message: e.to_string() });
         }
     };
