@@ -18,6 +18,7 @@ add scene_json $(small "$shared" "$root/crates/luster/tests" -name '*.json')
 add ply $(small "$shared" "$root/crates/luster/tests" -name '*.ply')
 add image $(small "$shared" "$root/crates/luster/tests" \( -name '*.png' -o -name '*.jpg' -o -name '*.exr' -o -name '*.hdr' \))
 add shader $(small "$root/crates/luster/tests" "$root/examples" "$root/docs" -name '*.lua')
+add partfile $(small seeds/partfile)
 mkdir -p corpus/obj
 for o in $(small "$root/crates/luster/tests" -name '*.obj'); do
     out="corpus/obj/$(name "$o")"

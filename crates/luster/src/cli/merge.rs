@@ -1,6 +1,7 @@
 //! `luster merge OUTDIR`: the part files of a split render become its images
 //! (see `luster::cluster::merge`).
 
+use luster_core::text::shown;
 use std::path::Path;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -11,7 +12,7 @@ pub fn run(outdir: &Path) -> ExitCode {
     match luster::cluster::merge::merge(outdir) {
         Ok(m) => {
             for p in &m.written {
-                say!("{}", p.display());
+                say!("{}", shown(&p.display().to_string(), false));
             }
             say!(
                 "merged {} part files into {} files in {:.3} s",
@@ -22,7 +23,7 @@ pub fn run(outdir: &Path) -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(e) => {
-            eprintln!("error: {e}");
+            eprintln!("error: {}", shown(&e.to_string(), false));
             ExitCode::from(2)
         }
     }

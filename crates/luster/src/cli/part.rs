@@ -3,9 +3,10 @@
 //! part files for `luster merge`.
 
 use luster::cluster::part::{render_part, Outcome, PartJob};
-use luster::cluster::{share, JobId, Part};
+use luster::cluster::{share, JobId, Part, MAX_IMAGES};
 use luster::render::{tile_origins, BuildOptions, RenderOptions, Scene};
 use luster::scene::obj::ModelView;
+use luster_core::text::shown;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -60,7 +61,7 @@ pub fn run(
     match pool.install(|| run_in_pool(scenes, outdir, quiet, opts, build, view, split)) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", shown(&format!("{e:#}"), false));
             ExitCode::from(2)
         }
     }
@@ -101,7 +102,11 @@ fn run_in_pool(
             );
         }
     }
-    let images: u32 = counts.iter().sum();
+    let images = counts.iter().map(|&c| u64::from(c)).sum::<u64>();
+    if images > u64::from(MAX_IMAGES) {
+        anyhow::bail!("the scenes hold {images} images; a split render holds at most {MAX_IMAGES}");
+    }
+    let images = images as u32;
     let mut first = 0u32;
     for (s, &count) in scenes.iter().zip(&counts) {
         let range = first..first + count;
@@ -112,14 +117,14 @@ fn run_in_pool(
         let t0 = Instant::now();
         let desc = luster::scene::load_viewed(s, view)?;
         for w in &desc.warnings {
-            eprintln!("warning: {}: {w}", s.display());
+            eprintln!("warning: {}", shown(&format!("{}: {w}", s.display()), false));
         }
         if desc.cameras.len() as u32 != count {
             anyhow::bail!("{}: the scene changed while it was being rendered", s.display());
         }
         let scene = Scene::build_with(&desc, build)?;
         for w in &scene.warnings {
-            eprintln!("warning: {}: {w}", s.display());
+            eprintln!("warning: {}", shown(&format!("{}: {w}", s.display()), false));
         }
         let setup = t0.elapsed().as_secs_f64();
         for (cam, image) in range.enumerate() {
@@ -137,17 +142,19 @@ fn run_in_pool(
                 checkpoint_every: split.checkpoint,
             };
             let t = Instant::now();
-            let outcome = render_part(&scene, cam, opts, &pj, &|_| {}, &mut |w| eprintln!("warning: {w}"))
-                .map_err(|e| anyhow::anyhow!("{}: {e}", s.display()))?;
+            let outcome = render_part(&scene, cam, opts, &pj, &|_| {}, &mut |w| {
+                eprintln!("warning: {}", shown(&w, false))
+            })
+            .map_err(|e| anyhow::anyhow!("{}: {e}", s.display()))?;
             if quiet {
                 continue;
             }
-            let file = luster::cluster::part_path(outdir, &c.image_name, part);
+            let file = luster::cluster::part_path(outdir, &c.image_name, part).display().to_string();
+            let file = shown(&file, false);
             match outcome {
-                Outcome::AlreadyDone => println!("{}  already finished", file.display()),
+                Outcome::AlreadyDone => println!("{file}  already finished"),
                 Outcome::Rendered { resumed, tiles, .. } => println!(
-                    "{}  {tiles} tiles{}  {:.2} s render (+{setup:.2} s load and build)",
-                    file.display(),
+                    "{file}  {tiles} tiles{}  {:.2} s render (+{setup:.2} s load and build)",
                     if resumed > 0 {
                         format!(" ({resumed} resumed from a checkpoint)")
                     } else {

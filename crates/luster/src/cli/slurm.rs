@@ -2,7 +2,10 @@
 //! scripts of a split render (see `luster::cluster::slurm`) and optionally
 //! submits them; `luster slurm status OUTDIR` reports its progress.
 
-use luster::cluster::slurm::{array_script, merge_script, SlurmJob, ARRAY_SCRIPT, LOG_DIR, MERGE_SCRIPT};
+use luster::cluster::slurm::{
+    array_script, merge_script, quote, submit_command, SlurmJob, ARRAY_SCRIPT, LOG_DIR, MERGE_SCRIPT,
+};
+use luster_core::text::shown;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -81,13 +84,14 @@ pub fn run(cli: Cli) -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", shown(&format!("{e:#}"), false));
             ExitCode::from(2)
         }
     }
 }
 
 fn status(outdir: &Path) -> anyhow::Result<()> {
+    // The lines come escaped for the terminal.
     for line in luster::cluster::merge::status(outdir)? {
         say!("{line}");
     }
@@ -110,8 +114,6 @@ fn write(a: &JobArgs) -> anyhow::Result<()> {
         scenes.push(absolute(s)?);
     }
     let outdir = absolute(outdir)?;
-    std::fs::create_dir_all(outdir.join(LOG_DIR))
-        .map_err(|e| anyhow::anyhow!("{}: cannot create the folder: {e}", outdir.display()))?;
     let luster =
         std::env::current_exe().map_err(|e| anyhow::anyhow!("cannot find the luster binary: {e}"))?;
     let mut render_args = Vec::new();
@@ -145,24 +147,27 @@ fn write(a: &JobArgs) -> anyhow::Result<()> {
         time: a.time.clone(),
         render_args,
     };
+    // Both scripts are made, so every value is checked, before anything is written.
+    let (array_text, merge_text) = (array_script(&job)?, merge_script(&job)?);
+    std::fs::create_dir_all(outdir.join(LOG_DIR))
+        .map_err(|e| anyhow::anyhow!("{}: cannot create the folder: {e}", outdir.display()))?;
     let (array, merge) = (outdir.join(ARRAY_SCRIPT), outdir.join(MERGE_SCRIPT));
-    for (path, text) in [(&array, array_script(&job)), (&merge, merge_script(&job))] {
+    for (path, text) in [(&array, array_text), (&merge, merge_text)] {
         std::fs::write(path, text).map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))?;
     }
+    // The paths were checked to hold no control character; quoted, they
+    // paste back into a shell as the same words.
+    let word = |p: &Path| quote(&p.to_string_lossy());
     if !a.submit {
-        say!("wrote {} and {}", array.display(), merge.display());
-        say!(
-            "submit with: jid=$(sbatch --parsable {}) && sbatch --dependency=afterok:$jid {}",
-            array.display(),
-            merge.display()
-        );
+        say!("wrote {} and {}", word(&array), word(&merge));
+        say!("submit with: {}", submit_command(&array, &merge));
         return Ok(());
     }
     let array_id = sbatch(&[array.as_os_str().to_string_lossy().into_owned()])?;
     let merge_id =
         sbatch(&[format!("--dependency=afterok:{array_id}"), merge.to_string_lossy().into_owned()])?;
     say!("submitted array job {array_id} ({tasks} tasks) and merge job {merge_id}");
-    say!("follow with: luster slurm status {}  (or squeue -j {array_id},{merge_id})", outdir.display());
+    say!("follow with: luster slurm status {}  (or squeue -j {array_id},{merge_id})", word(&outdir));
     Ok(())
 }
 

@@ -3,18 +3,24 @@
 //!
 //! Every part file is read and checked before any image is written: all
 //! must be finished parts of one job (same [`super::JobId`] and N), every
-//! image of the job must have each of its parts exactly once, and their
-//! tiles must cover the image exactly. Then each image's film is assembled
+//! image of the job must have each of its parts exactly once, and each part
+//! must hold exactly its share of the image's tiles ([`super::share`]), so
+//! together they cover it exactly. Then each image's film is assembled
 //! and written through [`luster_core::image::outputs`], as `luster render` does.
 //! The part files stay; a second merge writes the same images.
+//!
+//! Files are opened only when regular (see [`PartFile::read_with`]): a FIFO
+//! or a device named like a part is an error for a merge and a line of the
+//! progress report, never a read that blocks. Every count a part file
+//! claims (images, parts, tiles) is bounded before anything loops over it.
 
 use super::part::pull_tile;
-use super::partfile::{tile_rect, PartFile};
-use super::{parse_part_name, parts_of, ClusterError, Part};
+use super::partfile::{tile_count, tile_rect, PartFile, Pixels};
+use super::{images_of_part, parse_part_name, parts_of, share, tiles_of, ClusterError, Part};
 use luster_core::image::outputs::{first_clash, plan_outputs, Output};
+use luster_core::text::shown;
 use luster_render::film::write_outputs;
 use luster_render::film::Film;
-use luster_render::render::tile_origins;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -60,7 +66,6 @@ struct ImagePlan {
     size: (u32, u32),
     outputs: Vec<Output>,
     parts: Vec<PathBuf>,
-    covered: Vec<bool>,
 }
 
 /// What a merge did.
@@ -86,8 +91,8 @@ pub fn merge(outdir: &Path) -> Result<Merged, ClusterError> {
     let mut images: BTreeMap<u32, ImagePlan> = BTreeMap::new();
     let mut seen: BTreeMap<(u32, u32), PathBuf> = BTreeMap::new();
     for f in &found {
-        let mut p = PartFile::read(&f.path)?;
-        p.pixels = Vec::new();
+        // The checksum is checked now; the pixels are read when the image is assembled.
+        let p = PartFile::read_with(&f.path, Pixels::Check)?;
         let here = f.path.display();
         if !p.finished || p.k != f.part.k || p.n != f.part.n || p.image_name != f.image {
             return Err(ClusterError(format!(
@@ -117,6 +122,16 @@ pub fn merge(outdir: &Path) -> Result<Merged, ClusterError> {
                 p.k, p.n
             )));
         }
+        // Each part holds exactly its share, so the parts of an image cover
+        // it exactly once all are there.
+        let count = tile_count(p.width, p.height) as u32;
+        let share = share(p.images, f.part, p.image, count).map(tiles_of);
+        if !share.is_some_and(|s| s.eq(p.tiles.iter().copied())) {
+            return Err(ClusterError(format!(
+                "{here}: its tiles are not part {} of {}'s share of the image (parts of another split?)",
+                p.k, p.n
+            )));
+        }
         let plan = match images.get_mut(&p.image) {
             Some(plan) => plan,
             None => {
@@ -127,7 +142,6 @@ pub fn merge(outdir: &Path) -> Result<Merged, ClusterError> {
                     size: (p.width, p.height),
                     outputs,
                     parts: Vec::new(),
-                    covered: vec![false; tile_origins(p.width, p.height).len()],
                 })
             }
         };
@@ -143,16 +157,14 @@ pub fn merge(outdir: &Path) -> Result<Merged, ClusterError> {
                 p.height
             )));
         }
-        for &t in &p.tiles {
-            if std::mem::replace(&mut plan.covered[t as usize], true) {
-                return Err(ClusterError(format!("{here}: tile {t} is also in another part")));
-            }
-        }
         plan.parts.push(f.path.clone());
     }
-    let Some((_, _, n, m)) = first else {
+    let Some((_, job, n, m)) = first else {
         return Err(ClusterError(format!("{}: there are no part files to merge", outdir.display())));
     };
+    // However many images the parts claim, this stops at the first missing
+    // part: every lookup before it found a distinct file, so it runs at most
+    // once per part file read.
     for i in 0..m {
         for k in parts_of(m, n, i) {
             if !seen.contains_key(&(i, k)) {
@@ -175,37 +187,29 @@ pub fn merge(outdir: &Path) -> Result<Merged, ClusterError> {
             clash.display()
         )));
     }
-    if let Some(plan) = plans.iter().find(|p| p.covered.contains(&false)) {
-        let t = plan.covered.iter().position(|c| !c).unwrap_or(0);
-        return Err(ClusterError(format!(
-            "{}: no part holds tile {t} of {} (parts of another split?)",
-            plan.parts[0].display(),
-            plan.name
-        )));
-    }
     // Everything was checked (checksums included); the films are assembled
     // one at a time, since an animation's films together may not fit in memory.
     let mut written = Vec::new();
     for plan in &plans {
-        let film = assemble(plan)?;
+        let film = assemble(plan, job)?;
         written.extend(write_outputs(&film, outdir, &plan.outputs).map_err(|e| ClusterError(e.to_string()))?);
     }
     Ok(Merged { written, parts: found.len() })
 }
 
 /// The film of one image from its parts (checked by [`merge`]).
-fn assemble(plan: &ImagePlan) -> Result<Film, ClusterError> {
+fn assemble(plan: &ImagePlan, job: [u8; 32]) -> Result<Film, ClusterError> {
     let (w, h) = plan.size;
-    let origins = tile_origins(w, h);
     let mut film = Film::new(w, h);
     for path in &plan.parts {
         let p = PartFile::read(path)?;
-        if (p.width, p.height) != plan.size {
+        if (p.width, p.height) != plan.size || p.job != job {
             return Err(ClusterError(format!("{}: the file changed during the merge", path.display())));
         }
+        // The reader checked that the pixels are exactly the listed tiles'.
         let mut at = 0;
         for &t in &p.tiles {
-            let rect = tile_rect(&origins, t, w, h);
+            let rect = tile_rect(t, w, h);
             let len = ((rect.2 - rect.0) * (rect.3 - rect.1)) as usize;
             pull_tile(&mut film, &p.pixels[at..at + len], rect);
             at += len;
@@ -214,55 +218,60 @@ fn assemble(plan: &ImagePlan) -> Result<Film, ClusterError> {
     Ok(film)
 }
 
+/// Most lines about unfinished parts in a progress report; the rest are counted.
+const MAX_UNFINISHED_LINES: usize = 32;
+
 /// Progress of a split render, from the files under `outdir`: one line per
-/// fact, for `luster slurm status`.
+/// fact, for `luster slurm status`. Part files are read up to their tile
+/// lists (their checksums are `luster merge`'s to check); one that cannot be
+/// read is a line saying why. The lines are safe to print: names from the
+/// folder have their control characters escaped.
 pub fn status(outdir: &Path) -> Result<Vec<String>, ClusterError> {
     let found = find(outdir)?;
     if found.is_empty() {
-        return Ok(vec![format!("{}: no part files yet", outdir.display())]);
+        return Ok(vec![shown(&format!("{}: no part files yet", outdir.display()), false).into_owned()]);
     }
     let mut lines = Vec::new();
-    let mut done: BTreeMap<u32, usize> = BTreeMap::new();
+    let mut done: BTreeMap<u32, u64> = BTreeMap::new();
     let mut expected = None;
     for f in &found {
-        let p = match PartFile::read(&f.path) {
+        let p = match PartFile::read_with(&f.path, Pixels::Skip) {
             Ok(p) => p,
             Err(e) => {
                 lines.push(format!("unreadable: {e}"));
                 continue;
             }
         };
-        let total =
-            super::share(p.images, f.part, p.image, origins_len(&p)).map(|s| super::selected(s).len());
+        let count = tile_count(p.width, p.height) as u32;
+        let total = share(p.images, f.part, p.image, count).map_or(0, |s| tiles_of(s).count());
         expected = Some((p.images, p.n));
         if f.checkpoint {
             lines.push(format!(
-                "part {} of {}: {} in progress, {} of {} tiles checkpointed",
+                "part {} of {}: {} in progress, {} of {total} tiles checkpointed",
                 f.part.k,
                 f.part.n,
                 f.image,
                 p.tiles.len(),
-                total.unwrap_or(0)
             ));
         } else {
             *done.entry(f.part.k).or_default() += 1;
         }
     }
     if let Some((m, n)) = expected {
-        let per_part = |k: u32| (0..m).filter(|&i| parts_of(m, n, i).contains(&k)).count();
-        let finished: usize = done.values().sum();
-        let all: usize = (1..=n).map(per_part).sum();
+        let finished: u64 = done.values().sum();
+        // Every image has one part, or all N of them.
+        let all = if m >= n { u64::from(m) } else { u64::from(m) * u64::from(n) };
         lines.insert(0, format!("{finished} of {all} part files finished ({m} images in {n} parts)"));
-        for k in 1..=n {
-            let d = done.get(&k).copied().unwrap_or(0);
-            if d < per_part(k) {
-                lines.push(format!("part {k} of {n}: {d} of {} images finished", per_part(k)));
-            }
+        let done_of = |k: u32| done.get(&k).copied().unwrap_or(0);
+        // Lines are made for the first few only: N may be 2^20.
+        let mut unfinished = (1..=n).filter(|&k| done_of(k) < images_of_part(m, n, k));
+        lines.extend(unfinished.by_ref().take(MAX_UNFINISHED_LINES).map(|k| {
+            format!("part {k} of {n}: {} of {} images finished", done_of(k), images_of_part(m, n, k))
+        }));
+        let more = unfinished.count();
+        if more > 0 {
+            lines.push(format!("... and {more} more unfinished parts"));
         }
     }
-    Ok(lines)
-}
-
-fn origins_len(p: &PartFile) -> u32 {
-    tile_origins(p.width, p.height).len() as u32
+    Ok(lines.into_iter().map(|l| shown(&l, false).into_owned()).collect())
 }

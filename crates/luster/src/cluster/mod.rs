@@ -44,6 +44,11 @@ pub struct Part {
 /// Most parts of one render: far beyond any cluster's array size limit.
 pub const MAX_PARTS: u32 = 1 << 20;
 
+/// Most images of one split render (cameras of all its scenes together):
+/// a part file claiming more is refused, so no count over a job's images
+/// can run to 2^32.
+pub const MAX_IMAGES: u32 = 1 << 24;
+
 impl std::str::FromStr for Part {
     type Err = String;
     fn from_str(s: &str) -> Result<Part, String> {
@@ -74,17 +79,33 @@ pub fn share(images: u32, part: Part, image: u32, tiles: u32) -> Option<TileSele
 }
 
 /// The parts that hold some of image `image` (of `images`).
-pub fn parts_of(images: u32, n: u32, image: u32) -> Vec<u32> {
+pub fn parts_of(images: u32, n: u32, image: u32) -> std::ops::RangeInclusive<u32> {
     if images >= n {
-        vec![image % n + 1]
+        let k = image % n + 1;
+        k..=k
     } else {
-        (1..=n).collect()
+        1..=n
+    }
+}
+
+/// How many of the `images` images of a split in `n` parts part `k` holds
+/// some of, counted without a loop over the images.
+pub fn images_of_part(images: u32, n: u32, k: u32) -> u64 {
+    if images >= n {
+        u64::from(images / n) + u64::from(k - 1 < images % n)
+    } else {
+        u64::from(images)
     }
 }
 
 /// The tiles a selection holds, ascending.
 pub fn selected(sel: TileSelection) -> Vec<u32> {
-    (sel.first..sel.end).step_by(sel.step.max(1) as usize).collect()
+    tiles_of(sel).collect()
+}
+
+/// The tiles a selection holds, ascending, without a list.
+pub fn tiles_of(sel: TileSelection) -> impl Iterator<Item = u32> {
+    (sel.first..sel.end).step_by(sel.step.max(1) as usize)
 }
 
 /// What identifies a split render: SHA-256 of the luster version, the
@@ -102,14 +123,11 @@ impl JobId {
         h.update(b"luster ");
         h.update(env!("CARGO_PKG_VERSION").as_bytes());
         h.update(n.to_le_bytes());
+        // The scene and OBJ readers' own cap: a bigger file fails to load anyway.
+        const MAX_SCENE: u64 = 1 << 30;
         for s in scenes {
-            let bytes = std::fs::read(s).map_err(|e| {
-                ClusterError(format!(
-                    "{}: cannot read the scene: {}",
-                    s.display(),
-                    luster_core::file::io_reason(&e)
-                ))
-            })?;
+            let bytes = luster_core::file::read_bytes(s, MAX_SCENE)
+                .map_err(|why| ClusterError(format!("{}: cannot read the scene: {why}", s.display())))?;
             h.update((bytes.len() as u64).to_le_bytes());
             h.update(&bytes);
         }
@@ -171,6 +189,10 @@ mod tests {
                     }
                 }
                 assert!(seen.iter().all(|&c| c == 1), "{images} images, {n} parts: {seen:?}");
+            }
+            for k in 1..=n {
+                let holding = (0..images).filter(|&i| parts_of(images, n, i).contains(&k)).count();
+                assert_eq!(images_of_part(images, n, k), holding as u64, "{images} images, part {k} of {n}");
             }
         }
     }

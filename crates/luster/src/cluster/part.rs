@@ -9,12 +9,12 @@
 //! deterministic the resumed part file is the one an uninterrupted render
 //! writes.
 
-use super::partfile::{tile_rect, PartFile};
+use super::partfile::{tile_rect, PartFile, MAX_FILE};
 use super::{checkpoint_path, part_path, selected, ClusterError, JobId, Part};
 use luster_core::math::Vec3;
 use luster_render::film::Film;
 use luster_render::integrator::RayStats;
-use luster_render::render::{tile_origins, try_render_with, RenderOptions, Scene, TileSelection};
+use luster_render::render::{try_render_with, RenderOptions, Scene, TileSelection};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -66,7 +66,6 @@ pub fn render_part(
 ) -> Result<Outcome, ClusterError> {
     let camera = &scene.cameras[cam];
     let (w, h) = (camera.width, camera.height);
-    let origins = tile_origins(w, h);
     let mine = selected(pj.tiles);
     let final_path = part_path(pj.outdir, &camera.image_name, pj.part);
     let ckpt_path = checkpoint_path(pj.outdir, &camera.image_name, pj.part);
@@ -94,14 +93,14 @@ pub fn render_part(
     };
     let mut file = template.clone();
     if pj.resume {
-        if final_path.exists() {
+        if present(&final_path)? {
             match PartFile::read(&final_path) {
                 Ok(f) if f.finished && same_job(&f) && f.tiles == mine => return Ok(Outcome::AlreadyDone),
                 Ok(_) => warn(format!("{} is from another render; rendering it again", final_path.display())),
                 Err(e) => warn(format!("{e}; rendering it again")),
             }
         }
-        if ckpt_path.exists() {
+        if present(&ckpt_path)? {
             match PartFile::read(&ckpt_path) {
                 Ok(f) if !f.finished && same_job(&f) && mine.starts_with(&f.tiles) => file = f,
                 Ok(_) => {
@@ -131,7 +130,7 @@ pub fn render_part(
         stats.add(&img.stats);
         for &t in c.iter() {
             file.tiles.push(t);
-            push_tile(&mut file.pixels, &img.film, tile_rect(&origins, t, w, h));
+            push_tile(&mut file.pixels, &img.film, tile_rect(t, w, h));
         }
         let last = ci + 1 == chunks.len();
         if pj.resume && !last && saved.elapsed() >= pj.checkpoint_every {
@@ -151,6 +150,19 @@ pub fn render_part(
         })?;
     }
     Ok(Outcome::Rendered { resumed, tiles: mine.len(), stats })
+}
+
+/// Whether a part file or checkpoint to resume from is at `path`. A FIFO, a
+/// device or a folder there is an error rather than a file to set aside:
+/// luster never makes one, and reading it could block or never end.
+fn present(path: &Path) -> Result<bool, ClusterError> {
+    match std::fs::metadata(path) {
+        // A dangling link too: the new file replaces the link.
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(false),
+        _ => luster_core::file::check_regular(path, MAX_FILE)
+            .map(|_| true)
+            .map_err(|why| ClusterError(format!("{}: cannot resume from it: {why}", path.display()))),
+    }
 }
 
 /// Appends the pixels of rectangle `(x0, y0, x1, y1)` of `film`, row by row.

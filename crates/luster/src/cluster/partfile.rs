@@ -23,16 +23,41 @@
 //!
 //! P is the number of pixels in the listed tiles (edge tiles are cut at the
 //! image border).
+//!
+//! A file named like a part may be anything (a FIFO, a link to a device, a
+//! sparse file of gigabytes, a forged header with a right checksum), so
+//! [`PartFile::read_with`] opens regular files only, reads the header first,
+//! bounds every count in it by a limit ([`MAX_NAME`], [`MAX_TONEMAPS`],
+//! [`super::MAX_PARTS`], [`super::MAX_IMAGES`], the scene reader's image
+//! size) and by the bytes the file has left before allocating or looping,
+//! and requires the file's size to be exactly what the header implies
+//! before it reads a pixel.
 
-use super::ClusterError;
+use super::{ClusterError, MAX_IMAGES, MAX_PARTS};
 use luster_core::math::Vec3;
 use luster_core::tonemap::{Display, Gamma, Operator, Tonemap};
-use luster_render::render::{tile_origins, TILE};
+use luster_render::render::TILE;
 use luster_scene::ceng795::camera::{MAX_PIXELS, MAX_SIDE};
+use std::io::Read;
 use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"LUSTPART";
 const VERSION: u32 = 2;
+
+/// Longest `ImageName` a part file may hold, in bytes (a path's limit on Linux).
+pub const MAX_NAME: u32 = 4096;
+/// Most tone mappings a part file may hold.
+pub const MAX_TONEMAPS: u32 = 4096;
+/// Bytes of the fields of fixed size: magic to tile edge, the three counts
+/// (L, t, T), the display byte and the checksum.
+const FIXED: u64 = 8 + 4 + 4 + 32 + 7 * 4 + 4 + 4 + 1 + 4 + 4;
+/// Bytes of one tone mapping.
+const TONEMAP_BYTES: u64 = 18;
+/// The largest part file: the header at its longest, then every tile of the
+/// largest image (a tile holds at least one pixel) with its pixels. Larger
+/// files are refused before a byte is read.
+pub const MAX_FILE: u64 =
+    FIXED + MAX_NAME as u64 + TONEMAP_BYTES * MAX_TONEMAPS as u64 + (4 + 12) * MAX_PIXELS;
 
 /// The contents of a part file (or of a checkpoint).
 #[derive(Clone, Debug, PartialEq)]
@@ -61,24 +86,43 @@ pub struct PartFile {
     pub display: Display,
     /// The tiles held, ascending.
     pub tiles: Vec<u32>,
-    /// Their pixels, tile after tile.
+    /// Their pixels, tile after tile (empty when read with [`Pixels::Skip`]
+    /// or [`Pixels::Check`]).
     pub pixels: Vec<Vec3>,
 }
 
-/// The pixel rectangle of tile `i` of a `w`×`h` image.
-pub fn tile_rect(origins: &[(u32, u32)], i: u32, w: u32, h: u32) -> (u32, u32, u32, u32) {
-    let (x0, y0) = origins[i as usize];
+/// What [`PartFile::read_with`] does with the pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pixels {
+    /// Read them and check the checksum.
+    Keep,
+    /// Read them to check the checksum, and drop them.
+    Check,
+    /// Leave them unread: the header and the file's size are checked, the
+    /// checksum is not (for progress reports).
+    Skip,
+}
+
+/// Tiles of a `w`×`h` image (numbered row by row, as
+/// [`luster_render::render::tile_origins`] lists them).
+pub fn tile_count(w: u32, h: u32) -> u64 {
+    u64::from(w.div_ceil(TILE)) * u64::from(h.div_ceil(TILE))
+}
+
+/// The pixel rectangle `(x0, y0, x1, y1)` of tile `i` of a `w`×`h` image.
+pub fn tile_rect(i: u32, w: u32, h: u32) -> (u32, u32, u32, u32) {
+    let cols = w.div_ceil(TILE).max(1);
+    let (x0, y0) = ((i % cols) * TILE, (i / cols) * TILE);
     (x0, y0, (x0 + TILE).min(w), (y0 + TILE).min(h))
 }
 
 /// Pixels in the listed tiles of a `w`×`h` image.
-pub fn pixels_in(tiles: &[u32], w: u32, h: u32) -> usize {
-    let origins = tile_origins(w, h);
+pub fn pixels_in(tiles: &[u32], w: u32, h: u32) -> u64 {
     tiles
         .iter()
         .map(|&i| {
-            let (x0, y0, x1, y1) = tile_rect(&origins, i, w, h);
-            ((x1 - x0) * (y1 - y0)) as usize
+            let (x0, y0, x1, y1) = tile_rect(i, w, h);
+            u64::from(x1 - x0) * u64::from(y1 - y0)
         })
         .sum()
 }
@@ -134,122 +178,25 @@ impl PartFile {
         b
     }
 
-    /// Reads a part file; `what` names it in errors.
+    /// Reads a part file from memory; `what` names it in errors.
     pub fn decode(bytes: &[u8], what: &Path) -> Result<PartFile, ClusterError> {
-        let bad = |why: &str| ClusterError(format!("{}: not a usable part file ({why})", what.display()));
-        if bytes.len() < 8 || &bytes[..8] != MAGIC {
-            return Err(bad("it does not start with LUSTPART"));
-        }
-        if bytes.len() < 16 {
-            return Err(bad("it is truncated"));
-        }
-        let (body, tail) = bytes.split_at(bytes.len() - 4);
-        let mut r = Cursor { b: body, at: 8 };
-        let version = r.u32().ok_or_else(|| bad("it is truncated"))?;
-        if version != VERSION {
-            return Err(bad(&format!("format version {version}, this luster reads {VERSION}")));
-        }
-        let stored = u32::from_le_bytes([tail[0], tail[1], tail[2], tail[3]]);
-        if crc32fast::hash(body) != stored {
-            return Err(bad("its checksum does not match: truncated or corrupt"));
-        }
-        let parsed = (|| {
-            let finished = r.u32()? == 1;
-            let job: [u8; 32] = r.take(32)?.try_into().ok()?;
-            let [n, k, images, image, width, height, tile] = [(); 7].map(|_| r.u32());
-            let (n, k, images, image, width, height, tile) =
-                (n?, k?, images?, image?, width?, height?, tile?);
-            // The scene reader's size limits bound what a header may claim, so a
-            // forged one cannot make the reader build a huge tile list.
-            let too_big =
-                width > MAX_SIDE || height > MAX_SIDE || u64::from(width) * u64::from(height) > MAX_PIXELS;
-            if tile != TILE
-                || n == 0
-                || k == 0
-                || k > n
-                || image >= images
-                || width == 0
-                || height == 0
-                || too_big
-            {
-                return None;
-            }
-            let len = r.u32()? as usize;
-            let image_name = String::from_utf8(r.take(len)?.to_vec()).ok()?;
-            let nt = r.u32()? as usize;
-            let mut tonemaps = Vec::with_capacity(nt.min(64));
-            for _ in 0..nt {
-                let operator = match r.u8()? {
-                    0 => Operator::Photographic,
-                    1 => Operator::Aces,
-                    2 => Operator::Filmic,
-                    _ => return None,
-                };
-                let (key, burn_percent, saturation) = (r.f32()?, r.f32()?, r.f32()?);
-                let gamma = match (r.u8()?, r.f32()?) {
-                    (0, g) => Gamma::Power(g),
-                    (1, _) => Gamma::Srgb,
-                    _ => return None,
-                };
-                tonemaps.push(Tonemap { operator, key, burn_percent, saturation, gamma });
-            }
-            let display = match r.u8()? {
-                0 => Display::Course,
-                1 => Display::Srgb,
-                2 => Display::Aces,
-                3 => Display::Filmic,
-                _ => return None,
-            };
-            let count = tile_origins(width, height).len();
-            let t = r.u32()? as usize;
-            if t > count {
-                return None;
-            }
-            let tiles: Vec<u32> = (0..t).map(|_| r.u32()).collect::<Option<_>>()?;
-            if tiles.windows(2).any(|w| w[0] >= w[1]) || tiles.last().is_some_and(|&l| l as usize >= count) {
-                return None;
-            }
-            let p = pixels_in(&tiles, width, height);
-            let raw = r.take(p.checked_mul(12)?)?;
-            if r.at != body.len() {
-                return None;
-            }
-            let pixels = raw
-                .chunks_exact(12)
-                .map(|c| {
-                    let f = |i: usize| f32::from_le_bytes([c[i], c[i + 1], c[i + 2], c[i + 3]]);
-                    Vec3::new(f(0), f(4), f(8))
-                })
-                .collect();
-            Some(PartFile {
-                finished,
-                job,
-                n,
-                k,
-                images,
-                image,
-                width,
-                height,
-                image_name,
-                tonemaps,
-                display,
-                tiles,
-                pixels,
-            })
-        })();
-        parsed.ok_or_else(|| bad("its header or tile list is inconsistent"))
+        parse(bytes, bytes.len() as u64, what, Pixels::Keep)
     }
 
-    /// Reads and decodes `path`.
+    /// Reads and checks `path` with its pixels.
     pub fn read(path: &Path) -> Result<PartFile, ClusterError> {
-        let bytes = std::fs::read(path).map_err(|e| {
-            ClusterError(format!(
-                "{}: cannot read the part file: {}",
-                path.display(),
-                luster_core::file::io_reason(&e)
-            ))
-        })?;
-        PartFile::decode(&bytes, path)
+        PartFile::read_with(path, Pixels::Keep)
+    }
+
+    /// Reads and checks `path`: only a regular file of at most [`MAX_FILE`]
+    /// bytes is opened (a FIFO, a device or a folder is refused unopened),
+    /// and its size must be exactly what its header implies before a pixel
+    /// is read.
+    pub fn read_with(path: &Path, pixels: Pixels) -> Result<PartFile, ClusterError> {
+        let cannot =
+            |why: String| ClusterError(format!("{}: cannot read the part file: {why}", path.display()));
+        let (file, len) = luster_core::file::open_regular(path, MAX_FILE).map_err(cannot)?;
+        parse(std::io::BufReader::with_capacity(64 << 10, file), len, path, pixels)
     }
 
     /// Writes to `path` atomically (a temporary renamed into place), so a
@@ -263,27 +210,250 @@ impl PartFile {
     }
 }
 
-struct Cursor<'a> {
-    b: &'a [u8],
-    at: usize,
+/// Feeds `data` to the part-file reader as a file on disk reaches it: written
+/// as `f.png.part-1-of-1` into a scratch folder (one per thread), read in
+/// each [`Pixels`] mode, then given to `luster merge` and `luster slurm
+/// status` ([`super::merge`]). The entry point of the fuzz target `partfile`
+/// and of the fuzz smoke test; an error is the expected answer to garbage,
+/// the contract is to return.
+pub fn fuzz(data: &[u8]) {
+    thread_local! {
+        static SCRATCH: tempfile::TempDir =
+            tempfile::tempdir().unwrap_or_else(|e| panic!("no scratch folder for fuzzing: {e}"));
+    }
+    SCRATCH.with(|dir| {
+        let path = dir.path().join("f.png.part-1-of-1");
+        std::fs::write(&path, data).unwrap_or_else(|e| panic!("cannot write {}: {e}", path.display()));
+        for mode in [Pixels::Keep, Pixels::Check, Pixels::Skip] {
+            let _ = PartFile::read_with(&path, mode);
+        }
+        let _ = super::merge::status(dir.path());
+        let _ = super::merge::merge(dir.path());
+    });
 }
 
-impl<'a> Cursor<'a> {
-    fn take(&mut self, n: usize) -> Option<&'a [u8]> {
-        let end = self.at.checked_add(n)?;
-        let s = self.b.get(self.at..end)?;
-        self.at = end;
-        Some(s)
+/// Why a part file was refused, before the file's name is put in front.
+enum Fail {
+    /// Reading failed.
+    Io(String),
+    /// The contents are not a usable part file.
+    Bad(String),
+}
+
+impl Fail {
+    fn bad(why: &str) -> Fail {
+        Fail::Bad(why.to_string())
     }
-    fn u8(&mut self) -> Option<u8> {
-        Some(self.take(1)?[0])
+}
+
+/// The part file's bytes in order: every read is checked against the bytes
+/// the file has left first, so no count read from it can make the reader
+/// allocate or loop beyond the file's size; the checksum runs along.
+struct Reader<R> {
+    src: R,
+    /// The file's length.
+    len: u64,
+    /// Bytes not read yet.
+    left: u64,
+    crc: crc32fast::Hasher,
+}
+
+impl<R: Read> Reader<R> {
+    fn fill(&mut self, buf: &mut [u8]) -> Result<(), Fail> {
+        if buf.len() as u64 > self.left {
+            return Err(Fail::bad("it is truncated or corrupt"));
+        }
+        self.src.read_exact(buf).map_err(|e| match e.kind() {
+            // The file shrank since its size was read.
+            std::io::ErrorKind::UnexpectedEof => Fail::bad("it is truncated or corrupt"),
+            _ => Fail::Io(luster_core::file::io_reason(&e)),
+        })?;
+        self.left -= buf.len() as u64;
+        self.crc.update(buf);
+        Ok(())
     }
-    fn u32(&mut self) -> Option<u32> {
-        Some(u32::from_le_bytes(self.take(4)?.try_into().ok()?))
+    fn array<const N: usize>(&mut self) -> Result<[u8; N], Fail> {
+        let mut b = [0; N];
+        self.fill(&mut b)?;
+        Ok(b)
     }
-    fn f32(&mut self) -> Option<f32> {
-        Some(f32::from_bits(self.u32()?))
+    fn u8(&mut self) -> Result<u8, Fail> {
+        Ok(self.array::<1>()?[0])
     }
+    fn u32(&mut self) -> Result<u32, Fail> {
+        Ok(u32::from_le_bytes(self.array()?))
+    }
+    fn f32(&mut self) -> Result<f32, Fail> {
+        Ok(f32::from_bits(self.u32()?))
+    }
+    /// Checks that `count` items of `size` bytes, plus `after` bytes, fit in
+    /// what is left.
+    fn fits(&self, count: u64, size: u64, after: u64) -> Result<(), Fail> {
+        match count.checked_mul(size).and_then(|b| b.checked_add(after)) {
+            Some(b) if b <= self.left => Ok(()),
+            _ => Err(Fail::bad("its header claims more than the file holds: truncated or corrupt")),
+        }
+    }
+}
+
+/// Reads a part file of `len` bytes from `src`.
+fn parse(src: impl Read, len: u64, what: &Path, pixels: Pixels) -> Result<PartFile, ClusterError> {
+    let mut r = Reader { src, len, left: len, crc: crc32fast::Hasher::new() };
+    fields(&mut r, pixels).map_err(|f| match f {
+        Fail::Io(why) => ClusterError(format!("{}: cannot read the part file: {why}", what.display())),
+        Fail::Bad(why) => ClusterError(format!("{}: not a usable part file ({why})", what.display())),
+    })
+}
+
+fn fields<R: Read>(r: &mut Reader<R>, pixels: Pixels) -> Result<PartFile, Fail> {
+    let inconsistent = || Fail::bad("its header or tile list is inconsistent");
+    let mut magic = [0u8; 8];
+    let head = r.left.min(8) as usize;
+    r.fill(&mut magic[..head])?;
+    if head < 8 || &magic != MAGIC {
+        return Err(Fail::bad("it does not start with LUSTPART"));
+    }
+    if r.left < FIXED - 8 {
+        return Err(Fail::bad("it is truncated"));
+    }
+    let version = r.u32()?;
+    if version != VERSION {
+        return Err(Fail::Bad(format!("format version {version}, this luster reads {VERSION}")));
+    }
+    let finished = match r.u32()? {
+        0 => false,
+        1 => true,
+        _ => return Err(inconsistent()),
+    };
+    let job: [u8; 32] = r.array()?;
+    let [n, k, images, image, width, height, tile] = [(); 7].map(|_| r.u32());
+    let (n, k, images, image, width, height, tile) = (n?, k?, images?, image?, width?, height?, tile?);
+    // The scene reader's size limits and the split's bound what a header may
+    // claim, so a forged one cannot make the reader or a merge build a huge
+    // tile list or count to 2^32.
+    let too_big = width > MAX_SIDE || height > MAX_SIDE || u64::from(width) * u64::from(height) > MAX_PIXELS;
+    if tile != TILE
+        || n == 0
+        || n > MAX_PARTS
+        || k == 0
+        || k > n
+        || images > MAX_IMAGES
+        || image >= images
+        || width == 0
+        || height == 0
+        || too_big
+    {
+        return Err(inconsistent());
+    }
+    // What follows the name: t, the display byte, T and the checksum.
+    let rest = 4 + 1 + 4 + 4;
+    let len = r.u32()?;
+    if len > MAX_NAME {
+        return Err(Fail::bad("its image name is longer than any file name"));
+    }
+    r.fits(u64::from(len), 1, rest)?;
+    let mut name = vec![0; len as usize];
+    r.fill(&mut name)?;
+    let image_name = String::from_utf8(name).map_err(|_| Fail::bad("its image name is not UTF-8"))?;
+    if luster_core::text::file_name_problem(&image_name).is_some() {
+        return Err(Fail::bad("its image name is not a file name luster writes"));
+    }
+    let nt = r.u32()?;
+    if nt > MAX_TONEMAPS {
+        return Err(inconsistent());
+    }
+    r.fits(u64::from(nt), TONEMAP_BYTES, rest - 4)?;
+    let mut tonemaps = Vec::with_capacity(nt as usize);
+    for _ in 0..nt {
+        let operator = match r.u8()? {
+            0 => Operator::Photographic,
+            1 => Operator::Aces,
+            2 => Operator::Filmic,
+            _ => return Err(inconsistent()),
+        };
+        let (key, burn_percent, saturation) = (r.f32()?, r.f32()?, r.f32()?);
+        let gamma = match (r.u8()?, r.f32()?) {
+            (0, g) => Gamma::Power(g),
+            (1, _) => Gamma::Srgb,
+            _ => return Err(inconsistent()),
+        };
+        tonemaps.push(Tonemap { operator, key, burn_percent, saturation, gamma });
+    }
+    let display = match r.u8()? {
+        0 => Display::Course,
+        1 => Display::Srgb,
+        2 => Display::Aces,
+        3 => Display::Filmic,
+        _ => return Err(inconsistent()),
+    };
+    let count = tile_count(width, height);
+    let t = r.u32()?;
+    if u64::from(t) > count {
+        return Err(inconsistent());
+    }
+    r.fits(u64::from(t), 4, 4)?;
+    let mut tiles = Vec::with_capacity(t as usize);
+    for _ in 0..t {
+        tiles.push(r.u32()?);
+    }
+    if tiles.windows(2).any(|w| w[0] >= w[1]) || tiles.last().is_some_and(|&l| u64::from(l) >= count) {
+        return Err(inconsistent());
+    }
+    // The size the header implies, checked before a pixel is read: a huge
+    // or sparse file behind a small header is refused here.
+    let p = pixels_in(&tiles, width, height);
+    let expected = p * 12 + 4;
+    if r.left != expected {
+        let at = r.len - r.left;
+        return Err(Fail::Bad(format!(
+            "its header implies {} bytes, the file has {}: truncated or corrupt",
+            at + expected,
+            r.len
+        )));
+    }
+    let pixels = if pixels == Pixels::Skip { Vec::new() } else { read_pixels(r, p, pixels == Pixels::Keep)? };
+    Ok(PartFile {
+        finished,
+        job,
+        n,
+        k,
+        images,
+        image,
+        width,
+        height,
+        image_name,
+        tonemaps,
+        display,
+        tiles,
+        pixels,
+    })
+}
+
+/// Reads `p` pixels (kept when `keep`) and checks the checksum that ends the file.
+fn read_pixels<R: Read>(r: &mut Reader<R>, p: u64, keep: bool) -> Result<Vec<Vec3>, Fail> {
+    // The caller checked that the file holds exactly these bytes.
+    let mut out = Vec::with_capacity(if keep { p as usize } else { 0 });
+    // In chunks of whole pixels, so a large part never needs its bytes and
+    // its pixels in memory at once.
+    const CHUNK: u64 = 12 * 8192;
+    let mut buf = vec![0u8; CHUNK as usize];
+    let mut todo = p * 12;
+    while todo > 0 {
+        let chunk = &mut buf[..todo.min(CHUNK) as usize];
+        r.fill(chunk)?;
+        todo -= chunk.len() as u64;
+        if keep {
+            out.extend(chunk.chunks_exact(12).map(|c| {
+                let f = |i: usize| f32::from_le_bytes([c[i], c[i + 1], c[i + 2], c[i + 3]]);
+                Vec3::new(f(0), f(4), f(8))
+            }));
+        }
+    }
+    let computed = r.crc.clone().finalize();
+    if u32::from_le_bytes(r.array()?) != computed {
+        return Err(Fail::bad("its checksum does not match: truncated or corrupt"));
+    }
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -331,5 +501,81 @@ mod tests {
             b[at] ^= 0x10;
             assert!(PartFile::decode(&b, Path::new("p")).is_err(), "a flip at byte {at} went unnoticed");
         }
+    }
+
+    #[test]
+    fn tiles_are_numbered_as_the_renderer_numbers_them() {
+        for (w, h) in [(1, 1), (16, 16), (17, 5), (40, 20), (33, 70)] {
+            let origins = luster_render::render::tile_origins(w, h);
+            assert_eq!(tile_count(w, h), origins.len() as u64);
+            for (i, &(x0, y0)) in origins.iter().enumerate() {
+                let (a, b, x1, y1) = tile_rect(i as u32, w, h);
+                assert_eq!((a, b), (x0, y0));
+                assert_eq!((x1, y1), ((x0 + TILE).min(w), (y0 + TILE).min(h)));
+            }
+        }
+    }
+
+    /// Re-encodes `bytes` with the u32 at `at` set to `v` and a matching checksum.
+    fn forged(bytes: &[u8], at: usize, v: u32) -> Vec<u8> {
+        let mut b = bytes[..bytes.len() - 4].to_vec();
+        b[at..at + 4].copy_from_slice(&v.to_le_bytes());
+        let crc = crc32fast::hash(&b);
+        b.extend_from_slice(&crc.to_le_bytes());
+        b
+    }
+
+    #[test]
+    fn counts_in_a_checksum_valid_header_are_bounded_by_the_file() {
+        let f = sample();
+        let bytes = f.encode();
+        let name_at = 8 + 4 + 4 + 32 + 7 * 4;
+        let tonemaps_at = name_at + 4 + f.image_name.len();
+        let tiles_at = tonemaps_at + 4 + 18 * f.tonemaps.len() + 1;
+        let images_at = 8 + 4 + 4 + 32 + 8;
+        for (what, at, v) in [
+            ("a 4 GiB name", name_at, u32::MAX),
+            ("a name longer than the file", name_at, 4000),
+            ("2^32-1 tone mappings", tonemaps_at, u32::MAX),
+            ("more tone mappings than the file holds", tonemaps_at, 1000),
+            ("2^32-1 tiles", tiles_at, u32::MAX),
+            ("2^32-1 images", images_at, u32::MAX),
+            ("2^32-1 parts", 8 + 4 + 4 + 32, u32::MAX),
+        ] {
+            let e = PartFile::decode(&forged(&bytes, at, v), Path::new("p")).unwrap_err().0;
+            assert!(e.starts_with("p: not a usable part file"), "{what}: {e}");
+        }
+    }
+
+    #[test]
+    fn the_size_is_checked_against_the_header_before_the_pixels() {
+        let mut bytes = sample().encode();
+        bytes.extend_from_slice(&[0; 12]);
+        for mode in [Pixels::Keep, Pixels::Skip] {
+            let e = parse(&bytes[..], bytes.len() as u64, Path::new("p"), mode).unwrap_err().0;
+            assert!(e.contains("its header implies") && e.contains("truncated or corrupt"), "{e}");
+        }
+        // Headers alone do not check the checksum; the pixels are not read.
+        let f = sample();
+        let mut flipped = f.encode();
+        let last = flipped.len() - 1;
+        flipped[last] ^= 1;
+        let head = parse(&flipped[..], flipped.len() as u64, Path::new("p"), Pixels::Skip).unwrap();
+        assert!(head.pixels.is_empty() && head.tiles == f.tiles);
+        assert!(parse(&flipped[..], flipped.len() as u64, Path::new("p"), Pixels::Check).is_err());
+    }
+
+    #[test]
+    fn names_a_terminal_or_a_shell_would_act_on_are_refused() {
+        let mut f = sample();
+        f.image_name = "a\u{1b}[2J.png".into();
+        let e = PartFile::decode(&f.encode(), Path::new("p")).unwrap_err().0;
+        assert!(e.contains("not a file name luster writes") && !e.contains('\u{1b}'), "{e}");
+    }
+
+    #[test]
+    fn special_files_are_refused_unopened() {
+        let e = PartFile::read(Path::new("/dev/zero")).unwrap_err().0;
+        assert_eq!(e, "/dev/zero: cannot read the part file: it is a device, not a regular file");
     }
 }

@@ -11,6 +11,11 @@
 //! The scenes are multi-sample with a lens, so every pixel takes random
 //! samples: only a render that is truly deterministic per pixel can merge to
 //! the same bytes.
+//!
+//! The Slurm scripts are run too, by bash, with paths a shell would act on
+//! and the luster binary replaced by a stub that records its arguments:
+//! nothing but the intended words may reach it, and values that sbatch reads
+//! itself are refused when it would misread them.
 
 use crate::common;
 
@@ -66,15 +71,17 @@ fn ok(cmd: Command) {
     assert_eq!(run.code, Some(0), "{what} failed: {}", run.stderr);
 }
 
+/// `luster render`, with the scenes after `--` as the Slurm script gives them.
 fn render(scenes: &[PathBuf], out: &Path, extra: &[&str]) -> Command {
     let mut c = luster();
-    c.arg("render").arg("-q").arg("-o").arg(out).args(extra).args(scenes);
+    c.arg("render").arg("-q").arg("-o").arg(out).args(extra).arg("--").args(scenes);
     c
 }
 
+/// `luster merge -- OUT`, as the Slurm script runs it.
 fn merge(out: &Path) -> common::Run {
     let mut c = luster();
-    c.arg("merge").arg(out);
+    c.arg("merge").arg("--").arg(out);
     run_limited(c, LIMIT)
 }
 
@@ -147,7 +154,7 @@ fn parts_merge_to_the_bytes_of_a_single_render() {
     let lib = d.canonicalize().unwrap();
     assert!(array.contains(&format!("'--shader-lib' '{}'", lib.display())), "{array}");
     let merge = std::fs::read_to_string(d.join("slurm/luster-merge.sbatch")).unwrap();
-    assert!(merge.contains(&format!("merge '{}'", d.join("slurm").display())), "{merge}");
+    assert!(merge.contains(&format!("merge -- '{}'", d.join("slurm").display())), "{merge}");
 }
 
 fn assert_refused(run: &common::Run, says: &str, out: &Path) {
@@ -269,4 +276,138 @@ fn a_killed_part_resumes_from_its_checkpoint_to_the_same_bytes() {
     let m = merge(&parts);
     assert_eq!(m.code, Some(0), "{}", m.stderr);
     assert_same_images(&single, &parts);
+}
+
+/// A file name with everything a shell acts on: substitutions, separators,
+/// quotes, globs, white space and a leading `-`.
+const SHELLY: &str = "-n x $(touch MARK) `touch MARK`; touch MARK & '\"' * ? [a] |<>";
+
+/// The words each run of `stub` recorded, one run a line.
+fn recorded(log: &Path) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(log).unwrap_or_default();
+    text.lines().map(|l| l.split('\0').filter(|w| !w.is_empty()).map(String::from).collect()).collect()
+}
+
+/// Writes an executable shell script that appends its arguments to `$LOG`
+/// (NUL-separated, one run a line) and prints `say`.
+fn stub(path: &Path, say: &str) {
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::write(path, format!("#!/bin/sh\n{{ printf '%s\\0' \"$@\"; echo; }} >> \"$LOG\"\necho {say}\n"))
+        .unwrap();
+    std::fs::set_permissions(path, std::fs::Permissions::from_mode(0o755)).unwrap();
+}
+
+fn bash(script: &str, dir: &Path, log: &Path, path: Option<&Path>) -> std::process::Output {
+    let mut c = Command::new("bash");
+    c.arg("-c").arg(script).current_dir(dir).env("LOG", log).env("SLURM_ARRAY_TASK_ID", "1");
+    if let Some(p) = path {
+        c.env("PATH", format!("{}:{}", p.display(), std::env::var("PATH").unwrap_or_default()));
+    }
+    c.output().unwrap()
+}
+
+#[test]
+fn generated_scripts_run_exactly_the_intended_words() {
+    let root = tempfile::tempdir().unwrap();
+    let d = &root.path().canonicalize().unwrap();
+    // The binary too: the scripts run the path of the binary that wrote them.
+    let bin_dir = d.join(format!("bin {SHELLY}"));
+    std::fs::create_dir(&bin_dir).unwrap();
+    let bin = bin_dir.join("luster");
+    std::fs::copy(env!("CARGO_BIN_EXE_luster"), &bin).unwrap();
+    let scenes: Vec<PathBuf> =
+        [format!("{SHELLY}.xml"), "$(touch MARK).json".to_string(), "it's.xml".to_string()]
+            .iter()
+            .map(|n| d.join(n))
+            .collect();
+    for s in &scenes {
+        std::fs::write(s, "<Scene/>").unwrap();
+    }
+    let lib = d.join(format!("lib {SHELLY}"));
+    std::fs::create_dir(&lib).unwrap();
+    // No white space, quote, backslash, # or % (sbatch reads the log path itself).
+    let out = d.join("out;$(touch${IFS}MARK)`touch${IFS}MARK`*?[a]|&<>-n");
+    let made = Command::new(&bin)
+        .current_dir(d)
+        .arg("slurm")
+        .arg("-o")
+        .arg(&out)
+        .args(["--tasks", "3", "--cpus-per-task", "2", "--partition", "short,long", "--time", "1-00:30"])
+        .args(["--spp", "2", "--seed", "5", "--shader-lib"])
+        .arg(&lib)
+        .args(&scenes)
+        .output()
+        .unwrap();
+    assert!(made.status.success(), "{}", String::from_utf8_lossy(&made.stderr));
+    let said = String::from_utf8(made.stdout).unwrap();
+    let (array, merge_script) = (out.join("luster.sbatch"), out.join("luster-merge.sbatch"));
+    let quote = |p: &Path| luster::cluster::slurm::quote(p.to_str().unwrap());
+    assert!(said.contains(&format!("wrote {} and {}\n", quote(&array), quote(&merge_script))), "{said}");
+
+    // The binary becomes a stub, and both scripts run.
+    std::fs::remove_file(&bin).unwrap();
+    stub(&bin, "rendered");
+    let log = d.join("argv");
+    for script in [&array, &merge_script] {
+        let ran = bash(&format!("bash {}", quote(script)), d, &log, None);
+        assert!(ran.status.success(), "{}", String::from_utf8_lossy(&ran.stderr));
+    }
+    let words = |v: &[&str]| v.iter().map(|w| w.to_string()).collect::<Vec<String>>();
+    let path = |p: &Path| p.to_str().unwrap().to_string();
+    let mut render = words(&["render", "--part", "1/3", "--resume", "--threads", "2", "-o"]);
+    render.push(path(&out));
+    render.extend(words(&["--spp", "2", "--seed", "5", "--shader-lib"]));
+    render.push(path(&lib));
+    render.extend(words(&["--checkpoint", "60", "--"]));
+    render.extend(scenes.iter().map(|s| path(s)));
+    let merged = vec!["merge".to_string(), "--".to_string(), path(&out)];
+    assert_eq!(recorded(&log), vec![render, merged]);
+    assert!(!d.join("MARK").exists(), "a script ran a command from a file name");
+
+    // The printed submit command, pasted into a shell, runs sbatch on the two scripts.
+    let hint = said.lines().find_map(|l| l.strip_prefix("submit with: ")).expect("a submit command");
+    let stubs = d.join("stubs");
+    std::fs::create_dir(&stubs).unwrap();
+    stub(&stubs.join("sbatch"), "42");
+    let sbatch_log = d.join("sbatch-argv");
+    let ran = bash(hint, d, &sbatch_log, Some(&stubs));
+    assert!(ran.status.success(), "{hint}: {}", String::from_utf8_lossy(&ran.stderr));
+    assert_eq!(
+        recorded(&sbatch_log),
+        vec![
+            vec!["--parsable".to_string(), path(&array)],
+            vec!["--dependency=afterok:42".to_string(), path(&merge_script)]
+        ]
+    );
+    assert!(!d.join("MARK").exists(), "the submit command ran a command from a file name");
+}
+
+#[test]
+fn values_sbatch_reads_itself_are_refused() {
+    let dir = common::folder(&[("s.xml", "<Scene/>"), ("a\nb.xml", "<Scene/>")]);
+    let d = dir.path();
+    let cases: [(&[&str], &str, &[&str]); 9] = [
+        (&["--partition", "short\ntouch MARK"], "out", &["the partition", "short\\ntouch MARK"]),
+        (&["--partition", "short --wrap=id"], "out", &["the partition", "not a Slurm partition name"]),
+        (&["--time", "1:00\n#SBATCH --wrap=id"], "out", &["the time limit", "Slurm's formats"]),
+        (&["--time", "1h"], "out", &["the time limit"]),
+        (&[], "o\ntouch MARK", &["the output folder", "control character"]),
+        (&[], "my renders", &["the output folder", "white space"]),
+        (&[], "o#1", &["the output folder", "a #"]),
+        (&[], "o%j", &["the output folder", "a %"]),
+        (&["a\nb.xml"], "out", &["the scene path", "a\\nb.xml", "control character"]),
+    ];
+    for (extra, out, says) in cases {
+        let mut c = luster();
+        c.current_dir(d).args(["slurm", "--tasks", "2", "-o", out]).args(extra).arg("s.xml");
+        let run = run_limited(c, LIMIT);
+        let what = format!("{extra:?} -o {out:?}");
+        assert_eq!(run.code, Some(2), "{what}: {}", run.stderr);
+        let err = run.stderr.trim_end();
+        assert!(err.starts_with("error: ") && err.lines().count() == 1, "{what}: {err}");
+        for word in says {
+            assert!(err.contains(word), "{what}: {err} lacks {word}");
+        }
+        assert!(!d.join(out).join("luster.sbatch").exists(), "{what}: a script was written");
+    }
 }

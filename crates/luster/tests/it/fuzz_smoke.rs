@@ -272,3 +272,63 @@ fn fuzz_smoke_run_finds_no_panic() {
     println!("fuzz smoke run:\n  {}", report.join("\n  "));
     assert!(crashes.is_empty(), "{}", crashes.join("\n"));
 }
+
+/// Part files of split renders ([`luster::cluster::partfile::fuzz`], whose
+/// target is in `luster` rather than `luster::fuzzing`): valid part files
+/// and a checkpoint as seeds, counts and the magic word as tokens. Most
+/// mutants fail the header's checks or the checksum, which is the point.
+#[test]
+fn partfile_fuzz_smoke_run_finds_no_panic() {
+    use luster::cluster::partfile::{fuzz, pixels_in, PartFile};
+    use luster::math::Vec3;
+    use luster::tonemap::{Display, Tonemap};
+    let mut seeds = Vec::new();
+    for (w, h, n, k, tiles, tonemaps) in [
+        (8, 8, 1, 1, vec![0], vec![]),
+        (40, 20, 3, 2, vec![1, 4], vec![Tonemap::COURSE_DEFAULT]),
+        (33, 17, 2, 1, vec![0, 2, 4], vec![Tonemap::COURSE_DEFAULT, Tonemap::DISPLAY]),
+        (5, 5, 4, 4, vec![], vec![]),
+    ] {
+        let p = pixels_in(&tiles, w, h);
+        let part = PartFile {
+            finished: k != 4,
+            job: [3; 32],
+            n,
+            k,
+            images: 1,
+            image: 0,
+            width: w,
+            height: h,
+            image_name: "f.png".into(),
+            tonemaps,
+            display: Display::Srgb,
+            tiles,
+            pixels: (0..p).map(|i| Vec3::new(i as f32, 0.5, 2.0)).collect(),
+        };
+        seeds.push(part.encode());
+    }
+    // Counts of one, two and 2^31-1, the version, a tile edge.
+    let tokens: &[&str] =
+        &["LUSTPART", "\u{1}\0\0\0", "\u{2}\0\0\0", "\u{7f}\u{7f}\u{7f}\u{7f}", "\u{10}\0\0\0"];
+    let iterations = env("LUSTER_FUZZ_ITERATIONS").unwrap_or(ITERATIONS);
+    let budget = env("LUSTER_FUZZ_SECONDS").map_or(BUDGET, |s| Duration::from_secs(s as u64));
+    let mut rng = Rng(0x005e_ed0f_9a27_f11e);
+    let start = Instant::now();
+    let (mut runs, mut crashes) = (0, Vec::new());
+    let inputs = seeds.iter().cloned().chain(std::iter::repeat_with(|| mutate(&mut rng, &seeds, tokens)));
+    for input in inputs.take(iterations) {
+        runs += 1;
+        if std::panic::catch_unwind(|| fuzz(&input)).is_err() {
+            let dir = repo().join("target").join("fuzz-smoke");
+            let _ = std::fs::create_dir_all(&dir);
+            let file = dir.join(format!("crash-partfile-{runs}"));
+            let _ = std::fs::write(&file, &input);
+            crashes.push(format!("partfile panicked on input {runs} (saved as {})", file.display()));
+        }
+        if start.elapsed() > budget {
+            break;
+        }
+    }
+    println!("fuzz smoke run: partfile: {runs} inputs in {:.1} s", start.elapsed().as_secs_f64());
+    assert!(crashes.is_empty(), "{}", crashes.join("\n"));
+}

@@ -11,6 +11,7 @@
 //! [`huge_but_finite_coordinates_render`].
 
 mod cases;
+mod cluster;
 use crate::common;
 mod kit;
 mod terminal;
