@@ -3,7 +3,7 @@
 # executions (default 1000000) or SECONDS of time, whichever ends first, on
 # the seeded corpus, logging to logs/. Scene builds run on one thread
 # (RAYON_NUM_THREADS=1): parallel BVH builds of tiny scenes only add overhead.
-# usage: fuzz/run.sh [TARGET...]     (all six when none is given)
+# usage: fuzz/run.sh [TARGET...]     (all of them when none is given)
 # Crashing inputs land in artifacts/<target>/; replay one with
 #   fuzz/target/<host triple>/release/<target> artifacts/<target>/crash-...
 set -eu
@@ -13,12 +13,12 @@ cd "$(dirname "$0")"
 # scripts and proc macros (which would miss libFuzzer's symbols).
 host=$(rustc -vV | sed -n 's/^host: //p')
 cargo build --release --bins --target "$host"
-bin=target/$host/release
+bin=${CARGO_TARGET_DIR:-target}/$host/release
 [ -d corpus ] || ./seed.sh
 runs=${RUNS:-1000000}
 seconds=${SECONDS_PER_TARGET:-0}
 export RAYON_NUM_THREADS=${RAYON_NUM_THREADS:-1}
-targets=${*:-scene_xml scene_json ply obj image shader}
+targets=${*:-scene_xml scene_json ply obj image shader watch_request}
 mkdir -p logs
 for t in $targets; do
     mkdir -p "artifacts/$t"
