@@ -516,3 +516,54 @@ impl Connection<'_> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `n` connections on a local listener: (client ends, server ends).
+    fn pairs(n: usize) -> (Vec<TcpStream>, Vec<TcpStream>) {
+        let listener = TcpListener::bind("127.0.0.1:0").expect("a local listener");
+        let addr = listener.local_addr().expect("its address");
+        let clients: Vec<TcpStream> =
+            (0..n).map(|_| TcpStream::connect(addr).expect("a connection")).collect();
+        let servers = (0..n).map(|_| listener.accept().expect("an accepted connection").0).collect();
+        (clients, servers)
+    }
+
+    #[test]
+    fn a_full_table_closes_the_connection_waiting_longest_or_refuses() {
+        let (clients, servers) = pairs(MAX_CONNECTIONS + 2);
+        let conns = Conns::default();
+        let ids: Vec<u64> =
+            servers[..MAX_CONNECTIONS].iter().map(|s| conns.admit(s).expect("room")).collect();
+        for &id in &ids {
+            assert!(conns.mark(id, false));
+        }
+        // Only connection 5 waits for a request: it gives way.
+        assert!(conns.mark(ids[5], true));
+        let newcomer = conns.admit(&servers[MAX_CONNECTIONS]).expect("room made");
+        assert!(!conns.mark(ids[5], true), "connection 5 was closed");
+        let mut byte = [0u8; 1];
+        clients[5].set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+        assert_eq!(
+            (&clients[5]).read(&mut byte).expect("the end of the stream"),
+            0,
+            "its client sees the end"
+        );
+        // With every connection being answered, a newcomer is refused.
+        assert!(conns.mark(newcomer, false));
+        assert_eq!(conns.admit(&servers[MAX_CONNECTIONS + 1]), None);
+        conns.leave(ids[0]);
+        assert!(conns.admit(&servers[MAX_CONNECTIONS + 1]).is_some(), "a slot left is taken");
+    }
+
+    #[test]
+    fn event_streams_are_capped() {
+        let conns = Conns::default();
+        assert!((0..MAX_STREAMS).all(|_| conns.start_stream()));
+        assert!(!conns.start_stream());
+        conns.end_stream();
+        assert!(conns.start_stream());
+    }
+}
