@@ -18,7 +18,7 @@ bin=${CARGO_TARGET_DIR:-target}/$host/release
 runs=${RUNS:-1000000}
 seconds=${SECONDS_PER_TARGET:-0}
 export RAYON_NUM_THREADS=${RAYON_NUM_THREADS:-1}
-targets=${*:-scene_xml scene_json ply obj image shader partfile}
+targets=${*:-scene_xml scene_json ply obj image shader partfile watch_request}
 mkdir -p logs
 for t in $targets; do
     mkdir -p "artifacts/$t"

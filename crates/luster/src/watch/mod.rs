@@ -18,6 +18,7 @@
 pub mod driver;
 pub mod files;
 pub mod hub;
+pub mod request;
 pub mod server;
 pub mod tev;
 
@@ -60,7 +61,7 @@ pub struct Options {
 pub struct Session {
     hub: Arc<Hub>,
     addr: SocketAddr,
-    server: Arc<tiny_http::Server>,
+    server: Arc<server::Server>,
     cancel: Arc<AtomicBool>,
     threads: Vec<JoinHandle<()>>,
 }
@@ -71,8 +72,7 @@ impl Session {
     pub fn start(opts: Options, port: u16) -> Result<Session, String> {
         let tev = opts.tev.as_deref().map(tev::Tev::connect).transpose()?;
         let server = Arc::new(server::bind(port)?);
-        let addr =
-            server.server_addr().to_ip().ok_or_else(|| "the page server has no IP address".to_string())?;
+        let addr = server.addr();
         let hub = Hub::new(opts.scene.display().to_string());
         let cancel = Arc::new(AtomicBool::new(false));
         let (tx, changes) = std::sync::mpsc::channel::<Instant>();
@@ -107,7 +107,7 @@ impl Session {
         };
         let render = spawn("watch-driver", Box::new(move || driver.run(&pool)))?;
         let (s, h) = (Arc::clone(&server), Arc::clone(&hub));
-        let serve = spawn("watch-server", Box::new(move || server::serve(s, h)))?;
+        let serve = spawn("watch-server", Box::new(move || s.serve(h)))?;
         Ok(Session { hub, addr, server, cancel, threads: vec![render, serve] })
     }
 

@@ -8,126 +8,562 @@
 //! | `/events` | `text/event-stream`: a `state` event (the JSON of `/state`) at every change |
 //! | `/state` | the state: frame number, pass, spp, size, error, ... |
 //! | `/frame.png` | the newest frame (header `X-Luster-Frame`: its number); 404 before the first |
+//!
+//! A small HTTP/1.1 server on `std::net`, heads parsed by [`request`]
+//! (httparse): four fixed paths need caps and timeouts, not an async runtime.
+//! No client can stall or exhaust it:
+//!
+//! | what | limit | then |
+//! |---|---|---|
+//! | request head | [`MAX_HEAD`] bytes, [`MAX_FIELDS`](super::request::MAX_FIELDS) fields | 431, closed |
+//! | request body | [`MAX_BODY`] (`Content-Length` only) | 413 before a byte of it is read, closed |
+//! | time for a head | [`HEAD_TIME`] from the connection or the previous answer | closed (408 when part of it came) |
+//! | time for a body | [`BODY_TIME`] | closed |
+//! | time for an answer or an event | [`WRITE_TIME`] | closed |
+//! | connections | [`MAX_CONNECTIONS`], a thread each; a new one closes the one waiting longest for a request, or gets 503 when all are being answered | |
+//! | event streams | [`MAX_STREAMS`] of those connections | 503 |
+//! | `Host`, `Origin` | see [`request::admit`] | 421, 403 |
 
 use super::hub::Hub;
-use std::io::Write;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Arc;
-use std::time::Duration;
-use tiny_http::{Header, Request, Response, Server};
+use super::request::{self, Method, Refusal, Request, MAX_BODY, MAX_HEAD};
+use std::io::{ErrorKind, Read, Write};
+use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
 
 /// The page, plain HTML and JavaScript with nothing fetched from elsewhere.
 const PAGE: &str = include_str!("page.html");
 
-/// Event streams open at once; more are refused (each holds a thread).
-const MAX_STREAMS: usize = 32;
+/// Connections open at once (each holds a thread).
+pub const MAX_CONNECTIONS: usize = 64;
+
+/// Event streams open at once, out of [`MAX_CONNECTIONS`].
+pub const MAX_STREAMS: usize = 32;
+
+/// Longest wait for a whole request head.
+pub const HEAD_TIME: Duration = Duration::from_secs(5);
+
+/// Longest wait for a whole request body, after its head.
+pub const BODY_TIME: Duration = Duration::from_secs(10);
+
+/// Longest time to write one answer or one event.
+pub const WRITE_TIME: Duration = Duration::from_secs(10);
 
 /// Longest silence on a stream: a comment line then finds closed tabs.
 const KEEPALIVE: Duration = Duration::from_secs(10);
 
+/// How long a refused request's remaining bytes are read and dropped before
+/// closing, so that closing with unread bytes (a TCP reset) does not destroy
+/// the refusal before the client reads it.
+const LINGER: Duration = Duration::from_secs(1);
+
+/// The listening socket and the open connections.
+pub struct Server {
+    listener: TcpListener,
+    addr: SocketAddr,
+    conns: Arc<Conns>,
+}
+
 /// Binds 127.0.0.1:`port` (0: any free port).
 pub fn bind(port: u16) -> Result<Server, String> {
-    Server::http(("127.0.0.1", port)).map_err(|e| {
-        let why = match e.downcast_ref::<std::io::Error>() {
-            Some(io) if io.kind() == std::io::ErrorKind::AddrInUse => {
-                "the port is in use (try --port 0)".to_string()
-            }
-            Some(io) => luster_core::file::io_reason(io),
-            None => e.to_string(),
+    let fail = |e: std::io::Error| {
+        let why = match e.kind() {
+            ErrorKind::AddrInUse => "the port is in use (try --port 0)".to_string(),
+            _ => luster_core::file::io_reason(&e),
         };
         format!("cannot serve the page on 127.0.0.1:{port}: {why}")
-    })
-}
-
-/// Answers requests until the hub closes.
-pub fn serve(server: Arc<Server>, hub: Arc<Hub>) {
-    let streams = Arc::new(AtomicUsize::new(0));
-    while !hub.is_closed() {
-        let req = match server.recv_timeout(Duration::from_millis(250)) {
-            Ok(Some(r)) => r,
-            Ok(None) => continue,
-            Err(_) => break,
-        };
-        let path = req.url().split('?').next().unwrap_or("").to_string();
-        match path.as_str() {
-            "/events" => {
-                if streams.fetch_add(1, Ordering::SeqCst) >= MAX_STREAMS {
-                    streams.fetch_sub(1, Ordering::SeqCst);
-                    let _ = req.respond(Response::from_string("too many open pages").with_status_code(503));
-                    continue;
-                }
-                let (hub, open) = (Arc::clone(&hub), Arc::clone(&streams));
-                let spawned = std::thread::Builder::new().name("watch-events".into()).spawn(move || {
-                    stream(req, &hub);
-                    open.fetch_sub(1, Ordering::SeqCst);
-                });
-                if spawned.is_err() {
-                    streams.fetch_sub(1, Ordering::SeqCst);
-                }
-            }
-            _ => answer(req, &path, &hub),
-        }
-    }
-}
-
-fn header(name: &str, value: &str) -> Header {
-    // Both halves are ASCII constants or numbers written here.
-    Header::from_bytes(name.as_bytes(), value.as_bytes()).unwrap_or_else(|()| unreachable!("ASCII header"))
-}
-
-/// Every answer but the event stream.
-fn answer(req: Request, path: &str, hub: &Hub) {
-    let no_store = header("Cache-Control", "no-store");
-    let r = match path {
-        "/" | "/index.html" => req.respond(
-            Response::from_string(PAGE)
-                .with_header(header("Content-Type", "text/html; charset=utf-8"))
-                .with_header(no_store),
-        ),
-        "/state" => req.respond(
-            Response::from_string(hub.snapshot().to_json())
-                .with_header(header("Content-Type", "application/json"))
-                .with_header(no_store),
-        ),
-        "/frame.png" => match hub.snapshot().frame {
-            Some(f) => req.respond(
-                Response::from_data(f.png.as_slice())
-                    .with_header(header("Content-Type", "image/png"))
-                    .with_header(header("X-Luster-Frame", &f.number.to_string()))
-                    .with_header(no_store),
-            ),
-            None => req.respond(Response::from_string("no frame yet").with_status_code(404)),
-        },
-        _ => req.respond(Response::from_string("not found").with_status_code(404)),
     };
-    // A client that went away mid-answer is no concern of the session.
-    let _ = r;
+    let listener = TcpListener::bind(("127.0.0.1", port)).map_err(fail)?;
+    let addr = listener.local_addr().map_err(fail)?;
+    Ok(Server { listener, addr, conns: Arc::new(Conns::default()) })
 }
 
-/// Streams the state as Server-Sent Events until the client leaves or the
-/// hub closes.
-fn stream(req: Request, hub: &Hub) {
-    let mut out = req.into_writer();
-    let head = "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\n\
-                Connection: close\r\n\r\n";
-    if out.write_all(head.as_bytes()).and_then(|()| out.flush()).is_err() {
-        return;
+impl Server {
+    /// The address it listens on.
+    pub fn addr(&self) -> SocketAddr {
+        self.addr
     }
-    let mut state = hub.snapshot();
-    loop {
-        let event = format!("event: state\ndata: {}\n\n", state.to_json());
-        if out.write_all(event.as_bytes()).and_then(|()| out.flush()).is_err() {
-            return;
-        }
-        let seq = state.seq;
-        loop {
-            if let Some(s) = hub.wait_newer(seq, KEEPALIVE) {
-                state = s;
+
+    /// Accepts connections until the hub closes, each on a thread of its own
+    /// up to [`MAX_CONNECTIONS`].
+    pub fn serve(&self, hub: Arc<Hub>) {
+        for conn in self.listener.incoming() {
+            if hub.is_closed() {
                 break;
             }
-            if hub.is_closed() || out.write_all(b": keep-alive\n\n").and_then(|()| out.flush()).is_err() {
+            let Ok(socket) = conn else {
+                // Out of file descriptors, say: give the open ones time to end.
+                std::thread::sleep(Duration::from_millis(50));
+                continue;
+            };
+            let Some(id) = self.conns.admit(&socket) else {
+                // Every connection is being answered: refuse at once, never
+                // waiting on this client from the accepting thread.
+                let mut socket = socket;
+                let _ = socket.set_nonblocking(true);
+                let busy = Refusal { status: 503, why: "the server is busy; try again" };
+                let _ = write_answer(&mut socket, &Answer::refusal(busy), false, false);
+                continue;
+            };
+            let (conns, hub, port) = (Arc::clone(&self.conns), Arc::clone(&hub), self.addr.port());
+            let spawned = std::thread::Builder::new().name("watch-http".into()).spawn(move || {
+                Connection { socket, id, conns: &conns, hub: &hub, port, buf: Vec::new() }.run();
+                conns.leave(id);
+            });
+            if spawned.is_err() {
+                self.conns.leave(id);
+            }
+        }
+    }
+
+    /// Closes every connection and ends [`Server::serve`] (the hub must be
+    /// closed first).
+    pub fn unblock(&self) {
+        self.conns.close_all();
+        // Wake the accepting thread, blocked in accept().
+        let _ = TcpStream::connect_timeout(&self.addr, Duration::from_secs(1));
+    }
+}
+
+/// The open connections: which may be closed for a new one, and how many
+/// are event streams.
+#[derive(Default)]
+struct Conns {
+    table: Mutex<Table>,
+}
+
+#[derive(Default)]
+struct Table {
+    next: u64,
+    open: Vec<Slot>,
+    streams: usize,
+    closed: bool,
+}
+
+struct Slot {
+    id: u64,
+    /// A handle on the socket, to shut it down from another thread.
+    socket: TcpStream,
+    /// Since when it waits for a request (`None`: being answered).
+    waiting: Option<Instant>,
+}
+
+impl Conns {
+    fn lock(&self) -> MutexGuard<'_, Table> {
+        // A panic while holding the lock left plain data behind: keep using it.
+        self.table.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Takes `socket` on, closing the connection that has waited longest
+    /// for a request when all slots are taken; `None` when none waits.
+    fn admit(&self, socket: &TcpStream) -> Option<u64> {
+        let handle = socket.try_clone().ok()?;
+        let mut t = self.lock();
+        if t.closed {
+            return None;
+        }
+        if t.open.len() >= MAX_CONNECTIONS {
+            let oldest = (0..t.open.len())
+                .filter(|&i| t.open[i].waiting.is_some())
+                .min_by_key(|&i| t.open[i].waiting)?;
+            let slot = t.open.swap_remove(oldest);
+            // Its thread, blocked in a read, sees the end of the stream.
+            let _ = slot.socket.shutdown(Shutdown::Both);
+        }
+        t.next += 1;
+        let id = t.next;
+        t.open.push(Slot { id, socket: handle, waiting: Some(Instant::now()) });
+        Some(id)
+    }
+
+    /// Marks connection `id` as waiting for a request (`true`) or being
+    /// answered; `false` when it was closed for another.
+    fn mark(&self, id: u64, waiting: bool) -> bool {
+        let mut t = self.lock();
+        let Some(slot) = t.open.iter_mut().find(|s| s.id == id) else { return false };
+        slot.waiting = waiting.then(Instant::now);
+        true
+    }
+
+    fn leave(&self, id: u64) {
+        self.lock().open.retain(|s| s.id != id);
+    }
+
+    /// Counts a new event stream in, if there is room.
+    fn start_stream(&self) -> bool {
+        let mut t = self.lock();
+        let room = t.streams < MAX_STREAMS;
+        t.streams += usize::from(room);
+        room
+    }
+
+    fn end_stream(&self) {
+        let mut t = self.lock();
+        t.streams = t.streams.saturating_sub(1);
+    }
+
+    fn close_all(&self) {
+        let mut t = self.lock();
+        t.closed = true;
+        for s in t.open.drain(..) {
+            let _ = s.socket.shutdown(Shutdown::Both);
+        }
+    }
+}
+
+/// An answer's body.
+enum Body {
+    Static(&'static [u8]),
+    Owned(Vec<u8>),
+    Shared(Arc<Vec<u8>>),
+}
+
+/// An answer to one request (the event stream aside).
+struct Answer {
+    status: u16,
+    content_type: &'static str,
+    body: Body,
+    /// More header fields (name, value), ASCII written here.
+    fields: Vec<(&'static str, String)>,
+}
+
+impl Answer {
+    fn new(status: u16, content_type: &'static str, body: Body) -> Answer {
+        Answer { status, content_type, body, fields: Vec::new() }
+    }
+
+    fn text(status: u16, text: &'static str) -> Answer {
+        Answer::new(status, "text/plain; charset=utf-8", Body::Static(text.as_bytes()))
+    }
+
+    fn refusal(r: Refusal) -> Answer {
+        Answer::text(r.status, r.why)
+    }
+}
+
+fn reason(status: u16) -> &'static str {
+    match status {
+        100 => "Continue",
+        200 => "OK",
+        400 => "Bad Request",
+        403 => "Forbidden",
+        404 => "Not Found",
+        405 => "Method Not Allowed",
+        408 => "Request Timeout",
+        413 => "Content Too Large",
+        417 => "Expectation Failed",
+        421 => "Misdirected Request",
+        431 => "Request Header Fields Too Large",
+        501 => "Not Implemented",
+        503 => "Service Unavailable",
+        505 => "HTTP Version Not Supported",
+        _ => "",
+    }
+}
+
+/// Writes `a` within [`WRITE_TIME`] (the head only when `head_only`).
+fn write_answer(
+    socket: &mut TcpStream,
+    a: &Answer,
+    head_only: bool,
+    keep_alive: bool,
+) -> std::io::Result<()> {
+    let body: &[u8] = match &a.body {
+        Body::Static(b) => b,
+        Body::Owned(b) => b,
+        Body::Shared(b) => b,
+    };
+    let mut head = format!(
+        "HTTP/1.1 {} {}\r\nContent-Type: {}\r\nContent-Length: {}\r\nCache-Control: no-store\r\n\
+         X-Content-Type-Options: nosniff\r\nCross-Origin-Resource-Policy: same-origin\r\n",
+        a.status,
+        reason(a.status),
+        a.content_type,
+        body.len()
+    );
+    for (name, value) in &a.fields {
+        head.push_str(&format!("{name}: {value}\r\n"));
+    }
+    head.push_str(if keep_alive { "\r\n" } else { "Connection: close\r\n\r\n" });
+    let end = Instant::now() + WRITE_TIME;
+    write_by(socket, head.as_bytes(), end)?;
+    if !head_only {
+        write_by(socket, body, end)?;
+    }
+    socket.flush()
+}
+
+/// Writes all of `data` before `end`, however slowly the client reads.
+fn write_by(socket: &mut TcpStream, data: &[u8], end: Instant) -> std::io::Result<()> {
+    for chunk in data.chunks(64 * 1024) {
+        let left = end.saturating_duration_since(Instant::now());
+        if left.is_zero() {
+            return Err(ErrorKind::TimedOut.into());
+        }
+        socket.set_write_timeout(Some(left))?;
+        socket.write_all(chunk)?;
+    }
+    Ok(())
+}
+
+/// What came of waiting for a request.
+enum Next {
+    Request(Request),
+    /// The client closed, or the connection was closed for another.
+    Closed,
+    /// No whole head in time; whether part of one came.
+    Late(bool),
+    Refused(Refusal),
+}
+
+/// One client's connection: its requests, one after another.
+struct Connection<'a> {
+    socket: TcpStream,
+    id: u64,
+    conns: &'a Conns,
+    hub: &'a Hub,
+    port: u16,
+    /// Bytes read and not yet used (a head being read, or what followed one).
+    buf: Vec<u8>,
+}
+
+impl Connection<'_> {
+    fn run(mut self) {
+        let _ = self.socket.set_nodelay(true);
+        loop {
+            if !self.conns.mark(self.id, true) {
+                return;
+            }
+            let req = match self.head() {
+                Next::Request(r) => r,
+                Next::Closed => return,
+                Next::Late(partial) => {
+                    if partial {
+                        self.refuse(Refusal { status: 408, why: "the request came too slowly" });
+                    }
+                    return;
+                }
+                Next::Refused(r) => return self.refuse(r),
+            };
+            if let Err(r) = request::admit(&req, self.port) {
+                return self.refuse(r);
+            }
+            let Some(body) = self.body(&req) else { return };
+            if !self.conns.mark(self.id, false) {
+                return;
+            }
+            if !self.answer(&req, &body) || !req.keep_alive {
                 return;
             }
         }
+    }
+
+    /// Reads until a whole head is buffered, within [`HEAD_TIME`].
+    fn head(&mut self) -> Next {
+        let end = Instant::now() + HEAD_TIME;
+        let mut chunk = [0u8; 4096];
+        // What is buffered (a pipelined request) is parsed before reading.
+        let mut fresh = !self.buf.is_empty();
+        loop {
+            if fresh {
+                match request::parse(&self.buf) {
+                    Ok(Some(r)) => {
+                        self.buf.drain(..r.head_len);
+                        return Next::Request(r);
+                    }
+                    Ok(None) => {}
+                    Err(r) => return Next::Refused(r),
+                }
+            }
+            let late = Next::Late(!self.buf.is_empty());
+            let left = end.saturating_duration_since(Instant::now());
+            if left.is_zero() || self.socket.set_read_timeout(Some(left)).is_err() {
+                return late;
+            }
+            match self.socket.read(&mut chunk) {
+                Ok(0) => return Next::Closed,
+                Ok(n) => {
+                    self.buf.extend_from_slice(&chunk[..n]);
+                    // A head ends with a line feed; until one comes (or the
+                    // cap is passed) parsing again tells nothing new.
+                    fresh = chunk[..n].contains(&b'\n') || self.buf.len() > MAX_HEAD;
+                }
+                Err(e) if e.kind() == ErrorKind::Interrupted => fresh = false,
+                Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => return late,
+                Err(_) => return Next::Closed,
+            }
+        }
+    }
+
+    /// Reads the body `req` announced (at most [`MAX_BODY`], checked by the
+    /// parser), within [`BODY_TIME`]; `None` when it does not come whole.
+    fn body(&mut self, req: &Request) -> Option<Vec<u8>> {
+        let len = req.body_len.min(MAX_BODY);
+        let mut body: Vec<u8> = self.buf.drain(..len.min(self.buf.len())).collect();
+        if body.len() < len && req.expect_continue {
+            write_by(&mut self.socket, b"HTTP/1.1 100 Continue\r\n\r\n", Instant::now() + WRITE_TIME).ok()?;
+        }
+        let end = Instant::now() + BODY_TIME;
+        // Grown as bytes come, so a body announced and never sent costs nothing.
+        let mut chunk = [0u8; 16 * 1024];
+        while body.len() < len {
+            let left = end.saturating_duration_since(Instant::now());
+            if left.is_zero() {
+                return None;
+            }
+            self.socket.set_read_timeout(Some(left)).ok()?;
+            let want = (len - body.len()).min(chunk.len());
+            match self.socket.read(&mut chunk[..want]) {
+                Ok(0) => return None,
+                Ok(n) => body.extend_from_slice(&chunk[..n]),
+                Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                Err(_) => return None,
+            }
+        }
+        Some(body)
+    }
+
+    /// Answers a refused request and closes the connection, reading what
+    /// the client still sends for a moment so the answer reaches it.
+    fn refuse(&mut self, r: Refusal) {
+        if write_answer(&mut self.socket, &Answer::refusal(r), false, false).is_err() {
+            return;
+        }
+        let _ = self.socket.shutdown(Shutdown::Write);
+        let end = Instant::now() + LINGER;
+        let mut sink = [0u8; 16 * 1024];
+        for _ in 0..64 {
+            let left = end.saturating_duration_since(Instant::now());
+            if left.is_zero() || self.socket.set_read_timeout(Some(left)).is_err() {
+                return;
+            }
+            if !matches!(self.socket.read(&mut sink), Ok(n) if n > 0) {
+                return;
+            }
+        }
+    }
+
+    /// Answers an admitted request; `false` when the connection is done.
+    fn answer(&mut self, req: &Request, _body: &[u8]) -> bool {
+        let head_only = req.method == Method::Head;
+        if !matches!(req.method, Method::Get | Method::Head) {
+            let mut a = Answer::text(405, "only GET and HEAD are served");
+            a.fields.push(("Allow", "GET, HEAD".into()));
+            return write_answer(&mut self.socket, &a, false, req.keep_alive).is_ok();
+        }
+        let a = match req.path.as_str() {
+            "/events" => {
+                self.stream(head_only);
+                return false;
+            }
+            "/" | "/index.html" => {
+                Answer::new(200, "text/html; charset=utf-8", Body::Static(PAGE.as_bytes()))
+            }
+            "/state" => {
+                Answer::new(200, "application/json", Body::Owned(self.hub.snapshot().to_json().into_bytes()))
+            }
+            "/frame.png" => match self.hub.snapshot().frame {
+                Some(f) => {
+                    let mut a = Answer::new(200, "image/png", Body::Shared(f.png));
+                    a.fields.push(("X-Luster-Frame", f.number.to_string()));
+                    a
+                }
+                None => Answer::text(404, "no frame yet"),
+            },
+            _ => Answer::text(404, "not found"),
+        };
+        write_answer(&mut self.socket, &a, head_only, req.keep_alive).is_ok()
+    }
+
+    /// Streams the state as Server-Sent Events until the client leaves or
+    /// the hub closes.
+    fn stream(&mut self, head_only: bool) {
+        if !self.conns.start_stream() {
+            let busy = Answer::text(503, "too many open pages");
+            let _ = write_answer(&mut self.socket, &busy, head_only, false);
+            return;
+        }
+        self.events(head_only);
+        self.conns.end_stream();
+    }
+
+    fn events(&mut self, head_only: bool) {
+        let head = "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\n\
+                    Connection: close\r\n\r\n";
+        let send = |socket: &mut TcpStream, text: &str| {
+            write_by(socket, text.as_bytes(), Instant::now() + WRITE_TIME)
+                .and_then(|()| socket.flush())
+                .is_ok()
+        };
+        if !send(&mut self.socket, head) || head_only {
+            return;
+        }
+        let mut state = self.hub.snapshot();
+        loop {
+            if !send(&mut self.socket, &format!("event: state\ndata: {}\n\n", state.to_json())) {
+                return;
+            }
+            let seq = state.seq;
+            loop {
+                if let Some(s) = self.hub.wait_newer(seq, KEEPALIVE) {
+                    state = s;
+                    break;
+                }
+                if self.hub.is_closed() || !send(&mut self.socket, ": keep-alive\n\n") {
+                    return;
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `n` connections on a local listener: (client ends, server ends).
+    fn pairs(n: usize) -> (Vec<TcpStream>, Vec<TcpStream>) {
+        let listener = TcpListener::bind("127.0.0.1:0").expect("a local listener");
+        let addr = listener.local_addr().expect("its address");
+        let clients: Vec<TcpStream> =
+            (0..n).map(|_| TcpStream::connect(addr).expect("a connection")).collect();
+        let servers = (0..n).map(|_| listener.accept().expect("an accepted connection").0).collect();
+        (clients, servers)
+    }
+
+    #[test]
+    fn a_full_table_closes_the_connection_waiting_longest_or_refuses() {
+        let (clients, servers) = pairs(MAX_CONNECTIONS + 2);
+        let conns = Conns::default();
+        let ids: Vec<u64> =
+            servers[..MAX_CONNECTIONS].iter().map(|s| conns.admit(s).expect("room")).collect();
+        for &id in &ids {
+            assert!(conns.mark(id, false));
+        }
+        // Only connection 5 waits for a request: it gives way.
+        assert!(conns.mark(ids[5], true));
+        let newcomer = conns.admit(&servers[MAX_CONNECTIONS]).expect("room made");
+        assert!(!conns.mark(ids[5], true), "connection 5 was closed");
+        let mut byte = [0u8; 1];
+        clients[5].set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+        assert_eq!(
+            (&clients[5]).read(&mut byte).expect("the end of the stream"),
+            0,
+            "its client sees the end"
+        );
+        // With every connection being answered, a newcomer is refused.
+        assert!(conns.mark(newcomer, false));
+        assert_eq!(conns.admit(&servers[MAX_CONNECTIONS + 1]), None);
+        conns.leave(ids[0]);
+        assert!(conns.admit(&servers[MAX_CONNECTIONS + 1]).is_some(), "a slot left is taken");
+    }
+
+    #[test]
+    fn event_streams_are_capped() {
+        let conns = Conns::default();
+        assert!((0..MAX_STREAMS).all(|_| conns.start_stream()));
+        assert!(!conns.start_stream());
+        conns.end_stream();
+        assert!(conns.start_stream());
     }
 }

@@ -5,7 +5,8 @@
 //! interesting bytes, deletions, duplications, splices between seeds) plus
 //! tokens each format is sensitive to (`\z`, `[==[`, `1e39`, `element vertex
 //! 4294967295`, ...). Any panic fails the test and names the input, which is
-//! written to `target/fuzz-smoke/` for replay.
+//! written to `target/fuzz-smoke/` for replay. The watch server's request
+//! parser gets the same loop over request heads (`watch_request`).
 //!
 //! Each target gets [`ITERATIONS`] inputs or [`BUDGET`] of time, whichever
 //! ends first, so the whole run stays well under two minutes. For a long run
@@ -331,4 +332,60 @@ fn partfile_fuzz_smoke_run_finds_no_panic() {
     }
     println!("fuzz smoke run: partfile: {runs} inputs in {:.1} s", start.elapsed().as_secs_f64());
     assert!(crashes.is_empty(), "{}", crashes.join("\n"));
+}
+
+/// Request heads as browsers and tools send them to `luster watch`.
+const WATCH_REQUESTS: &[&str] = &[
+    "GET /state HTTP/1.1\r\nHost: 127.0.0.1:8795\r\n\r\n",
+    "GET /frame.png?n=12 HTTP/1.1\r\nHost: localhost:8795\r\nConnection: keep-alive\r\nUser-Agent: Mozilla/5.0\r\n\
+     Accept: */*\r\nSec-Fetch-Site: same-origin\r\nCookie: a=1; b=2\r\n\r\n",
+    "GET /events HTTP/1.1\r\nHost: [::1]:8795\r\nAccept: text/event-stream\r\n\r\n",
+    "POST /shader HTTP/1.1\r\nHost: 127.0.0.1:8795\r\nOrigin: http://127.0.0.1:8795\r\nContent-Length: 5\r\n\
+     Expect: 100-continue\r\n\r\nhelloHEAD / HTTP/1.0\r\nHost: localhost\r\nConnection: close\r\n\r\n",
+];
+
+/// Tokens the request parser is sensitive to.
+const WATCH_TOKENS: &[&str] = &[
+    "\r\n",
+    "\r\n\r\n",
+    "\n",
+    " ",
+    "\0",
+    "Content-Length: ",
+    "Content-Length: 4\r\n",
+    "99999999999999999999",
+    "Transfer-Encoding: chunked\r\n",
+    "Host: ",
+    ":8795",
+    "Origin: null\r\n",
+    "Expect: 100-continue\r\n",
+    "Connection: close\r\n",
+    "HTTP/1.1",
+    "\u{ff}",
+];
+
+#[test]
+fn watch_request_smoke_run_finds_no_panic() {
+    let seeds: Vec<Vec<u8>> = WATCH_REQUESTS.iter().map(|s| s.as_bytes().to_vec()).collect();
+    let iterations = env("LUSTER_FUZZ_ITERATIONS").unwrap_or(ITERATIONS);
+    let budget = env("LUSTER_FUZZ_SECONDS").map_or(BUDGET, |s| Duration::from_secs(s as u64));
+    let mut rng = Rng(0x9e37_79b9_7f4a_7c15 ^ 0x77);
+    let start = Instant::now();
+    let inputs =
+        seeds.iter().cloned().chain(std::iter::repeat_with(|| mutate(&mut rng, &seeds, WATCH_TOKENS)));
+    let mut runs = 0;
+    for input in inputs.take(iterations) {
+        runs += 1;
+        if std::panic::catch_unwind(|| luster::watch::request::fuzz(&input)).is_err() {
+            let dir = repo().join("target").join("fuzz-smoke");
+            let _ = std::fs::create_dir_all(&dir);
+            let file = dir.join(format!("crash-watch_request-{runs}"));
+            let _ = std::fs::write(&file, &input);
+            panic!("watch_request panicked on input {runs} (saved as {})", file.display());
+        }
+        if start.elapsed() > budget {
+            break;
+        }
+    }
+    println!("fuzz smoke run: watch_request: {runs} inputs in {:.1} s", start.elapsed().as_secs_f64());
 }

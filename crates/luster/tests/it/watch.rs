@@ -2,7 +2,10 @@
 //! over Server-Sent Events and the newest frame as a PNG; saving the shader
 //! re-renders, a syntax error is reported with the script's file:line while
 //! the last good image stays, and fixing it recovers. A scene that does not
-//! load at start still serves the page with the error.
+//! load at start still serves the page with the error. Hostile clients (a
+//! huge or missing body, a foreign `Host` or `Origin`, hundreds of idle
+//! connections, a head sent a byte a second) are refused or dropped without
+//! delaying anyone else.
 
 use crate::common;
 use common::folder;
@@ -100,15 +103,49 @@ fn start_with(dir: &std::path::Path, scene: &str, more: &[&str]) -> Watch {
 
 /// GET `path`: (status, headers, body).
 fn get(addr: &str, path: &str) -> (u16, String, Vec<u8>) {
-    let mut s = TcpStream::connect(addr).expect("the page server answers");
-    s.set_read_timeout(Some(WAIT)).unwrap();
-    write!(s, "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").unwrap();
-    let mut all = Vec::new();
-    s.read_to_end(&mut all).expect("a whole answer");
-    let split = all.windows(4).position(|w| w == b"\r\n\r\n").expect("headers end");
+    get_within(addr, path, WAIT).unwrap_or_else(|e| panic!("GET {path}: {e}"))
+}
+
+/// GET `path` with the whole answer read within `limit`.
+fn get_within(addr: &str, path: &str, limit: Duration) -> Result<(u16, String, Vec<u8>), String> {
+    let request = format!("GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n");
+    let all = exchange(addr, request.as_bytes(), limit)?;
+    let split = all.windows(4).position(|w| w == b"\r\n\r\n").ok_or("no end of headers")?;
     let head = String::from_utf8_lossy(&all[..split]).to_string();
-    let status = head.split(' ').nth(1).and_then(|c| c.parse().ok()).expect("a status code");
-    (status, head, all[split + 4..].to_vec())
+    let status = head.split(' ').nth(1).and_then(|c| c.parse().ok()).ok_or("no status code")?;
+    Ok((status, head, all[split + 4..].to_vec()))
+}
+
+/// Sends `request` on a new connection and reads until the server closes
+/// it; an error when that takes longer than `limit`. A reset after the
+/// server closed counts as closed.
+fn exchange(addr: &str, request: &[u8], limit: Duration) -> Result<Vec<u8>, String> {
+    let mut s = TcpStream::connect(addr).map_err(|e| format!("cannot connect: {e}"))?;
+    s.set_read_timeout(Some(limit)).unwrap();
+    let end = Instant::now() + limit;
+    // The server may answer and close before reading a refused request whole.
+    let _ = s.write_all(request);
+    let mut all = Vec::new();
+    let mut chunk = [0u8; 65536];
+    loop {
+        match s.read(&mut chunk) {
+            Ok(0) => return Ok(all),
+            Ok(n) => all.extend_from_slice(&chunk[..n]),
+            Err(e) if e.kind() == std::io::ErrorKind::ConnectionReset => return Ok(all),
+            Err(e) => return Err(format!("no whole answer within {limit:?} ({e}); got {} bytes", all.len())),
+        }
+        let left = end.saturating_duration_since(Instant::now());
+        if left.is_zero() {
+            return Err(format!("no whole answer within {limit:?}; got {} bytes", all.len()));
+        }
+        s.set_read_timeout(Some(left)).unwrap();
+    }
+}
+
+/// The status code an answer starts with (`None`: the server closed without one).
+fn status(answer: &[u8]) -> Option<u16> {
+    let line = answer.split(|&b| b == b'\r').next()?;
+    std::str::from_utf8(line).ok()?.strip_prefix("HTTP/1.1 ")?.get(..3)?.parse().ok()
 }
 
 /// The states of the `/events` stream, parsed, as they arrive.
@@ -441,4 +478,191 @@ fn the_refined_frame_is_the_rendered_image_at_load_and_after_a_save() {
         after == rendered(dir.path(), "s.xml", "r2"),
         "the watch's frame differs from `luster render` after the save"
     );
+}
+
+/// A session on a scene that does not load: the server runs, the CPUs idle.
+fn idle_session() -> (tempfile::TempDir, Watch) {
+    let dir = folder(&[("s.xml", "<Scene><Cameras>")]);
+    let w = start(dir.path(), "s.xml");
+    (dir, w)
+}
+
+/// Whether the process is still running.
+fn alive(w: &mut Watch) -> bool {
+    matches!(w.child.try_wait(), Ok(None))
+}
+
+#[test]
+fn a_huge_body_is_refused_without_reading_it_and_the_server_lives_on() {
+    let (_dir, mut w) = idle_session();
+    let lengths = ["99999999999999", "18446744073709551615", "99999999999999999999999", "4194305"];
+    // With and without asking for a go-ahead; the head comes with the first
+    // bytes of the body. A server that allocates the announced length
+    // aborts on one of these.
+    for expect in ["Expect: 100-continue\r\n", ""] {
+        for method in ["POST", "GET"] {
+            for length in lengths {
+                let what = format!("{method} with Content-Length {length} {expect:?}");
+                let request = format!(
+                    "{method} /state HTTP/1.1\r\nHost: {}\r\nContent-Length: {length}\r\n{expect}\r\nabc",
+                    w.addr
+                );
+                let answer = exchange(&w.addr, request.as_bytes(), Duration::from_secs(10))
+                    .unwrap_or_else(|e| panic!("{what}: {e}"));
+                let code = status(&answer);
+                assert!(code.is_none() || code == Some(413), "{what}: {code:?}");
+                let (code, _, _) = get_within(&w.addr, "/state", Duration::from_secs(10))
+                    .unwrap_or_else(|e| panic!("/state after {what}: {e}"));
+                assert_eq!(code, 200, "/state after {what}");
+                assert!(alive(&mut w), "the server died on {what}");
+            }
+        }
+    }
+}
+
+#[test]
+fn a_body_that_never_comes_does_not_delay_another_client() {
+    let (_dir, w) = idle_session();
+    let mut stalled = Vec::new();
+    for (method, length, sent) in [("POST", 100, 10), ("GET", 5, 0), ("POST", 4 << 20, 1000)] {
+        let mut s = TcpStream::connect(&w.addr).expect("the page server answers");
+        write!(s, "{method} /state HTTP/1.1\r\nHost: {}\r\nContent-Length: {length}\r\n\r\n", w.addr)
+            .unwrap();
+        s.write_all(&vec![b'x'; sent]).unwrap();
+        stalled.push(s);
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    for _ in 0..3 {
+        let t = Instant::now();
+        let (code, _, _) = get_within(&w.addr, "/state", Duration::from_secs(3)).expect("/state answers");
+        assert_eq!(code, 200);
+        assert!(t.elapsed() < Duration::from_secs(3), "/state took {:?}", t.elapsed());
+    }
+}
+
+#[test]
+fn a_foreign_host_or_origin_is_refused() {
+    let (_dir, w) = idle_session();
+    let port = w.addr.rsplit(':').next().unwrap();
+    let ask = |request: String| status(&exchange(&w.addr, request.as_bytes(), WAIT).expect("an answer"));
+    // DNS rebinding: a page of evil.example whose name now points to 127.0.0.1.
+    for host in [
+        "evil.example".to_string(),
+        format!("evil.example:{port}"),
+        format!("127.0.0.1.evil.example:{port}"),
+        "127.0.0.1:1".to_string(),
+        "127.0.0.1".to_string(),
+        format!("localhost:{port}0"),
+        String::new(),
+    ] {
+        for path in ["/state", "/", "/frame.png", "/events"] {
+            let code = ask(format!("GET {path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n"));
+            assert!(matches!(code, Some(400 | 403 | 421)), "GET {path} with Host {host:?} answered {code:?}");
+        }
+    }
+    let code = ask("GET /state HTTP/1.1\r\nConnection: close\r\n\r\n".to_string());
+    assert_eq!(code, Some(400), "no Host at all");
+    for host in [format!("127.0.0.1:{port}"), format!("localhost:{port}"), format!("LocalHost:{port}")] {
+        let code = ask(format!("GET /state HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n"));
+        assert_eq!(code, Some(200), "Host {host}");
+    }
+    // A state-changing request from another site's page (CSRF) is refused by
+    // its Origin; one from the page itself reaches the router, where no path
+    // takes a POST yet.
+    let post = |origin: &str| {
+        ask(format!(
+            "POST /state HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nOrigin: {origin}\r\nContent-Length: 2\r\n\
+             Connection: close\r\n\r\n{{}}"
+        ))
+    };
+    for origin in ["http://evil.example", "null", &format!("http://evil.example:{port}"), "https://127.0.0.1"]
+    {
+        assert_eq!(post(origin), Some(403), "POST with Origin {origin}");
+    }
+    assert_eq!(post(&format!("http://127.0.0.1:{port}")), Some(405), "POST from the page");
+}
+
+/// The `Threads:` line of /proc/PID/status.
+fn threads(pid: u32) -> usize {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).expect("the process's status");
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("Threads:"))
+        .and_then(|n| n.trim().parse().ok())
+        .expect("Threads:")
+}
+
+#[test]
+fn hundreds_of_idle_connections_neither_lock_out_a_client_nor_spawn_a_thread_each() {
+    let (_dir, w) = idle_session();
+    let before = threads(w.child.id());
+    // Half say nothing, half start a request and stop.
+    let idle: Vec<TcpStream> = (0..200)
+        .map(|i| {
+            let mut s = TcpStream::connect(&w.addr).expect("a connection");
+            if i % 2 == 1 {
+                write!(s, "GET /state HTTP/1.1\r\nHost: {}\r\n", w.addr).unwrap();
+            }
+            s
+        })
+        .collect();
+    std::thread::sleep(Duration::from_millis(500));
+    let t = Instant::now();
+    let (code, _, _) = get_within(&w.addr, "/state", Duration::from_secs(3)).expect("a new client is served");
+    assert_eq!(code, 200);
+    assert!(t.elapsed() < Duration::from_secs(3), "/state took {:?}", t.elapsed());
+    // The session's own threads, plus at most the connection cap (64) and a
+    // few threads of dropped connections on their way out.
+    let during = threads(w.child.id());
+    assert!(during <= before + 64 + 8, "{during} threads with 200 idle connections ({before} before)");
+    drop(idle);
+}
+
+#[test]
+fn a_head_sent_a_byte_a_second_is_dropped() {
+    let (_dir, w) = idle_session();
+    let mut s = TcpStream::connect(&w.addr).expect("the page server answers");
+    s.set_read_timeout(Some(Duration::from_secs(1))).unwrap();
+    let head = format!("GET /state HTTP/1.1\r\nHost: {}\r\nX-Slow: {}\r\n\r\n", w.addr, "a".repeat(60));
+    let t = Instant::now();
+    let mut dropped = false;
+    for &b in head.as_bytes() {
+        if t.elapsed() > Duration::from_secs(20) {
+            break;
+        }
+        let _ = s.write_all(&[b]);
+        let mut answer = Vec::new();
+        match s.read_to_end(&mut answer) {
+            // Closed, with a 408 or nothing at all.
+            Ok(_) => {
+                assert!(
+                    matches!(status(&answer), None | Some(408)),
+                    "{:?}",
+                    String::from_utf8_lossy(&answer)
+                );
+                dropped = true;
+                break;
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::ConnectionReset => {
+                dropped = true;
+                break;
+            }
+            Err(_) => {} // still open: one more byte
+        }
+    }
+    assert!(dropped, "a slow head still held its connection after {:?}", t.elapsed());
+    assert_eq!(get(&w.addr, "/state").0, 200);
+}
+
+#[test]
+fn requests_on_one_connection_are_answered_in_order() {
+    let (_dir, w) = idle_session();
+    let one = |path: &str, close: &str| format!("GET {path} HTTP/1.1\r\nHost: {}\r\n{close}\r\n", w.addr);
+    // Sent at once (pipelined): the server must not lose the bytes after the first head.
+    let all =
+        format!("{}{}{}", one("/state", ""), one("/frame.png", ""), one("/nothing", "Connection: close\r\n"));
+    let answer = exchange(&w.addr, all.as_bytes(), WAIT).expect("three answers");
+    let text = String::from_utf8_lossy(&answer);
+    let codes: Vec<&str> = text.match_indices("HTTP/1.1 ").map(|(i, _)| &text[i + 9..i + 12]).collect();
+    assert_eq!(codes, ["200", "404", "404"], "{text}");
 }
