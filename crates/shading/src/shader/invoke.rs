@@ -5,6 +5,8 @@
 
 use std::os::raw::c_int;
 
+use luster_core::text::shown;
+
 use super::error::{ShaderError, ShaderErrorKind};
 use super::ffi;
 use super::shade::{describe, fill_point, fill_shade, object_random};
@@ -129,7 +131,7 @@ impl ThreadState {
             };
             eprintln!(
                 "[shader {} at pixel {},{}] {}(s) -> {out}\n  s = {}",
-                shader.name,
+                shown(&shader.name, false),
                 input.pixel[0],
                 input.pixel[1],
                 entry.name(),
@@ -201,7 +203,7 @@ impl ThreadState {
             };
             eprintln!(
                 "[shader {} at pixel {},{}] material(s) -> {out}\n  s = {}",
-                shader.name,
+                shown(&shader.name, false),
                 input.pixel[0],
                 input.pixel[1],
                 describe(input)
