@@ -15,6 +15,7 @@
 //! Reads the scene as `luster render` does, plus each camera's
 //! `ImageResolution`, `NumSamples`, `ImageName` and `Tonemap` for the frames.
 
+mod conns;
 pub mod driver;
 pub mod files;
 pub mod hub;
