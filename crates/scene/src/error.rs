@@ -72,17 +72,8 @@ impl fmt::Display for Warning {
 }
 
 /// A token of a file for an error message: quoted when it looks like a word
-/// or a number (`"Kd"`, `"0,3"`), otherwise only its length, so an error about
-/// a file that is not what it should be (`mtllib /etc/passwd`) never shows
-/// what the file holds.
-pub fn shown_token(tok: &str) -> String {
-    let wordlike = |c: char| c.is_ascii_alphanumeric() || "_.+-,".contains(c);
-    if !tok.is_empty() && tok.len() <= 24 && tok.chars().all(wordlike) {
-        format!("\"{tok}\"")
-    } else {
-        format!("a token of {} characters", tok.chars().count())
-    }
-}
+/// or a number, otherwise only its length (see [`luster_core::text::shown_token`]).
+pub use luster_core::text::shown_token;
 
 #[cfg(test)]
 mod tests {

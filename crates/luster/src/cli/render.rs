@@ -62,7 +62,8 @@ fn render_scene(
     // A model's --size already made its camera; --scale and --crop apply to both.
     super::reframe::apply(&mut desc, if obj { None } else { frame.0 }, &frame.1)
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    check_memory(path, &desc)?;
+    luster::film::check_memory(desc.cameras.iter().map(|c| c.resolution))
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     for w in &desc.warnings {
         super::report("warning", &format_args!("{}: {w}", path.display()));
     }
@@ -128,25 +129,4 @@ fn render_scene(
         }
     }
     Ok(())
-}
-
-/// Refuses a scene whose films and images cannot fit in the memory this
-/// process may still take (`ulimit -v`, its cgroup's limit), before any
-/// of it is rendered: an allocation failing midway would abort.
-fn check_memory(path: &Path, desc: &luster::scene::Description) -> anyhow::Result<()> {
-    let needed = luster::film::memory_needed(desc.cameras.iter().map(|c| c.resolution));
-    match luster::memory::headroom() {
-        Some(left) if needed > left => {
-            let largest =
-                desc.cameras.iter().map(|c| c.resolution).max_by_key(|&(w, h)| u64::from(w) * u64::from(h));
-            let (w, h) = largest.unwrap_or((0, 0));
-            anyhow::bail!(
-                "{}: its images (the largest {w}x{h}) need about {} of memory, more than the {} this process may still use (its ulimit -v or cgroup limit)",
-                path.display(),
-                luster::memory::describe(needed),
-                luster::memory::describe(left)
-            )
-        }
-        _ => Ok(()),
-    }
 }

@@ -43,7 +43,7 @@ pub fn run(args: Args) -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(e) => {
-            eprintln!("error: {e}");
+            super::report("error", &e);
             ExitCode::from(2)
         }
     }

@@ -110,7 +110,7 @@ impl Driver {
                 }
             };
             if let Some(e) = &error {
-                eprintln!("error: {e}");
+                eprintln!("error: {}", luster_core::text::shown(e, false));
             }
             self.hub.update(|s| {
                 s.busy = false;
@@ -237,8 +237,10 @@ impl Driver {
             .map_err(|e| format!("{:#}", anyhow::Error::from(e)))?;
         (self.opts.reframe)(&mut desc).map_err(|e| format!("{}: {e}", path.display()))?;
         for w in &desc.warnings {
-            eprintln!("warning: {}: {w}", path.display());
+            eprintln!("warning: {}", luster_core::text::shown(&format!("{}: {w}", path.display()), false));
         }
+        let camera = desc.cameras.get(self.opts.camera).map(|c| c.resolution);
+        luster_render::film::check_memory(camera).map_err(|e| format!("{}: {e}", path.display()))?;
         Ok(desc)
     }
 

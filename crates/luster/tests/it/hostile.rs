@@ -14,8 +14,8 @@ mod cases;
 mod cluster;
 use crate::common;
 mod kit;
-mod terminal;
 mod shaders2;
+mod terminal;
 
 use cases::all_cases;
 use common::{run_limited, Run};

@@ -165,6 +165,26 @@ pub fn memory_needed(sizes: impl IntoIterator<Item = (u32, u32)>) -> u64 {
     films + largest * (std::mem::size_of::<[f32; 4]>() as u64 + OUTPUT_BYTES_PER_PIXEL)
 }
 
+/// Refuses, in a sentence, a render of cameras of these sizes whose
+/// [`memory_needed`] is beyond what the process may still take
+/// ([`luster_core::memory::headroom`]): an allocation failing midway would
+/// abort it.
+pub fn check_memory(sizes: impl IntoIterator<Item = (u32, u32)> + Clone) -> Result<(), String> {
+    let needed = memory_needed(sizes.clone());
+    match luster_core::memory::headroom() {
+        Some(left) if needed > left => {
+            let (w, h) =
+                sizes.into_iter().max_by_key(|&(w, h)| u64::from(w) * u64::from(h)).unwrap_or((0, 0));
+            Err(format!(
+                "its images (the largest {w}x{h}) need about {} of memory, more than the {} this process may still use (its ulimit -v or cgroup limit)",
+                luster_core::memory::describe(needed),
+                luster_core::memory::describe(left)
+            ))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// A finished image in linear radiance, row-major, top row first.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Film {
