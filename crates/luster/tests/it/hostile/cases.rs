@@ -330,7 +330,8 @@ fn shaders() -> Vec<Case> {
             "memory bomb",
             "function color(s) local s = 'x' for i = 1, 40 do s = s .. s end return 1, 1, 1 end",
             &["ran out of memory"],
-        ),
+        )
+        .shader_timeout("20"),
         r("string.rep bomb", "function color(s) return #string.rep('x', 1e12), 0, 0 end", &["string.rep"]),
         r(
             "reserved name",

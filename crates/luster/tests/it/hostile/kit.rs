@@ -68,6 +68,15 @@ impl Case {
         self
     }
 
+    /// Runs with this `--shader-timeout` (seconds) instead of 0.3 s: for a
+    /// case that must fail by another limit first, however loaded the machine.
+    pub fn shader_timeout(mut self, seconds: &str) -> Case {
+        if let Some(i) = self.args.iter().position(|a| a == "--shader-timeout") {
+            self.args[i + 1] = seconds.to_string();
+        }
+        self
+    }
+
     /// Words that must not appear.
     pub fn absent(mut self, words: &[&'static str]) -> Case {
         self.absent.extend_from_slice(words);
