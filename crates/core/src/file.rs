@@ -56,7 +56,14 @@ pub fn check_regular(path: &Path, max: u64) -> Result<u64, Why> {
 /// most `max` bytes; returns the file and its length.
 pub fn open_regular(path: &Path, max: u64) -> Result<(File, u64), Why> {
     check_regular(path, max)?;
-    let file = File::open(path).map_err(|e| io_reason(&e))?;
+    // Without blocking: a path swapped for a FIFO after the check above
+    // would otherwise wait for a writer inside `open`; the type is checked
+    // again on the handle.
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NONBLOCK);
+    let file = options.open(path).map_err(|e| io_reason(&e))?;
     let len = check(&file.metadata().map_err(|e| io_reason(&e))?, max)?;
     Ok((file, len))
 }
