@@ -16,6 +16,8 @@ use super::{Entry, ParamValue, ShaderSource, ENTRIES};
 /// [`Caller`](super::call::Caller).
 pub(super) struct Compiled {
     pub(super) name: String,
+    /// The script's file, for errors LuaJIT raises without a location.
+    pub(super) file: String,
     pub(super) entries: [Option<Slot>; ENTRIES],
     /// `height` at three points in one call, for bump mapping.
     pub(super) height3: Option<Slot>,
@@ -32,6 +34,7 @@ pub(super) const WRAPPERS: usize = ENTRIES + 2;
 /// The entry wrappers of one shader as the prelude made them.
 struct Wrappers {
     name: String,
+    file: String,
     entries: [Option<Function>; ENTRIES],
     height3: Option<Function>,
     material: Option<Function>,
@@ -65,7 +68,7 @@ impl ThreadState {
             makers;
         let name = src.name.as_str();
         let file = src.path.display().to_string();
-        let lua_err = |e: mlua::Error| self.error(name, &e);
+        let lua_err = |e: mlua::Error| self.error(name, &file, &e);
         let code = match instrument(&src.code) {
             Ok(code) => code,
             Err(ScanError::Reserved { line, name: word }) => {
@@ -134,7 +137,7 @@ impl ThreadState {
         }
         let height3 = make_height3.call((env.clone(), name)).map_err(lua_err)?;
         let material = make_material.call((env, name)).map_err(lua_err)?;
-        Ok(Wrappers { name: name.to_string(), entries, height3, material, closure })
+        Ok(Wrappers { name: name.to_string(), file, entries, height3, material, closure })
     }
 
     /// Puts a shader's wrappers on the caller's stack.
@@ -150,6 +153,6 @@ impl ThreadState {
         }
         let height3 = keep(&w.height3).map_err(internal)?;
         let material = keep(&w.material).map_err(internal)?;
-        Ok(Compiled { name: w.name, entries, height3, material, closure: w.closure })
+        Ok(Compiled { name: w.name, file: w.file, entries, height3, material, closure: w.closure })
     }
 }

@@ -175,6 +175,9 @@ fn in_script(text: &str) -> String {
     in_words(located)
 }
 
+/// What a recursion that filled Lua's stack reads as.
+pub(crate) const RECURSION: &str = "recursion too deep: Lua's stack is full";
+
 /// LuaJIT's "stack overflow" in the author's terms: a script recursed too
 /// deeply (Lua's stack, not the process's, is full; nothing crashed).
 fn in_words(message: String) -> String {
@@ -186,7 +189,7 @@ fn in_words(message: String) -> String {
     if !message[at..].starts_with(LUAJIT) {
         return message;
     }
-    format!("{}recursion too deep: Lua's stack is full{}", &message[..at], &message[at + LUAJIT.len()..])
+    format!("{}{RECURSION}{}", &message[..at], &message[at + LUAJIT.len()..])
 }
 
 /// `(location, rest)` when `msg` starts with a location in the runtime's

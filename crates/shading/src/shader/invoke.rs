@@ -7,6 +7,7 @@ use std::os::raw::c_int;
 
 use luster_core::text::shown;
 
+use super::compile::Compiled;
 use super::error::{ShaderError, ShaderErrorKind};
 use super::ffi;
 use super::shade::{describe, fill_point, fill_shade, object_random};
@@ -112,7 +113,7 @@ impl ThreadState {
         status: c_int,
     ) -> Result<[f64; 3], ShaderError> {
         let shader = &self.shaders[id];
-        let result = self.outcome(&shader.name, status).map(|()| {
+        let result = self.outcome(shader, status).map(|()| {
             let o = self.io.out();
             [o.r, o.g, o.b]
         });
@@ -143,12 +144,12 @@ impl ThreadState {
 
     /// What a finished call amounts to: its error (popped off the call
     /// thread), a caught timeout, or success.
-    fn outcome(&self, shader: &str, status: c_int) -> Result<(), ShaderError> {
+    fn outcome(&self, shader: &Compiled, status: c_int) -> Result<(), ShaderError> {
         if status != mlua::ffi::LUA_OK {
             let e = self.caller.pop_error(&self.lua, status);
-            return Err(self.error(shader, &e));
+            return Err(self.error(&shader.name, &shader.file, &e));
         }
-        self.check_deadline(shader)
+        self.check_deadline(&shader.name)
     }
 
     /// The usage error for a missing shader or entry point.
@@ -189,7 +190,7 @@ impl ThreadState {
         let status = self.caller.call(f);
         let shader = &self.shaders[id];
         let defines = self.entries(id);
-        let result = self.outcome(&shader.name, status).and_then(|()| {
+        let result = self.outcome(shader, status).and_then(|()| {
             self.io.material_outputs(|e| defines[e as usize]).ok_or_else(|| {
                 let msg = "shader runtime: material(s) wrote a malformed closure";
                 ShaderError::new(ShaderErrorKind::Internal, &shader.name, msg)
@@ -244,7 +245,7 @@ impl ThreadState {
         let Some(status) = status_of(code) else {
             return Err(self.no_entry(id, "height"));
         };
-        self.outcome(&self.shaders[id].name, status).map(|()| {
+        self.outcome(&self.shaders[id], status).map(|()| {
             let o = self.io.out();
             [o.r, o.g, o.b]
         })

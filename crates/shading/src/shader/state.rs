@@ -191,11 +191,16 @@ impl ThreadState {
         ))
     }
 
-    /// A Lua error as a shader error, in the author's terms.
-    pub(super) fn error(&self, shader: &str, e: &mlua::Error) -> ShaderError {
+    /// A Lua error as a shader error, in the author's terms. A recursion
+    /// that filled Lua's stack inside compiled code is reported by LuaJIT
+    /// with no location at all; it names the script's `file` then.
+    pub(super) fn error(&self, shader: &str, file: &str, e: &mlua::Error) -> ShaderError {
         let mut err =
             ShaderError::from_lua(shader, e, self.io.timed_out(), self.io.bad_result(), self.timeout);
         err.message = self.in_author_terms(&err.message);
+        if err.message.starts_with(super::error::RECURSION) {
+            err.message = luster_core::text::shown(&format!("{file}: {}", err.message), false).into_owned();
+        }
         err
     }
 

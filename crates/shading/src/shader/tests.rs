@@ -207,7 +207,8 @@ fn goto_continue_idiom_still_compiles() {
 fn deep_recursion_and_memory_bombs_fail_cleanly() {
     let e = color_err("local function f(n) return 1 + f(n + 1) end function color(s) return f(0), 0, 0 end");
     assert_eq!(e.kind, ShaderErrorKind::Runtime, "{e}");
-    assert!(e.message.contains("test.lua:1: recursion too deep"), "{e}");
+    // With the line when LuaJIT knows it; inside compiled code it may not.
+    assert!(e.message.starts_with("test.lua:") && e.message.contains(": recursion too deep"), "{e}");
     let e = color_err("function color(s) local x = string.rep('x', 1e10) return 1, 1, 1 end");
     assert!(e.message.contains("limit"), "{e}");
     let e = color_err("function color(s) local x = ('x'):rep(2^40) return 1, 1, 1 end");
