@@ -27,47 +27,7 @@ fn shader(name: &'static str, timeout: &str, code: &str, expect: &[&'static str]
     .text("x.lua", code.to_string())
 }
 
-/// C calling Lua calling the same C function: each must end in a Lua error
-/// (a recursion or coroutines nested "too deep") with the line.
-const RECURSIONS: &[(&str, &str)] = &[
-    ("gsub", "local function f(m) return (string.gsub('a', 'a', f)) end\nlocal function go() f('a') end"),
-    (
-        "gsub __index",
-        "local t = setmetatable({}, {__index = function(t, k) return (string.gsub('a', 'a', t)) end})\n\
-         local function go() string.gsub('a', 'a', t) end",
-    ),
-    (
-        "__tostring formats itself",
-        "local t = setmetatable({}, {__tostring = function(x) return string.format('%s', x) end})\n\
-         local function go() return tostring(t) end",
-    ),
-    (
-        "__tostring format method",
-        "local t = setmetatable({}, {__tostring = function(x) return ('<%s>'):format(x) end})\n\
-         local function go() return ('%s'):format(t) end",
-    ),
-    (
-        "sort comparator sorts",
-        "local function cmp(a, b) table.sort({3, 2, 1}, cmp) return a < b end\n\
-         local function go() table.sort({3, 2, 1}, cmp) end",
-    ),
-    (
-        "sort __lt sorts",
-        "local mt = {}\nmt.__lt = function(a, b) table.sort({setmetatable({}, mt), setmetatable({}, mt)}) return false end\n\
-         local function go() table.sort({setmetatable({}, mt), setmetatable({}, mt)}) end",
-    ),
-    ("coroutine.wrap", "local function f() return coroutine.wrap(f)() end\nlocal function go() f() end"),
-    (
-        "coroutine.resume",
-        "local function f() local ok, e = coroutine.resume(coroutine.create(f)) if not ok then error(e, 0) end end\n\
-         local function go() f() end",
-    ),
-    (
-        "coroutine in gsub",
-        "local function f(m) return coroutine.wrap(function() return (string.gsub('a', 'a', f)) end)() end\n\
-         local function go() f('a') end",
-    ),
-];
+include!("../../../../shading/tests-data/recursions.rs");
 
 fn recursions() -> Vec<Case> {
     let mut cases = Vec::new();
