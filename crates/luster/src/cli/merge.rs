@@ -23,7 +23,7 @@ pub fn run(outdir: &Path) -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(e) => {
-            eprintln!("error: {}", shown(&e.to_string(), false));
+            super::report("error", &e);
             ExitCode::from(2)
         }
     }

@@ -61,7 +61,7 @@ pub fn run(
     match pool.install(|| run_in_pool(scenes, outdir, quiet, opts, build, view, split)) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", shown(&format!("{e:#}"), false));
+            super::report("error", &format_args!("{e:#}"));
             ExitCode::from(2)
         }
     }
@@ -117,14 +117,14 @@ fn run_in_pool(
         let t0 = Instant::now();
         let desc = luster::scene::load_viewed(s, view)?;
         for w in &desc.warnings {
-            eprintln!("warning: {}", shown(&format!("{}: {w}", s.display()), false));
+            super::report("warning", &format_args!("{}: {w}", s.display()));
         }
         if desc.cameras.len() as u32 != count {
             anyhow::bail!("{}: the scene changed while it was being rendered", s.display());
         }
         let scene = Scene::build_with(&desc, build)?;
         for w in &scene.warnings {
-            eprintln!("warning: {}", shown(&format!("{}: {w}", s.display()), false));
+            super::report("warning", &format_args!("{}: {w}", s.display()));
         }
         let setup = t0.elapsed().as_secs_f64();
         for (cam, image) in range.enumerate() {
@@ -142,10 +142,8 @@ fn run_in_pool(
                 checkpoint_every: split.checkpoint,
             };
             let t = Instant::now();
-            let outcome = render_part(&scene, cam, opts, &pj, &|_| {}, &mut |w| {
-                eprintln!("warning: {}", shown(&w, false))
-            })
-            .map_err(|e| anyhow::anyhow!("{}: {e}", s.display()))?;
+            let outcome = render_part(&scene, cam, opts, &pj, &|_| {}, &mut |w| super::report("warning", &w))
+                .map_err(|e| anyhow::anyhow!("{}: {e}", s.display()))?;
             if quiet {
                 continue;
             }

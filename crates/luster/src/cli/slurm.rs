@@ -5,7 +5,6 @@
 use luster::cluster::slurm::{
     array_script, merge_script, quote, submit_command, SlurmJob, ARRAY_SCRIPT, LOG_DIR, MERGE_SCRIPT,
 };
-use luster_core::text::shown;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -84,7 +83,7 @@ pub fn run(cli: Cli) -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", shown(&format!("{e:#}"), false));
+            super::report("error", &format_args!("{e:#}"));
             ExitCode::from(2)
         }
     }

@@ -34,17 +34,20 @@ pub fn folder(files: &[(&str, &str)]) -> tempfile::TempDir {
 }
 
 /// How a run of the luster binary ended: its exit code (`None` when it was
-/// killed at the time limit or by a signal) and everything it wrote to stderr.
+/// killed at the time limit or by a signal) and everything it wrote.
 #[allow(dead_code)] // only the command-line tests run the binary
 pub struct Run {
     /// Exit code.
     pub code: Option<i32>,
+    /// Standard output, lossily decoded.
+    pub stdout: String,
     /// Standard error, lossily decoded.
     pub stderr: String,
 }
 
-/// Runs `cmd` with no backtraces, stdin closed and stderr captured, killing
-/// it after `limit`, so a hang fails a test instead of stalling the suite.
+/// Runs `cmd` with no backtraces, stdin closed and both outputs captured,
+/// killing it after `limit`, so a hang fails a test instead of stalling the
+/// suite.
 #[allow(dead_code)] // only the command-line tests run the binary
 pub fn run_limited(mut cmd: std::process::Command, limit: std::time::Duration) -> Run {
     use std::io::Read;
@@ -53,16 +56,20 @@ pub fn run_limited(mut cmd: std::process::Command, limit: std::time::Duration) -
         .env_remove("RUST_BACKTRACE")
         .env_remove("RUST_LIB_BACKTRACE")
         .stdin(Stdio::null())
-        .stdout(Stdio::null())
+        .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .expect("the luster binary starts");
-    let mut pipe = child.stderr.take().expect("stderr is piped");
-    let reader = std::thread::spawn(move || {
-        let mut bytes = Vec::new();
-        let _ = pipe.read_to_end(&mut bytes);
-        String::from_utf8_lossy(&bytes).into_owned()
-    });
+    // Each pipe drained on its own thread, so a full one never stalls the child.
+    let drain = |mut pipe: Box<dyn Read + Send>| {
+        std::thread::spawn(move || {
+            let mut bytes = Vec::new();
+            let _ = pipe.read_to_end(&mut bytes);
+            String::from_utf8_lossy(&bytes).into_owned()
+        })
+    };
+    let out = drain(Box::new(child.stdout.take().expect("stdout is piped")));
+    let err = drain(Box::new(child.stderr.take().expect("stderr is piped")));
     let start = std::time::Instant::now();
     let status = loop {
         if let Some(status) = child.try_wait().expect("waiting for luster") {
@@ -75,7 +82,11 @@ pub fn run_limited(mut cmd: std::process::Command, limit: std::time::Duration) -
         }
         std::thread::sleep(std::time::Duration::from_millis(5));
     };
-    Run { code: status.and_then(|s| s.code()), stderr: reader.join().unwrap_or_default() }
+    Run {
+        code: status.and_then(|s| s.code()),
+        stdout: out.join().unwrap_or_default(),
+        stderr: err.join().unwrap_or_default(),
+    }
 }
 
 /// Writes `sky.exr` into `dir`: a constant-radiance lat-long sky of radiance

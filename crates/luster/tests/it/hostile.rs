@@ -91,17 +91,7 @@ fn check(case: &Case) -> Option<String> {
 fn hostile_inputs_are_refused_cleanly() {
     let cases = all_cases();
     assert!(cases.len() >= 100, "the corpus has only {} cases", cases.len());
-    // Two at a time: cases are independent, and most of their time is the
-    // process start.
-    let failures: Vec<String> = std::thread::scope(|s| {
-        let workers: Vec<_> = (0..2)
-            .map(|k| {
-                let cases = &cases;
-                s.spawn(move || cases.iter().skip(k).step_by(2).filter_map(check).collect::<Vec<_>>())
-            })
-            .collect();
-        workers.into_iter().flat_map(|w| w.join().expect("a worker")).collect()
-    });
+    let failures = kit::check_two_at_a_time(&cases, check);
     assert!(
         failures.is_empty(),
         "{} of {} hostile cases misbehaved:\n{}",

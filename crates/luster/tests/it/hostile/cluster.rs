@@ -14,52 +14,17 @@ use luster::cluster::partfile::PartFile;
 use luster::math::Vec3;
 use luster::tonemap::Display;
 
-use std::io::Read;
+use crate::common::{run_limited, Run};
 use std::path::Path;
-use std::process::{Command, Stdio};
+use std::process::Command;
 
 const GIB: u64 = 1 << 30;
 
-/// How a run ended: exit code (`None` past [`TIMEOUT`] or on a signal), stdout, stderr.
-struct Ran {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-}
-
 /// Runs `luster ARGS` in `dir`, killing it after [`TIMEOUT`].
-fn run(args: &[&str], dir: &Path) -> Ran {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_luster"))
-        .args(args)
-        .current_dir(dir)
-        .env_remove("RUST_BACKTRACE")
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("the luster binary starts");
-    let drain = |mut pipe: Box<dyn Read + Send>| {
-        std::thread::spawn(move || {
-            let mut bytes = Vec::new();
-            let _ = pipe.read_to_end(&mut bytes);
-            String::from_utf8_lossy(&bytes).into_owned()
-        })
-    };
-    let out = drain(Box::new(child.stdout.take().expect("stdout is piped")));
-    let err = drain(Box::new(child.stderr.take().expect("stderr is piped")));
-    let start = std::time::Instant::now();
-    let code = loop {
-        if let Some(status) = child.try_wait().expect("waiting for luster") {
-            break status.code();
-        }
-        if start.elapsed() > TIMEOUT {
-            let _ = child.kill();
-            let _ = child.wait();
-            break None;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(5));
-    };
-    Ran { code, stdout: out.join().unwrap_or_default(), stderr: err.join().unwrap_or_default() }
+fn run(args: &[&str], dir: &Path) -> Run {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_luster"));
+    cmd.args(args).current_dir(dir);
+    run_limited(cmd, TIMEOUT)
 }
 
 /// A valid finished part 1 of 1 of an 8×8 image `out.png` (one tile), one
@@ -295,17 +260,7 @@ fn cases() -> Vec<Hostile> {
 #[test]
 fn hostile_part_files_and_checkpoints_are_refused_quickly() {
     let cases = cases();
-    let failures: Vec<String> = std::thread::scope(|s| {
-        let workers: Vec<_> = (0..2)
-            .map(|k| {
-                let cases = &cases;
-                s.spawn(move || {
-                    cases.iter().skip(k).step_by(2).filter_map(Hostile::check).collect::<Vec<_>>()
-                })
-            })
-            .collect();
-        workers.into_iter().flat_map(|w| w.join().expect("a worker")).collect()
-    });
+    let failures = super::kit::check_two_at_a_time(&cases, Hostile::check);
     assert!(
         failures.is_empty(),
         "{} of {} hostile part-file cases misbehaved:\n{}",

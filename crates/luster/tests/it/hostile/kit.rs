@@ -230,3 +230,17 @@ fn crc32(bytes: &[u8]) -> u32 {
     }
     !crc
 }
+
+/// `check` of every case, two cases at a time (they are independent, and
+/// most of their time is the process start); what went wrong, in order.
+pub fn check_two_at_a_time<T: Sync>(cases: &[T], check: impl Fn(&T) -> Option<String> + Sync) -> Vec<String> {
+    std::thread::scope(|s| {
+        let workers: Vec<_> = (0..2)
+            .map(|k| {
+                let check = &check;
+                s.spawn(move || cases.iter().skip(k).step_by(2).filter_map(check).collect::<Vec<_>>())
+            })
+            .collect();
+        workers.into_iter().flat_map(|w| w.join().expect("a worker")).collect()
+    })
+}
