@@ -7,6 +7,7 @@ pub mod ceng795;
 pub mod description;
 pub mod element;
 pub mod error;
+pub mod gltf;
 pub mod json;
 pub mod obj;
 pub mod ply;
