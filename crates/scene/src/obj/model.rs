@@ -57,6 +57,11 @@ pub struct ModelView {
     /// The display transform (`--display`), overriding the scene's or, for a
     /// model, `srgb`. Applies to scene files too (see [`crate::load_viewed`]).
     pub display: Option<luster_core::tonemap::Display>,
+    /// Which of a glTF file's cameras to use (`--camera N`, 0-based); `None`:
+    /// the first, or a framing camera when the file has none.
+    pub camera: Option<usize>,
+    /// Lua material shaders replacing glTF materials by name (`--material NAME=FILE.lua`).
+    pub material_shaders: Vec<crate::gltf::material::MaterialOverride>,
 }
 
 impl Default for ModelView {
@@ -71,6 +76,8 @@ impl Default for ModelView {
             distance: None,
             ground: true,
             display: None,
+            camera: None,
+            material_shaders: Vec::new(),
         }
     }
 }
