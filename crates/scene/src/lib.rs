@@ -8,6 +8,7 @@ pub mod description;
 pub mod element;
 pub mod error;
 pub mod gltf;
+pub mod hdri;
 pub mod json;
 pub mod obj;
 pub mod ply;

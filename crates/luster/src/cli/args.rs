@@ -1,6 +1,7 @@
 //! The command line's shared argument types and value parsers: the OBJ
 //! model view (`--size`, `--azimuth`, `--elevation`, `--fov`, `--distance`,
-//! `--no-ground`, `--display`), `--filter`, `--threads`, `--shader-lib`,
+//! `--no-ground`, `--display`), the HDRI (`--env`, `--env-rotate`,
+//! `--env-strength`), `--filter`, `--threads`, `--shader-lib`,
 //! `--shader-timeout`, and the worker pool they configure.
 
 use std::path::PathBuf;
@@ -71,6 +72,52 @@ impl ModelArgs {
             display: self.display,
             ..Default::default()
         }
+    }
+}
+
+/// An HDRI lighting the scene (see `luster::scene::hdri`).
+#[derive(clap::Args)]
+#[command(next_help_heading = "HDRI lighting")]
+pub(super) struct EnvArgs {
+    /// A latitude-longitude HDR image (.hdr or .exr; 1.0 is display white)
+    /// that lights the scene and is its background, replacing a
+    /// SphericalDirectionalLight or a model's studio lights.
+    #[arg(long, value_name = "FILE")]
+    env: Option<PathBuf>,
+    /// Turns the HDRI about the vertical axis, degrees counter-clockwise
+    /// seen from above (0: as Blender's world shows it).
+    #[arg(long, value_name = "DEG", default_value_t = 0.0, allow_negative_numbers = true,
+          requires = "env", value_parser = parse_env_rotate)]
+    env_rotate: f32,
+    /// Scales the HDRI's radiance (0 to 1e36).
+    #[arg(long, value_name = "S", default_value_t = 1.0, allow_negative_numbers = true, requires = "env",
+          value_parser = parse_env_strength)]
+    env_strength: f32,
+}
+
+impl EnvArgs {
+    /// The HDRI, if `--env` names one; an error is one sentence naming the file.
+    pub(super) fn hdri(&self) -> Result<Option<luster::scene::hdri::Hdri>, luster::scene::SceneError> {
+        self.env
+            .as_deref()
+            .map(|p| luster::scene::hdri::Hdri::new(p, self.env_rotate, self.env_strength))
+            .transpose()
+    }
+}
+
+/// An `--env-rotate`: finite degrees.
+pub(super) fn parse_env_rotate(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(d) if d.is_finite() => Ok(d),
+        _ => Err(format!("\"{s}\" is not a number of degrees")),
+    }
+}
+
+/// An `--env-strength`: from 0 to 1e36 (255 times it must stay finite).
+pub(super) fn parse_env_strength(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if (0.0..=1e36).contains(&v) => Ok(v),
+        _ => Err(format!("\"{s}\" is not a strength (a number from 0 to 1e36)")),
     }
 }
 

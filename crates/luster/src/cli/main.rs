@@ -104,6 +104,8 @@ enum Command {
         #[command(flatten)]
         model: ModelArgs,
         #[command(flatten)]
+        env: EnvArgs,
+        #[command(flatten)]
         frame: reframe::FrameArgs,
     },
     /// Preview a scene live in the browser, re-rendering whenever its files are saved.
@@ -141,6 +143,8 @@ enum Command {
         shader_lib: Vec<PathBuf>,
         #[command(flatten)]
         model: ModelArgs,
+        #[command(flatten)]
+        env: EnvArgs,
         #[command(flatten)]
         frame: reframe::FrameArgs,
         /// Also stream every pass to the tev image viewer listening at HOST:PORT (tev's default: 127.0.0.1:14158).
@@ -307,8 +311,16 @@ fn main() -> ExitCode {
             checkpoint,
             time,
             model,
+            env,
             frame,
         } => {
+            let env = match env.hdri() {
+                Ok(env) => env,
+                Err(e) => {
+                    report("error", &e);
+                    return ExitCode::from(2);
+                }
+            };
             luster::shader::set_library_dirs(shader_lib);
             let filter = filter.filter();
             let time_limit = time.map(std::time::Duration::from_secs_f64);
@@ -320,11 +332,13 @@ fn main() -> ExitCode {
                 Some(part) => {
                     let split =
                         part::Split { part, resume, checkpoint: std::time::Duration::from_secs(checkpoint) };
-                    part::run(&scenes, &outdir, threads, quiet, &opts, &build, &model.view(), &split)
+                    let view = model.view();
+                    part::run(&scenes, &outdir, threads, quiet, &opts, &build, &view, env.as_ref(), &split)
                 }
                 None => {
                     let frame = (model.size, frame);
-                    render::run(&scenes, &outdir, threads, quiet, &opts, &build, &model.view(), &frame)
+                    let view = model.view();
+                    render::run(&scenes, &outdir, threads, quiet, &opts, &build, &view, env.as_ref(), &frame)
                 }
             }
         }
@@ -338,9 +352,17 @@ fn main() -> ExitCode {
             shader_timeout,
             shader_lib,
             model,
+            env,
             frame,
             tev,
         } => {
+            let env = match env.hdri() {
+                Ok(env) => env,
+                Err(e) => {
+                    report("error", &e);
+                    return ExitCode::from(2);
+                }
+            };
             luster::shader::set_library_dirs(shader_lib);
             watch::run(watch::Args {
                 scene,
@@ -352,6 +374,7 @@ fn main() -> ExitCode {
                     shader_timeout: std::time::Duration::from_secs_f64(shader_timeout),
                 },
                 view: model.view(),
+                env,
                 frame: (model.size, frame),
                 tev,
             })

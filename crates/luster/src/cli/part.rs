@@ -5,6 +5,7 @@
 use luster::cluster::part::{render_part, Outcome, PartJob};
 use luster::cluster::{share, JobId, Part, MAX_IMAGES};
 use luster::render::{tile_origins, BuildOptions, RenderOptions, Scene};
+use luster::scene::hdri::Hdri;
 use luster::scene::obj::ModelView;
 use luster_core::text::shown;
 use std::path::{Path, PathBuf};
@@ -52,13 +53,14 @@ pub fn run(
     opts: &RenderOptions,
     build: &BuildOptions,
     view: &ModelView,
+    env: Option<&Hdri>,
     split: &Split,
 ) -> ExitCode {
     let pool = match super::args::pool(threads) {
         Ok(p) => p,
         Err(code) => return code,
     };
-    match pool.install(|| run_in_pool(scenes, outdir, quiet, opts, build, view, split)) {
+    match pool.install(|| run_in_pool(scenes, outdir, quiet, opts, build, view, env, split)) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             super::report("error", &format_args!("{e:#}"));
@@ -67,6 +69,7 @@ pub fn run(
     }
 }
 
+#[allow(clippy::too_many_arguments)] // the command's options, passed through as given
 fn run_in_pool(
     scenes: &[PathBuf],
     outdir: &Path,
@@ -74,12 +77,14 @@ fn run_in_pool(
     opts: &RenderOptions,
     build: &BuildOptions,
     view: &ModelView,
+    env: Option<&Hdri>,
     split: &Split,
 ) -> anyhow::Result<()> {
     let part = split.part;
     // Everything that changes a pixel is in the job id; the shader time limit
     // is not (a render it stops fails instead of writing a part).
-    let options = format!("spp={:?} seed={} filter={:?} view={view:?}", opts.spp, opts.seed, opts.filter);
+    let options =
+        format!("spp={:?} seed={} filter={:?} view={view:?} env={env:?}", opts.spp, opts.seed, opts.filter);
     let job = JobId::new(part.n, scenes, &options)?;
     // Every part numbers the images of the job alike, from every scene's
     // cameras; the names must not clash across scenes, since the parts of
@@ -115,7 +120,10 @@ fn run_in_pool(
             continue;
         }
         let t0 = Instant::now();
-        let desc = luster::scene::load_viewed(s, view)?;
+        let mut desc = luster::scene::load_viewed(s, view)?;
+        if let Some(env) = env {
+            env.apply(&mut desc);
+        }
         for w in &desc.warnings {
             super::report("warning", &format_args!("{}: {w}", s.display()));
         }

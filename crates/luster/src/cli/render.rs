@@ -8,6 +8,7 @@ use luster::film::write_outputs;
 use luster::film::FilmReserve;
 use luster::image::outputs::{first_clash, plan_outputs};
 use luster::render::{self, BuildOptions, RenderOptions, Scene};
+use luster::scene::hdri::Hdri;
 use luster::scene::obj::ModelView;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -23,6 +24,7 @@ pub fn run(
     opts: &RenderOptions,
     build: &BuildOptions,
     view: &ModelView,
+    env: Option<&Hdri>,
     frame: &(Option<(u32, u32)>, super::reframe::FrameArgs),
 ) -> ExitCode {
     let pool = match super::args::pool(threads) {
@@ -31,7 +33,7 @@ pub fn run(
     };
     let mut failed = 0;
     for s in scenes {
-        if let Err(e) = pool.install(|| render_scene(s, outdir, quiet, opts, build, view, frame)) {
+        if let Err(e) = pool.install(|| render_scene(s, outdir, quiet, opts, build, view, env, frame)) {
             super::report("error", &format_args!("{e:#}"));
             failed += 1;
         }
@@ -47,6 +49,7 @@ pub fn run(
 
 /// Renders every camera of one scene, then writes the images: a shader that
 /// fails in any camera leaves no image of the scene behind.
+#[allow(clippy::too_many_arguments)] // the command's options, passed through as given
 fn render_scene(
     path: &Path,
     outdir: &Path,
@@ -54,11 +57,15 @@ fn render_scene(
     opts: &RenderOptions,
     build: &BuildOptions,
     view: &ModelView,
+    env: Option<&Hdri>,
     frame: &(Option<(u32, u32)>, super::reframe::FrameArgs),
 ) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let obj = luster::scene::is_obj(path);
     let mut desc = luster::scene::load_viewed(path, view)?;
+    if let Some(env) = env {
+        env.apply(&mut desc);
+    }
     // A model's --size already made its camera; --scale and --crop apply to both.
     super::reframe::apply(&mut desc, if obj { None } else { frame.0 }, &frame.1)
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;

@@ -15,6 +15,8 @@ pub struct Args {
     pub render: RenderOptions,
     pub build: BuildOptions,
     pub view: ModelView,
+    /// `--env`: applied to every load, so it survives reloads.
+    pub env: Option<luster::scene::hdri::Hdri>,
     pub frame: (Option<(u32, u32)>, super::reframe::FrameArgs),
     pub tev: Option<String>,
 }
@@ -24,8 +26,13 @@ pub fn run(args: Args) -> ExitCode {
     let (size, frame) = args.frame;
     // A model's --size already made its camera; --scale and --crop apply to both.
     let size = if obj { None } else { size };
-    let reframe: luster::watch::Reframe =
-        Box::new(move |desc| super::reframe::apply(desc, size, &frame).map_err(|e| e.to_string()));
+    let env = args.env;
+    let reframe: luster::watch::Reframe = Box::new(move |desc| {
+        if let Some(env) = &env {
+            env.apply(desc);
+        }
+        super::reframe::apply(desc, size, &frame).map_err(|e| e.to_string())
+    });
     let opts = luster::watch::Options {
         scene: args.scene,
         camera: args.camera,

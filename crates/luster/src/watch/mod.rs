@@ -34,7 +34,7 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::Instant;
 
-/// A change to a loaded description before it is built (`--size`,
+/// A change to a loaded description before it is built (`--env`, `--size`,
 /// `--scale`, `--crop`); its error is one sentence.
 pub type Reframe = Box<dyn Fn(&mut Description) -> Result<(), String> + Send>;
 

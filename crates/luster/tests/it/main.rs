@@ -12,6 +12,7 @@ mod compare;
 mod display;
 mod distribution;
 mod ellipsoid;
+mod env_flag;
 mod flip_reference;
 mod fuzz_smoke;
 mod golden;

@@ -63,9 +63,9 @@ fn shader(r: f32, g: f32, b: f32) -> String {
 }
 
 /// The running `luster watch`, killed when dropped.
-struct Watch {
+pub(crate) struct Watch {
     child: Child,
-    addr: String,
+    pub(crate) addr: String,
 }
 
 impl Drop for Watch {
@@ -79,7 +79,7 @@ fn start(dir: &std::path::Path, scene: &str) -> Watch {
     start_with(dir, scene, &[])
 }
 
-fn start_with(dir: &std::path::Path, scene: &str, more: &[&str]) -> Watch {
+pub(crate) fn start_with(dir: &std::path::Path, scene: &str, more: &[&str]) -> Watch {
     let mut child = Command::new(env!("CARGO_BIN_EXE_luster"))
         .args(["watch", scene, "--port", "0", "--threads", "2"])
         .args(more)
@@ -149,7 +149,7 @@ fn status(answer: &[u8]) -> Option<u16> {
 }
 
 /// The states of the `/events` stream, parsed, as they arrive.
-fn events(addr: &str) -> Receiver<serde_json::Value> {
+pub(crate) fn events(addr: &str) -> Receiver<serde_json::Value> {
     let mut s = TcpStream::connect(addr).expect("the page server answers");
     write!(s, "GET /events HTTP/1.1\r\nHost: {addr}\r\nAccept: text/event-stream\r\n\r\n").unwrap();
     let (tx, rx) = channel();
@@ -168,7 +168,7 @@ fn events(addr: &str) -> Receiver<serde_json::Value> {
 }
 
 /// The first state for which `ok` holds.
-fn until(
+pub(crate) fn until(
     rx: &Receiver<serde_json::Value>,
     what: &str,
     ok: impl Fn(&serde_json::Value) -> bool,
@@ -185,7 +185,7 @@ fn until(
 }
 
 /// The newest frame: its number and its centre pixel.
-fn frame(addr: &str) -> (u64, [u8; 3], Vec<u8>) {
+pub(crate) fn frame(addr: &str) -> (u64, [u8; 3], Vec<u8>) {
     let (status, head, body) = get(addr, "/frame.png");
     assert_eq!(status, 200, "{head}");
     let number = head
@@ -199,11 +199,11 @@ fn frame(addr: &str) -> (u64, [u8; 3], Vec<u8>) {
 }
 
 /// Whether channel `c` of `p` exceeds the other two by a wide margin.
-fn dominant(p: [u8; 3], c: usize) -> bool {
+pub(crate) fn dominant(p: [u8; 3], c: usize) -> bool {
     (0..3).all(|o| o == c || p[c] > p[o].saturating_add(100))
 }
 
-fn finished(s: &serde_json::Value) -> bool {
+pub(crate) fn finished(s: &serde_json::Value) -> bool {
     s["busy"] == false && s["frame"].is_u64()
 }
 

@@ -22,6 +22,7 @@ pub(super) fn desc(volumes: Vec<VolumeDesc>) -> Description {
         directional_lights: Vec::new(),
         spot_lights: Vec::new(),
         environment_light: None,
+        studio: None,
         emitters: Vec::new(),
         materials: Vec::new(),
         vertices: Vec::new(),

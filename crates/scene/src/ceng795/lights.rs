@@ -183,7 +183,7 @@ fn environment(
             (k >= 1 && k <= images.len()).then(|| k - 1)
         })
         .ok_or_else(|| r.err(id_el, "<ImageId> names no image of <Textures>/<Images>"))?;
-    Ok(EnvironmentLightDesc { image, mapping, sampling, loc: e.loc.clone() })
+    Ok(EnvironmentLightDesc { image, mapping, sampling, rotation: 0.0, strength: 1.0, loc: e.loc.clone() })
 }
 
 fn unit(r: &Reader, el: &Element) -> Result<Vec3, SceneError> {

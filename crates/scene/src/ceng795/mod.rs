@@ -204,6 +204,7 @@ pub fn read(file: &Path, root: &Element) -> Result<Description, SceneError> {
         directional_lights: lights.directionals,
         spot_lights: lights.spots,
         environment_light: lights.environment,
+        studio: None,
         emitters,
         materials,
         vertices,

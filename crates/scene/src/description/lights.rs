@@ -100,6 +100,30 @@ pub struct EnvironmentLightDesc {
     pub mapping: EnvMapping,
     /// How directions are sampled.
     pub sampling: EnvSampling,
+    /// Degrees the map is turned about `+y`, counter-clockwise seen from
+    /// above, from hw5's orientation (docs/environment-light.md); 0 for the
+    /// course's `SphericalDirectionalLight`.
+    pub rotation: f32,
+    /// Factor on the image's values: 1 for the course's light (its values
+    /// are radiance as they are), `255 × --env-strength` for `--env` (whose
+    /// 1.0 is display white).
+    pub strength: f32,
     /// Where.
     pub loc: Loc,
+}
+
+/// The lighting a model scene adds around a model (`luster render
+/// model.obj`): the lights an HDRI (`--env`, [`crate::hdri`]) replaces.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Studio {
+    /// Indices into [`Description::point_lights`](super::Description::point_lights): the key and fill lights.
+    pub point_lights: Vec<usize>,
+    /// Whether [`Description::ambient_light`](super::Description::ambient_light) is the studio's.
+    pub ambient: bool,
+    /// Indices into [`Description::materials`](super::Description::materials):
+    /// the model's course materials, whose diffuse term (without the course's
+    /// missing `1/π`) is tuned to the studio lights. Under an HDRI they take
+    /// the normalized Blinn-Phong, so that a reflectance is an albedo as in
+    /// other renderers.
+    pub materials: Vec<usize>,
 }

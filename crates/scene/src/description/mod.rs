@@ -64,6 +64,9 @@ pub struct Description {
     pub spot_lights: Vec<SpotLightDesc>,
     /// The environment light (`SphericalDirectionalLight`, hw5), if any.
     pub environment_light: Option<EnvironmentLightDesc>,
+    /// The lights and materials a model scene adds around a model, which an
+    /// HDRI replaces; `None` in scene files.
+    pub studio: Option<Studio>,
     /// Objects that emit light (`LightMesh`, `LightSphere`, hw7).
     pub emitters: Vec<EmitterDesc>,
     /// Materials, referenced by index from objects.

@@ -22,14 +22,15 @@
 //! The ground is lit mostly by the ambient light (its ambient reflectance is
 //! 2.6), so it stays light out to the horizon, where point lights would fade,
 //! and the key light's shadow still shows on it. The background is a soft
-//! grey-blue. The output image is `<stem>.png`, through the display transform
+//! grey-blue. An HDRI (`--env`, [`crate::hdri`]) replaces the key, fill and
+//! ambient lights (the [`Studio`] of the description). The output image is `<stem>.png`, through the display transform
 //! `srgb` unless `--display` names another (docs/hdr.md): MTL colours are
 //! linear reflectances and 8-bit `map_Kd` images are sRGB-decoded, as other
 //! renderers read them, and the values above are tuned for that.
 
 use super::{load, Additions, ObjModel};
 use crate::description::{
-    CameraDesc, Description, MaterialDesc, MeshSource, ObjectDesc, PointLightDesc, Projection, Shape,
+    CameraDesc, Description, MaterialDesc, MeshSource, ObjectDesc, PointLightDesc, Projection, Shape, Studio,
 };
 use crate::error::{Loc, SceneError, Warning};
 use luster_core::math::{Transform, Vec3};
@@ -189,6 +190,13 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         });
     }
     let warnings: Vec<Warning> = model.warnings;
+    // All of it is the studio's: an HDRI replaces the lights and reads the
+    // materials (the ground's too) as albedos.
+    let studio = Studio {
+        point_lights: (0..point_lights.len()).collect(),
+        ambient: true,
+        materials: (0..add.materials.len()).collect(),
+    };
     Ok(Description {
         file: path.to_path_buf(),
         base_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
@@ -204,6 +212,7 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         directional_lights: Vec::new(),
         spot_lights: Vec::new(),
         environment_light: None,
+        studio: Some(studio),
         emitters: Vec::new(),
         materials: add.materials,
         vertices: Vec::new(),

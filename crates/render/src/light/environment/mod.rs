@@ -26,7 +26,16 @@
 //!
 //! Texels are looked up nearest, so the radiance is exactly piecewise constant
 //! like the distribution. Values keep the file's scale (linear floats for EXR
-//! and HDR, 0–255 for 8-bit images, like `BackgroundColor`).
+//! and HDR, 0–255 for 8-bit images, like `BackgroundColor`), times the
+//! light's strength (1 for the course's light; `--env` sets 255 × its
+//! `--env-strength`, [`luster_scene::hdri`]).
+//!
+//! ## Rotation
+//! [`Environment::placed`] turns the map about `+y` by an angle `γ`,
+//! counter-clockwise seen from above: the radiance from `d` is the map's at
+//! `R(−γ) d`, and a direction drawn in the map's frame is turned by `R(γ)`.
+//! A rotation keeps solid angles, so the pdf of `d` is the map's pdf at
+//! `R(−γ) d` and lookup, sampling and pdf agree.
 
 use super::distribution::Distribution2D;
 use crate::texture::Image;
@@ -42,6 +51,9 @@ pub struct Environment {
     mapping: EnvMapping,
     sampling: EnvSampling,
     distribution: Distribution2D,
+    /// `(cos γ, sin γ)` of the turn about `+y`; `None` for none, so the
+    /// course's maps keep their exact lookups.
+    turn: Option<(f32, f32)>,
 }
 
 impl std::fmt::Debug for Environment {
@@ -86,7 +98,54 @@ impl Environment {
             }
         }
         let distribution = Distribution2D::new(&weights, width, height);
-        Ok(Environment { width, height, texels, mapping, sampling, distribution })
+        Ok(Environment { width, height, texels, mapping, sampling, distribution, turn: None })
+    }
+
+    /// This map turned by `rotation` degrees about `+y` (counter-clockwise
+    /// seen from above) and its values scaled by `strength`. Fails when a
+    /// scaled texel is no longer finite.
+    pub fn placed(mut self, rotation: f32, strength: f32) -> Result<Environment, String> {
+        if !(strength >= 0.0 && strength.is_finite() && rotation.is_finite()) {
+            return Err(format!(
+                "the environment's strength {strength} or rotation {rotation} is not usable"
+            ));
+        }
+        if strength != 1.0 {
+            for t in &mut self.texels {
+                *t *= strength;
+            }
+            if let Some(i) = self.texels.iter().position(|t| !t.is_finite()) {
+                return Err(format!(
+                    "the environment map's texel at ({}, {}) times the strength {strength} is too bright to represent",
+                    i % self.width,
+                    i / self.width
+                ));
+            }
+        }
+        let turn = rotation.rem_euclid(360.0);
+        self.turn = (turn != 0.0).then(|| {
+            let (s, c) = turn.to_radians().sin_cos();
+            (c, s)
+        });
+        Ok(self)
+    }
+
+    /// `d` in the map's own frame: turned back by the rotation, `R(−γ) d`.
+    #[inline]
+    fn world_to_map(&self, d: Vec3) -> Vec3 {
+        match self.turn {
+            None => d,
+            Some((c, s)) => Vec3::new(c * d.x - s * d.z, d.y, s * d.x + c * d.z),
+        }
+    }
+
+    /// A direction of the map's frame in the world: `R(γ) d`.
+    #[inline]
+    fn map_to_world(&self, d: Vec3) -> Vec3 {
+        match self.turn {
+            None => d,
+            Some((c, s)) => Vec3::new(c * d.x + s * d.z, d.y, c * d.z - s * d.x),
+        }
     }
 
     /// Radiance arriving from direction `d` (unit), i.e. seen along `d`.
@@ -119,8 +178,10 @@ impl Environment {
         self.texels[y * self.width + x]
     }
 
-    /// Image coordinates of direction `d`, in `[0, 1]²`.
+    /// Image coordinates of direction `d` (in the world, after the
+    /// rotation), in `[0, 1]²`.
     pub fn uv(&self, d: Vec3) -> Vec2 {
+        let d = self.world_to_map(d);
         match self.mapping {
             EnvMapping::LatLong => {
                 let u = 0.5 * (1.0 + d.x.atan2(-d.z) / PI);
@@ -135,9 +196,14 @@ impl Environment {
         }
     }
 
-    /// The direction at image coordinates `uv`, or `None` outside a probe's
-    /// circle.
+    /// The direction (in the world, after the rotation) at image
+    /// coordinates `uv`, or `None` outside a probe's circle.
     pub fn direction(&self, uv: Vec2) -> Option<Vec3> {
+        self.map_direction(uv).map(|d| self.map_to_world(d))
+    }
+
+    /// The direction at `uv` in the map's own frame.
+    fn map_direction(&self, uv: Vec2) -> Option<Vec3> {
         match self.mapping {
             EnvMapping::LatLong => {
                 let phi = PI * (2.0 * uv.x - 1.0);

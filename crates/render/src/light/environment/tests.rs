@@ -118,59 +118,141 @@ fn sampled_value_is_radiance_over_pdf() {
 
 /// Pearson's chi-square of importance-sampled directions binned on a
 /// 10 × 20 equal-area grid in (cos θ, φ), against the pdf integrated over each
-/// bin. Bins expecting fewer than 5 samples are pooled into one. The 99.9%
-/// point of χ²(k) is below k + 3.1√(2k) + 2 for the k here.
+/// bin, and the test's limit. Bins expecting fewer than 5 samples are pooled
+/// into one. The 99.9% point of χ²(k) is below k + 3.1√(2k) + 2 for the k here.
+fn chi_square(env: &Environment, seed: u64) -> (f64, usize, f64) {
+    let (nz, nphi) = (10usize, 20usize);
+    let bin = |d: Vec3| {
+        let z = (((d.z + 1.0) * 0.5 * nz as f32) as usize).min(nz - 1);
+        let phi = d.y.atan2(d.x).rem_euclid(2.0 * std::f32::consts::PI);
+        let p = ((phi / (2.0 * std::f32::consts::PI) * nphi as f32) as usize).min(nphi - 1);
+        z * nphi + p
+    };
+    let n = 400_000usize;
+    let mut observed = vec![0f64; nz * nphi];
+    let mut rng = Rng(seed);
+    for _ in 0..n {
+        if let Some((d, _)) = env.sample(None, (rng.next(), rng.next())) {
+            observed[bin(d)] += 1.0;
+        }
+    }
+    let mut expected = vec![0f64; nz * nphi];
+    let m = 1200;
+    for i in 0..m {
+        let z = -1.0 + 2.0 * (i as f64 + 0.5) / m as f64;
+        let r = (1.0 - z * z).sqrt();
+        for j in 0..2 * m {
+            let phi = std::f64::consts::PI * (j as f64 + 0.5) / m as f64;
+            let d = Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
+            expected[bin(d)] += env.pdf(d) as f64;
+        }
+    }
+    let scale = 4.0 * std::f64::consts::PI / (2 * m * m) as f64 * n as f64;
+    let (mut chi2, mut k) = (0.0, 0usize);
+    let (mut pool_o, mut pool_e) = (0.0, 0.0);
+    for (o, e) in observed.iter().zip(&expected) {
+        let e = e * scale;
+        if e < 5.0 {
+            pool_o += o;
+            pool_e += e;
+        } else {
+            chi2 += (o - e).powi(2) / e;
+            k += 1;
+        }
+    }
+    if pool_e >= 5.0 {
+        chi2 += (pool_o - pool_e).powi(2) / pool_e;
+        k += 1;
+    }
+    let dof = (k - 1) as f64;
+    (chi2, k, dof + 3.1 * (2.0 * dof).sqrt() + 2.0)
+}
+
 #[test]
 fn sampling_matches_pdf_chi_square() {
     for mapping in [EnvMapping::LatLong, EnvMapping::Probe] {
         let env = Environment::new(&sky(32, 16), mapping, EnvSampling::Importance).expect("valid map");
-        let (nz, nphi) = (10usize, 20usize);
-        let bin = |d: Vec3| {
-            let z = (((d.z + 1.0) * 0.5 * nz as f32) as usize).min(nz - 1);
-            let phi = d.y.atan2(d.x).rem_euclid(2.0 * std::f32::consts::PI);
-            let p = ((phi / (2.0 * std::f32::consts::PI) * nphi as f32) as usize).min(nphi - 1);
-            z * nphi + p
-        };
-        let n = 400_000usize;
-        let mut observed = vec![0f64; nz * nphi];
-        let mut rng = Rng(17);
-        for _ in 0..n {
-            if let Some((d, _)) = env.sample(None, (rng.next(), rng.next())) {
-                observed[bin(d)] += 1.0;
-            }
-        }
-        let mut expected = vec![0f64; nz * nphi];
-        let m = 1200;
-        for i in 0..m {
-            let z = -1.0 + 2.0 * (i as f64 + 0.5) / m as f64;
-            let r = (1.0 - z * z).sqrt();
-            for j in 0..2 * m {
-                let phi = std::f64::consts::PI * (j as f64 + 0.5) / m as f64;
-                let d = Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
-                expected[bin(d)] += env.pdf(d) as f64;
-            }
-        }
-        let scale = 4.0 * std::f64::consts::PI / (2 * m * m) as f64 * n as f64;
-        let (mut chi2, mut k) = (0.0, 0usize);
-        let (mut pool_o, mut pool_e) = (0.0, 0.0);
-        for (o, e) in observed.iter().zip(&expected) {
-            let e = e * scale;
-            if e < 5.0 {
-                pool_o += o;
-                pool_e += e;
-            } else {
-                chi2 += (o - e).powi(2) / e;
-                k += 1;
-            }
-        }
-        if pool_e >= 5.0 {
-            chi2 += (pool_o - pool_e).powi(2) / pool_e;
-            k += 1;
-        }
-        let dof = (k - 1) as f64;
-        let limit = dof + 3.1 * (2.0 * dof).sqrt() + 2.0;
+        let (chi2, k, limit) = chi_square(&env, 17);
         assert!(chi2 < limit, "{mapping:?}: χ² = {chi2:.1} over {k} bins (limit {limit:.1})");
     }
+}
+
+/// `d` turned by `deg` about `+y`, counter-clockwise seen from above.
+fn turned(d: Vec3, deg: f32) -> Vec3 {
+    let (s, c) = deg.to_radians().sin_cos();
+    Vec3::new(c * d.x + s * d.z, d.y, c * d.z - s * d.x)
+}
+
+/// A turned map: what the unturned map shows at `d` is seen at `R(γ) d`;
+/// the pdf still integrates to one, samples follow it (chi-square), and a
+/// sample's value is the looked-up radiance over the pdf.
+#[test]
+fn rotation_turns_lookup_sampling_and_pdf_together() {
+    let plain = Environment::new(&sky(32, 16), EnvMapping::LatLong, EnvSampling::Importance).expect("valid");
+    // -z (the map's centre) turned 90° counter-clockwise seen from above is -x.
+    let quarter = Environment::new(&sky(32, 16), EnvMapping::LatLong, EnvSampling::Importance)
+        .and_then(|e| e.placed(90.0, 1.0))
+        .expect("valid");
+    assert!((quarter.uv(Vec3::NEG_X) - Vec2::new(0.5, 0.5)).length() < 1e-6, "{:?}", quarter.uv(Vec3::NEG_X));
+    assert!((quarter.uv(Vec3::NEG_Z) - Vec2::new(0.75, 0.5)).length() < 1e-6);
+    for (mapping, deg) in
+        [(EnvMapping::LatLong, 37.0), (EnvMapping::LatLong, -150.0), (EnvMapping::Probe, 200.0)]
+    {
+        let unturned = Environment::new(&sky(32, 16), mapping, EnvSampling::Importance).expect("valid");
+        let env = Environment::new(&sky(32, 16), mapping, EnvSampling::Importance)
+            .and_then(|e| e.placed(deg, 1.0))
+            .expect("valid");
+        let mut rng = Rng(23);
+        for _ in 0..2000 {
+            let z = 2.0 * rng.next() - 1.0;
+            let phi = 2.0 * std::f32::consts::PI * rng.next();
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let d = Vec3::new(r * phi.cos(), z, r * phi.sin());
+            let seen = turned(d, deg);
+            assert_eq!(env.eval(seen), unturned.eval(d), "{mapping:?} {deg}: {d:?}");
+            let (a, b) = (env.pdf(seen), unturned.pdf(d));
+            assert!((a - b).abs() <= 1e-3 * b.max(1e-3), "{mapping:?} {deg}: pdf {a} vs {b}");
+        }
+        let total = integrate(|d| env.pdf(d) as f64, 1000);
+        assert!((total - 1.0).abs() < 5e-3, "{mapping:?} {deg}: ∫pdf = {total}");
+        let (chi2, k, limit) = chi_square(&env, 29);
+        assert!(chi2 < limit, "{mapping:?} {deg}: χ² = {chi2:.1} over {k} bins (limit {limit:.1})");
+        for _ in 0..2000 {
+            let Some((d, e)) = env.sample(None, (rng.next(), rng.next())) else { continue };
+            let expect = env.eval(d) / env.pdf(d);
+            assert!(
+                (e - expect).abs().max_element() <= 2e-3 * expect.max_element().max(1.0),
+                "{mapping:?} {deg}: {e:?} vs {expect:?}"
+            );
+        }
+    }
+    // A whole turn is no turn; the course's maps keep their exact lookups.
+    let whole = Environment::new(&sky(32, 16), EnvMapping::LatLong, EnvSampling::Importance)
+        .and_then(|e| e.placed(360.0, 1.0))
+        .expect("valid");
+    let d = Vec3::new(0.3, 0.4, -0.866).normalize();
+    assert_eq!(whole.uv(d), plain.uv(d));
+}
+
+/// Strength scales every value and no density; a product that overflows is
+/// refused with the texel named.
+#[test]
+fn strength_scales_radiance_not_the_density() {
+    let plain = Environment::new(&sky(32, 16), EnvMapping::LatLong, EnvSampling::Importance).expect("valid");
+    let bright = Environment::new(&sky(32, 16), EnvMapping::LatLong, EnvSampling::Importance)
+        .and_then(|e| e.placed(0.0, 255.0))
+        .expect("valid");
+    let mut rng = Rng(31);
+    for _ in 0..500 {
+        let d = Vec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5).normalize();
+        assert_eq!(bright.eval(d), plain.eval(d) * 255.0);
+        assert_eq!(bright.pdf(d), plain.pdf(d));
+    }
+    let huge = Image::from_rgb32f(4, 2, vec![[3e38, 1.0, 1.0]; 8]).expect("valid size");
+    let e = Environment::new(&huge, EnvMapping::LatLong, EnvSampling::Importance)
+        .and_then(|e| e.placed(0.0, 10.0))
+        .expect_err("overflows");
+    assert!(e.contains("(0, 0)") && e.contains("too bright"), "{e}");
 }
 
 /// The furnace: under a constant environment `L`, a diffuse surface with

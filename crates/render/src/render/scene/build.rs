@@ -259,7 +259,9 @@ fn build_environment(
     let at = |msg: String| SceneError::at(&desc.file, &e.loc, msg);
     let image = textures.images.get(e.image).ok_or_else(|| at("internal error: no such image".into()))?;
     let path = desc.images.get(e.image).map(|i| i.path.display().to_string()).unwrap_or_default();
-    let env = Environment::new(image, e.mapping, e.sampling).map_err(|m| at(format!("{path}: {m}")))?;
+    let env = Environment::new(image, e.mapping, e.sampling)
+        .and_then(|env| env.placed(e.rotation, e.strength))
+        .map_err(|m| at(format!("{path}: {m}")))?;
     Ok(Some(Arc::new(env)))
 }
 
