@@ -57,7 +57,7 @@ fn render_scene(
     frame: &(Option<(u32, u32)>, super::reframe::FrameArgs),
 ) -> anyhow::Result<()> {
     let t0 = Instant::now();
-    let obj = luster::scene::is_obj(path);
+    let obj = luster::scene::is_model(path);
     let mut desc = luster::scene::load_viewed(path, view)?;
     // A model's --size already made its camera; --scale and --crop apply to both.
     super::reframe::apply(&mut desc, if obj { None } else { frame.0 }, &frame.1)
