@@ -1,5 +1,5 @@
 //! luster-scene: scene loading — the two encodings of the CENG795 format,
-//! OBJ models, PLY meshes, and the plain [`Description`] they produce, every
+//! OBJ models, glTF scenes, PLY meshes, and the plain [`Description`] they produce, every
 //! value with the file and line it came from. Nothing here knows the renderer.
 #![warn(missing_docs)]
 
@@ -12,6 +12,7 @@ pub mod hdri;
 pub mod json;
 pub mod obj;
 pub mod ply;
+pub mod studio;
 pub mod xml;
 
 pub use description::Description;
@@ -26,7 +27,8 @@ const MAX_SCENE_BYTES: u64 = 1 << 30;
 /// Loads a scene file, choosing the encoding by its extension (`.json` or
 /// `.xml`) or, failing that, by its first character. An `.obj` file is a
 /// model, rendered in the scene [`obj::model_scene`] makes around it with the
-/// default [`obj::ModelView`].
+/// default [`obj::ModelView`]; a `.gltf` or `.glb` file is a glTF scene
+/// ([`gltf::scene`]).
 pub fn load(path: &Path) -> Result<Description, SceneError> {
     load_viewed(path, &obj::ModelView::default())
 }
@@ -36,6 +38,9 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
 pub fn load_viewed(path: &Path, view: &obj::ModelView) -> Result<Description, SceneError> {
     if is_obj(path) {
         return obj::model_scene(path, view);
+    }
+    if gltf::is_gltf(path) {
+        return gltf::scene(path, view);
     }
     let mut desc = ceng795::read(path, &element_tree(path)?)?;
     if let Some(d) = view.display {
@@ -64,6 +69,12 @@ pub fn element_tree(path: &Path) -> Result<element::Element, SceneError> {
         _ => text.trim_start().starts_with('{'),
     };
     Ok(if is_json { json::parse(path, &text)? } else { xml::parse(path, &text)? })
+}
+
+/// Whether a path names a model rendered in a scene made around it: an
+/// OBJ or glTF file, whose `--size` makes its camera.
+pub fn is_model(path: &Path) -> bool {
+    is_obj(path) || gltf::is_gltf(path)
 }
 
 /// Whether a path names an OBJ model (by its extension, in any case).

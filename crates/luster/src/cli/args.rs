@@ -64,6 +64,7 @@ impl ModelArgs {
         luster::scene::obj::ModelView {
             width: self.size.map_or(800, |s| s.0),
             height: self.size.map_or(600, |s| s.1),
+            sized: self.size.is_some(),
             azimuth: self.azimuth,
             elevation: self.elevation,
             fov_y: self.fov,

@@ -44,7 +44,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render scenes (CENG795 XML or JSON) or OBJ models; writes one image per camera.
+    /// Render scenes (CENG795 XML or JSON, glTF) or OBJ models; writes one image per camera.
     ///
     /// Each camera's image goes to OUTDIR/<ImageName>. An .obj file is
     /// rendered on its own, framed by a camera with a studio light setup, to
@@ -52,7 +52,7 @@ enum Command {
     /// scene are reported and the others still render; the exit code is 2 if
     /// any failed.
     Render {
-        /// Scene files (.xml or .json) or OBJ models (.obj).
+        /// Scene files (.xml or .json), glTF scenes (.gltf, .glb) or OBJ models (.obj).
         #[arg(required = true)]
         scenes: Vec<PathBuf>,
         /// Folder for the images (created if needed).
@@ -101,6 +101,11 @@ enum Command {
         /// than the camera's or --spp's count). Prints the samples used.
         #[arg(long, value_name = "SECONDS", value_parser = parse_timeout)]
         time: Option<f64>,
+        /// Which camera of a glTF file to render, numbered from 0 in the
+        /// order of the scene's nodes (default: the first, or a framing
+        /// camera when the file has none).
+        #[arg(long, value_name = "N")]
+        camera: Option<usize>,
         #[command(flatten)]
         model: ModelArgs,
         #[command(flatten)]
@@ -310,6 +315,7 @@ fn main() -> ExitCode {
             resume,
             checkpoint,
             time,
+            camera,
             model,
             env,
             frame,
@@ -322,6 +328,7 @@ fn main() -> ExitCode {
                 }
             };
             luster::shader::set_library_dirs(shader_lib);
+            let view = luster::scene::obj::ModelView { camera, ..model.view() };
             let filter = filter.filter();
             let time_limit = time.map(std::time::Duration::from_secs_f64);
             let opts = luster::render::RenderOptions { spp, seed, filter, time_limit, ..Default::default() };
@@ -332,12 +339,10 @@ fn main() -> ExitCode {
                 Some(part) => {
                     let split =
                         part::Split { part, resume, checkpoint: std::time::Duration::from_secs(checkpoint) };
-                    let view = model.view();
                     part::run(&scenes, &outdir, threads, quiet, &opts, &build, &view, env.as_ref(), &split)
                 }
                 None => {
                     let frame = (model.size, frame);
-                    let view = model.view();
                     render::run(&scenes, &outdir, threads, quiet, &opts, &build, &view, env.as_ref(), &frame)
                 }
             }

@@ -27,7 +27,7 @@ pub struct Split {
 /// scene (the statue orbit is 360 scenes around a 2 MB mesh). A scene that
 /// fails to load fails in the part that renders it.
 fn image_names(path: &Path, view: &ModelView) -> anyhow::Result<Vec<String>> {
-    if luster::scene::is_obj(path) {
+    if luster::scene::is_model(path) {
         return Ok(luster::scene::load_viewed(path, view)?
             .cameras
             .into_iter()

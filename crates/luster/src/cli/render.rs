@@ -61,7 +61,7 @@ fn render_scene(
     frame: &(Option<(u32, u32)>, super::reframe::FrameArgs),
 ) -> anyhow::Result<()> {
     let t0 = Instant::now();
-    let obj = luster::scene::is_obj(path);
+    let obj = luster::scene::is_model(path);
     let mut desc = luster::scene::load_viewed(path, view)?;
     if let Some(env) = env {
         env.apply(&mut desc);

@@ -21,8 +21,13 @@ pub struct Args {
     pub tev: Option<String>,
 }
 
-pub fn run(args: Args) -> ExitCode {
-    let obj = luster::scene::is_obj(&args.scene);
+pub fn run(mut args: Args) -> ExitCode {
+    let obj = luster::scene::is_model(&args.scene);
+    // A glTF scene's description holds the one camera `--camera` picks.
+    if luster::scene::gltf::is_gltf(&args.scene) {
+        args.view.camera = Some(args.camera);
+        args.camera = 0;
+    }
     let (size, frame) = args.frame;
     // A model's --size already made its camera; --scale and --crop apply to both.
     let size = if obj { None } else { size };

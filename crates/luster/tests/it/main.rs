@@ -1,6 +1,6 @@
 //! The integration tests of luster, one binary: the command line, bad and
 //! hostile input, golden images of the course scenes, shaders, volumes,
-//! OBJ models, split renders, the watch server and the fuzz smoke run.
+//! OBJ models, glTF scenes, split renders, the watch server and the fuzz smoke run.
 
 mod bad_input;
 mod camera_gaze;
@@ -15,6 +15,8 @@ mod ellipsoid;
 mod env_flag;
 mod flip_reference;
 mod fuzz_smoke;
+mod gltf;
+mod gltf_bad;
 mod golden;
 mod golden_hw3;
 mod golden_hw4;

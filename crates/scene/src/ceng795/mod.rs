@@ -24,6 +24,7 @@
 
 pub mod brdf;
 pub mod camera;
+pub mod gltf_file;
 pub mod lights;
 pub mod material;
 pub mod media;

@@ -2,7 +2,7 @@
 //!
 //! | object | reads |
 //! |---|---|
-//! | `Mesh` | `Material`, `Transformations`, `Faces` (inline 1-based vertex indices, `plyFile="..."`, or `objFile="..."`: see [`super::obj_file`]), `shadingMode="smooth"` |
+//! | `Mesh` | `Material`, `Transformations`, `Faces` (inline 1-based vertex indices, `plyFile="..."`, `objFile="..."` (see [`super::obj_file`]) or `gltfFile="..."` (see [`super::gltf_file`])), `shadingMode="smooth"` |
 //! | `Triangle` | `Material`, `Transformations`, `Indices` (three vertex indices) |
 //! | `Sphere` | `Material`, `Transformations`, `Center` (a vertex index), `Radius` |
 //! | `Ellipsoid` | `Material`, `Transformations`, `Center` (a vertex index), `Radii` (three positive numbers), `Rotation` (optional: angle in degrees, counter-clockwise, and axis x y z) |
@@ -31,6 +31,7 @@
 //! `resetTransform="true"` (hw2 spec, eq. 3). Degenerate inline triangles (two
 //! equal indices) are dropped with a warning, as the course's specs advise.
 
+use super::gltf_file;
 use super::obj_file::{self, Pending};
 use super::textures::object_textures;
 use super::transforms::compose;
@@ -114,8 +115,12 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Objec
             }
             Ok(())
         };
-        if el.name == "Mesh" && obj_file::is_obj_mesh(el) {
-            obj_file::read(ctx, el, w, &mut out)?;
+        if el.name == "Mesh" && (obj_file::is_obj_mesh(el) || gltf_file::is_gltf_mesh(el)) {
+            if gltf_file::is_gltf_mesh(el) {
+                gltf_file::read(ctx, el, w, &mut out)?;
+            } else {
+                obj_file::read(ctx, el, w, &mut out)?;
+            }
             interior(&out, &mut interiors)?;
             register(&mut mesh_ids, el.attr("id").unwrap_or("").trim(), first, el, w);
             continue;
@@ -432,8 +437,8 @@ fn resolve_instances(
                     return Err(r.err(
                         &loc_el(objs, &out[p.index]),
                         format!(
-                            "baseMeshId \"{}\" is an OBJ mesh with several materials, which makes several \
-                             objects; an instance needs one (give that Mesh a <Material>)",
+                            "baseMeshId \"{}\" is an OBJ or glTF mesh that makes several objects (one per \
+                             material or primitive); an instance needs one",
                             inst.base_id
                         ),
                     ));

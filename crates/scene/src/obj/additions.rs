@@ -1,8 +1,8 @@
-//! Numbering an OBJ model's materials, images and texture maps into a
+//! Numbering a model's (OBJ or glTF) materials, images and texture maps into a
 //! description that already has some: a CENG795 scene with `objFile` meshes
 //! appends them after its own, the model scene starts from nothing.
 
-use super::Part;
+use super::{Part, PartMap};
 use crate::description::{ImageDesc, MaterialDesc, TextureMapDesc, TextureSource};
 
 /// Materials, images and texture maps that OBJ parts add to a description,
@@ -33,9 +33,15 @@ impl Additions {
     /// Adds a part's material and maps; returns the material's index and the
     /// maps' indices in the description. An image file used twice is read once.
     pub fn add_part(&mut self, part: &Part) -> (usize, Vec<usize>) {
-        let material = self.add_material(part.material.clone());
+        self.add_with_maps(&part.material, &part.maps)
+    }
+
+    /// Adds a material and its maps (an OBJ part's, a glTF material's);
+    /// returns the material's index and the maps' indices in the description.
+    pub fn add_with_maps(&mut self, material: &MaterialDesc, part_maps: &[PartMap]) -> (usize, Vec<usize>) {
+        let material = self.add_material(material.clone());
         let mut maps = Vec::new();
-        for pm in &part.maps {
+        for pm in part_maps {
             let mut map = pm.map.clone();
             if let (TextureSource::Image { image, .. }, Some(img)) = (&mut map.source, &pm.image) {
                 let local = match self.images.iter().position(|i| i.path == img.path) {

@@ -22,17 +22,18 @@
 //! The ground is lit mostly by the ambient light (its ambient reflectance is
 //! 2.6), so it stays light out to the horizon, where point lights would fade,
 //! and the key light's shadow still shows on it. The background is a soft
-//! grey-blue. An HDRI (`--env`, [`crate::hdri`]) replaces the key, fill and
-//! ambient lights (the [`Studio`] of the description). The output image is `<stem>.png`, through the display transform
+//! grey-blue ([`crate::studio`] holds this layout; glTF files without
+//! cameras or lights use it too). An HDRI (`--env`, [`crate::hdri`])
+//! replaces the key, fill and ambient lights (the [`Studio`] of the
+//! description). The output image is `<stem>.png`, through the display transform
 //! `srgb` unless `--display` names another (docs/hdr.md): MTL colours are
 //! linear reflectances and 8-bit `map_Kd` images are sRGB-decoded, as other
 //! renderers read them, and the values above are tuned for that.
 
 use super::{load, Additions, ObjModel};
-use crate::description::{
-    CameraDesc, Description, MaterialDesc, MeshSource, ObjectDesc, PointLightDesc, Projection, Shape, Studio,
-};
+use crate::description::{Description, MeshSource, ObjectDesc, Shape, Studio};
 use crate::error::{Loc, SceneError, Warning};
+use crate::studio;
 use luster_core::math::{Transform, Vec3};
 use std::path::Path;
 
@@ -58,6 +59,9 @@ pub struct ModelView {
     /// The display transform (`--display`), overriding the scene's or, for a
     /// model, `srgb`. Applies to scene files too (see [`crate::load_viewed`]).
     pub display: Option<luster_core::tonemap::Display>,
+    /// Whether `width` and `height` were asked for (`--size`); when not, a
+    /// glTF camera's `aspectRatio` sets the width.
+    pub sized: bool,
     /// Which of a glTF file's cameras to use (`--camera N`, 0-based); `None`:
     /// the first, or a framing camera when the file has none.
     pub camera: Option<usize>,
@@ -77,77 +81,27 @@ impl Default for ModelView {
             distance: None,
             ground: true,
             display: None,
+            sized: false,
             camera: None,
             material_shaders: Vec::new(),
         }
     }
 }
 
-/// Key and fill irradiance at the model's centre, and the ambient light.
-const KEY: f32 = 190.0;
-const FILL: f32 = 60.0;
-const AMBIENT: Vec3 = Vec3::new(12.0, 13.0, 15.0);
-const SKY: Vec3 = Vec3::new(105.0, 130.0, 168.0);
-
 /// The bounding sphere of a model: centre and radius (at least a tiny bit).
 pub fn bounding_sphere(model: &ObjModel) -> (Vec3, f32) {
-    let points = || model.parts.iter().flat_map(|p| p.arrays.positions.iter().copied());
-    let (lo, hi) = points().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
-    let c = (lo + hi) * 0.5;
-    let r = points().map(|p| p.distance(c)).fold(0.0f32, f32::max);
-    (c, if r > 0.0 { r } else { 1.0 })
-}
-
-/// The unit vector from the centre towards a view at `azimuth`, `elevation` degrees.
-fn direction(azimuth: f32, elevation: f32) -> Vec3 {
-    let (a, e) = (azimuth.to_radians(), elevation.to_radians());
-    Vec3::new(a.sin() * e.cos(), e.sin(), a.cos() * e.cos())
+    studio::bounding_sphere(|| model.parts.iter().flat_map(|p| p.arrays.positions.iter().copied()))
 }
 
 /// The scene of `luster render model.obj`.
 pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneError> {
-    check(path, view)?;
+    studio::check(path, view)?;
     let model = load(path)?;
     let (center, radius) = bounding_sphere(&model);
-    let aspect = view.width as f32 / view.height as f32;
-    let half_y = (view.fov_y * 0.5).to_radians();
-    let half = half_y.tan().min(half_y.tan() * aspect).atan();
-    let distance = view.distance.unwrap_or(1.1 * radius / half.sin());
-    let elevation = view.elevation.clamp(-89.0, 89.0);
-    let eye = center + direction(view.azimuth, elevation) * distance;
-    let stem = path.file_stem().map_or_else(|| "model".into(), |s| s.to_string_lossy().into_owned());
-    // The image is named after the model; what could not name a file safely
-    // (a newline, an escape) becomes `_`.
-    let stem: String =
-        stem.chars().map(|c| if luster_core::text::is_unsafe(c) || c == '\\' { '_' } else { c }).collect();
-    let file_name = path.file_name().map_or_else(|| stem.clone(), |s| s.to_string_lossy().into_owned());
+    let file_name = path.file_name().map_or_else(|| "model".into(), |s| s.to_string_lossy().into_owned());
     let loc = super::at(path, 0);
-    let camera = CameraDesc {
-        id: "model".into(),
-        position: eye,
-        up: Vec3::Y,
-        projection: Projection::LookAt { gaze_point: center, fov_y: view.fov_y },
-        near_distance: 1.0,
-        resolution: (view.width, view.height),
-        image_name: format!("{stem}.png"),
-        // The display transform (`view.display`, sRGB by default) makes the
-        // PNG: MTL colours are linear reflectances, as in other renderers.
-        tonemaps: Vec::new(),
-        num_samples: view.samples,
-        aperture_size: 0.0,
-        focus_distance: 1.0,
-        renderer: Default::default(),
-        loc: loc.clone(),
-    };
-    let light = |az: f32, el: f32, irradiance: f32| {
-        let d = 4.0 * radius;
-        PointLightDesc {
-            position: center + direction(view.azimuth + az, el) * d,
-            intensity: Vec3::splat(irradiance * d * d),
-            loc: loc.clone(),
-        }
-    };
-    let point_lights = vec![light(-45.0, 50.0, KEY), light(60.0, 15.0, FILL)];
+    let camera = studio::framing_camera(view, center, radius, studio::image_name(path), &loc);
+    let point_lights = studio::lights(view, center, radius, 1.0, &loc);
 
     let mut add = Additions::new(0, 0, 0);
     let mut objects = Vec::new();
@@ -166,28 +120,9 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
     }
     let lowest =
         model.parts.iter().flat_map(|p| p.arrays.positions.iter().map(|p| p.y)).fold(f32::INFINITY, f32::min);
-    // A camera below the ground would see only the ground.
-    if view.ground && eye.y > lowest {
-        let material = add.add_material(MaterialDesc {
-            id: "ground".into(),
-            // Mostly ambient: a light floor all the way to the horizon (point
-            // lights fade with distance), where the key light's shadow shows.
-            ambient: Vec3::splat(2.6),
-            diffuse: Vec3::splat(0.3),
-            ..super::mtl::default_material(loc.clone())
-        });
-        objects.push(ObjectDesc {
-            id: "ground".into(),
-            shape: Shape::Plane {
-                point: Vec3::new(center.x, lowest - 1e-3 * radius, center.z),
-                normal: Vec3::Y,
-            },
-            material,
-            transform: Transform::IDENTITY,
-            motion: Vec3::ZERO,
-            textures: Vec::new(),
-            loc: loc.clone(),
-        });
+    if view.ground && camera.position.y > lowest {
+        let material = add.add_material(studio::ground_material(&loc));
+        objects.extend(studio::ground(view, &camera, center, radius, lowest, material, &loc));
     }
     let warnings: Vec<Warning> = model.warnings;
     // All of it is the studio's: an HDRI replaces the lights and reads the
@@ -202,11 +137,11 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         base_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
         shader_libraries: Vec::new(),
         max_recursion_depth: 6,
-        background: SKY,
+        background: studio::SKY,
         shadow_ray_epsilon: None,
         intersection_test_epsilon: 1e-6,
         cameras: vec![camera],
-        ambient_light: AMBIENT,
+        ambient_light: studio::AMBIENT,
         point_lights,
         area_lights: Vec::new(),
         directional_lights: Vec::new(),
@@ -227,25 +162,4 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         display: view.display.unwrap_or(luster_core::tonemap::Display::Srgb),
         warnings,
     })
-}
-
-/// Refuses views that cannot make an image.
-fn check(path: &Path, v: &ModelView) -> Result<(), SceneError> {
-    let bad = |msg: String| Err(SceneError::file(path, msg));
-    if v.width == 0 || v.height == 0 || v.width > 1 << 14 || v.height > 1 << 14 {
-        return bad(format!(
-            "an image of {}x{} pixels cannot be made (1 to 16384 a side)",
-            v.width, v.height
-        ));
-    }
-    if !(v.fov_y > 0.0 && v.fov_y < 180.0) {
-        return bad(format!("the field of view must be between 0 and 180 degrees, found {}", v.fov_y));
-    }
-    if v.distance.is_some_and(|d| !(d > 0.0 && d.is_finite())) {
-        return bad("the camera distance must be positive".to_string());
-    }
-    if !(v.azimuth.is_finite() && v.elevation.is_finite()) || v.samples == 0 {
-        return bad("the view's angles must be finite and its samples at least 1".to_string());
-    }
-    Ok(())
 }
