@@ -1,8 +1,9 @@
 //! The command line's shared argument types and value parsers: the OBJ
 //! model view (`--size`, `--azimuth`, `--elevation`, `--fov`, `--distance`,
-//! `--no-ground`, `--display`), `--filter`, `--threads`, `--shader-lib`,
+//! `--no-ground`, `--display`), glTF material overrides (`--material`), `--filter`, `--threads`, `--shader-lib`,
 //! `--shader-timeout`, and the worker pool they configure.
 
+use luster::scene::gltf::material::MaterialOverride;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -56,6 +57,12 @@ pub(super) struct ModelArgs {
     /// (8-bit colour textures sRGB-decoded) ending in srgb, aces or filmic.
     #[arg(long, value_name = "MODE", value_parser = parse_display, help_heading = "Output")]
     display: Option<luster::tonemap::Display>,
+    /// Replace the glTF material NAME by a Lua material shader (its
+    /// material(s) closure or material outputs); repeatable. The path is
+    /// relative to the current folder.
+    #[arg(long = "material", value_name = "NAME=FILE.lua", value_parser = parse_material,
+          help_heading = "glTF scenes")]
+    materials: Vec<MaterialOverride>,
 }
 
 impl ModelArgs {
@@ -69,9 +76,27 @@ impl ModelArgs {
             distance: self.distance,
             ground: !self.no_ground,
             display: self.display,
+            material_shaders: self.materials.clone(),
             ..Default::default()
         }
     }
+}
+
+/// A `--material NAME=FILE.lua`: a material name (up to the first `=`)
+/// and a script file that exists.
+pub(super) fn parse_material(s: &str) -> Result<MaterialOverride, String> {
+    let shown = |t: &str| luster_core::text::shown(t, false).into_owned();
+    let Some((name, file)) = s.split_once('=').filter(|(n, f)| !n.is_empty() && !f.is_empty()) else {
+        return Err(format!(
+            "\"{}\" is not NAME=FILE.lua (a glTF material's name and a Lua script)",
+            shown(s)
+        ));
+    };
+    let script = PathBuf::from(file);
+    if !script.is_file() {
+        return Err(format!("cannot read shader script {}: no such file", shown(file)));
+    }
+    Ok(MaterialOverride { name: name.to_string(), script })
 }
 
 /// A `--display` mode.

@@ -14,6 +14,7 @@ mod distribution;
 mod ellipsoid;
 mod flip_reference;
 mod fuzz_smoke;
+mod gltf_materials;
 mod golden;
 mod golden_hw3;
 mod golden_hw4;
