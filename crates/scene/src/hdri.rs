@@ -82,12 +82,7 @@ impl Hdri {
         if let Some(studio) = desc.studio.take() {
             remove_studio(desc, &studio, &loc);
         }
-        desc.images.push(ImageDesc {
-            id: "--env".into(),
-            path: self.path.clone(),
-            degamma: false,
-            loc: loc.clone(),
-        });
+        desc.images.push(ImageDesc::file("--env".into(), self.path.clone(), false, loc.clone()));
         desc.environment_light = Some(EnvironmentLightDesc {
             image: desc.images.len() - 1,
             mapping: EnvMapping::LatLong,

@@ -1,9 +1,10 @@
 //! The command line's shared argument types and value parsers: the OBJ
 //! model view (`--size`, `--azimuth`, `--elevation`, `--fov`, `--distance`,
-//! `--no-ground`, `--display`), the HDRI (`--env`, `--env-rotate`,
-//! `--env-strength`), `--filter`, `--threads`, `--shader-lib`,
+//! `--no-ground`, `--display`), glTF material overrides (`--material`), the
+//! HDRI (`--env`, `--env-rotate`, `--env-strength`), `--filter`, `--threads`, `--shader-lib`,
 //! `--shader-timeout`, and the worker pool they configure.
 
+use luster::scene::gltf::material::MaterialOverride;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -57,6 +58,12 @@ pub(super) struct ModelArgs {
     /// (8-bit colour textures sRGB-decoded) ending in srgb, aces or filmic.
     #[arg(long, value_name = "MODE", value_parser = parse_display, help_heading = "Output")]
     display: Option<luster::tonemap::Display>,
+    /// Replace the glTF material NAME by a Lua material shader (its
+    /// material(s) closure or material outputs); repeatable. The path is
+    /// relative to the current folder.
+    #[arg(long = "material", value_name = "NAME=FILE.lua", value_parser = parse_material,
+          help_heading = "glTF scenes")]
+    materials: Vec<MaterialOverride>,
 }
 
 impl ModelArgs {
@@ -71,6 +78,7 @@ impl ModelArgs {
             distance: self.distance,
             ground: !self.no_ground,
             display: self.display,
+            material_shaders: self.materials.clone(),
             ..Default::default()
         }
     }
@@ -110,7 +118,7 @@ impl EnvArgs {
 pub(super) fn parse_env_rotate(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
         Ok(d) if d.is_finite() => Ok(d),
-        _ => Err(format!("\"{s}\" is not a number of degrees")),
+        _ => Err(format!("\"{}\" is not a number of degrees", luster_core::text::shown(s, false))),
     }
 }
 
@@ -118,8 +126,25 @@ pub(super) fn parse_env_rotate(s: &str) -> Result<f32, String> {
 pub(super) fn parse_env_strength(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
         Ok(v) if (0.0..=1e36).contains(&v) => Ok(v),
-        _ => Err(format!("\"{s}\" is not a strength (a number from 0 to 1e36)")),
+        _ => Err(format!("\"{}\" is not a strength (a number from 0 to 1e36)", luster_core::text::shown(s, false))),
     }
+}
+
+/// A `--material NAME=FILE.lua`: a material name (up to the first `=`)
+/// and a script file that exists.
+pub(super) fn parse_material(s: &str) -> Result<MaterialOverride, String> {
+    let shown = |t: &str| luster_core::text::shown(t, false).into_owned();
+    let Some((name, file)) = s.split_once('=').filter(|(n, f)| !n.is_empty() && !f.is_empty()) else {
+        return Err(format!(
+            "\"{}\" is not NAME=FILE.lua (a glTF material's name and a Lua script)",
+            shown(s)
+        ));
+    };
+    let script = PathBuf::from(file);
+    if !script.is_file() {
+        return Err(format!("cannot read shader script {}: no such file", shown(file)));
+    }
+    Ok(MaterialOverride { name: name.to_string(), script })
 }
 
 /// A `--display` mode.

@@ -17,6 +17,7 @@ mod flip_reference;
 mod fuzz_smoke;
 mod gltf;
 mod gltf_bad;
+mod gltf_materials;
 mod golden;
 mod golden_hw3;
 mod golden_hw4;

@@ -120,6 +120,15 @@ fn rgb_texels(raw: Vec<u8>) -> Vec<[u8; 3]> {
     unsafe { Vec::from_raw_parts(raw.as_mut_ptr().cast::<[u8; 3]>(), raw.len() / 3, raw.capacity() / 3) }
 }
 
+/// Which of an image's channels become its texels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Channels {
+    /// Red, green and blue (grey images repeat their one channel).
+    Rgb,
+    /// Alpha, as grey (fully opaque where the image has no alpha).
+    Alpha,
+}
+
 /// A decoded image with its mipmap levels (level 0 only until
 /// [`Image::build_mipmaps`]).
 pub struct Image {
@@ -134,6 +143,11 @@ pub const MAX_EDGE: u32 = 32768;
 impl Image {
     /// Decodes an image file (PNG, JPEG, EXR, HDR; anything the `image` crate reads).
     pub fn load(path: &Path) -> Result<Image, String> {
+        Image::load_channels(path, Channels::Rgb)
+    }
+
+    /// Decodes an image file into the texels `channels` says.
+    pub fn load_channels(path: &Path, channels: Channels) -> Result<Image, String> {
         let (file, _) = luster_core::file::open_regular(path, luster_core::image::MAX_IMAGE_BYTES)
             .map_err(|why| format!("cannot open {}: {why}", path.display()))?;
         let mut file = std::io::BufReader::new(file);
@@ -149,25 +163,62 @@ impl Image {
         let reader =
             reader.with_guessed_format().map_err(|e| format!("cannot read {}: {e}", path.display()))?;
         let img = reader.decode().map_err(|e| format!("cannot decode image {}: {e}", path.display()))?;
+        Image::from_dynamic(img, channels, &path.display().to_string())
+    }
+
+    /// Decodes a PNG or JPEG image held in memory (one inside a glTF file);
+    /// `name` names it in messages.
+    pub fn decode_bytes(bytes: &[u8], name: &str, channels: Channels) -> Result<Image, String> {
+        let reader = ::image::ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| format!("cannot read image {name}: {e}"))?;
+        // Formats with headers of their own to check (EXR) are files only.
+        if !matches!(reader.format(), Some(::image::ImageFormat::Png | ::image::ImageFormat::Jpeg)) {
+            return Err(format!("image {name} is not a PNG or JPEG image"));
+        }
+        let img = reader.decode().map_err(|e| format!("cannot decode image {name}: {e}"))?;
+        Image::from_dynamic(img, channels, name)
+    }
+
+    fn from_dynamic(img: ::image::DynamicImage, channels: Channels, name: &str) -> Result<Image, String> {
         let (w, h) = (img.width(), img.height());
         if w == 0 || h == 0 || w > MAX_EDGE || h > MAX_EDGE {
-            return Err(format!("image {} is {w}×{h}; edges must be 1 to {MAX_EDGE}", path.display()));
+            return Err(format!("image {name} is {w}×{h}; edges must be 1 to {MAX_EDGE}"));
         }
         use ::image::DynamicImage as D;
-        Ok(match img {
-            D::ImageRgb32F(_) | D::ImageRgba32F(_) => {
+        let level = |texels| Level { width: w, height: h, texels };
+        Ok(match (channels, &img) {
+            (Channels::Alpha, D::ImageRgb32F(_) | D::ImageRgba32F(_)) => {
+                let t = img.to_rgba32f().pixels().map(|p| [p.0[3]; 3]).collect();
+                Image::from_level(level(Texels::Hdr(t)), true)
+            }
+            (
+                Channels::Alpha,
+                D::ImageLuma16(_) | D::ImageLumaA16(_) | D::ImageRgb16(_) | D::ImageRgba16(_),
+            ) => {
+                let t = img.to_rgba16().pixels().map(|p| [p.0[3] as f32 / 257.0; 3]).collect();
+                Image::from_level(level(Texels::Hdr(t)), false)
+            }
+            (Channels::Alpha, _) => {
+                let t = img.to_rgba8().pixels().map(|p| [p.0[3]; 3]).collect();
+                Image::from_level(level(Texels::Ldr(t)), false)
+            }
+            (Channels::Rgb, D::ImageRgb32F(_) | D::ImageRgba32F(_)) => {
                 let t = img.to_rgb32f().pixels().map(|p| p.0).collect();
-                Image::from_level(Level { width: w, height: h, texels: Texels::Hdr(t) }, true)
+                Image::from_level(level(Texels::Hdr(t)), true)
             }
-            D::ImageLuma16(_) | D::ImageLumaA16(_) | D::ImageRgb16(_) | D::ImageRgba16(_) => {
+            (
+                Channels::Rgb,
+                D::ImageLuma16(_) | D::ImageLumaA16(_) | D::ImageRgb16(_) | D::ImageRgba16(_),
+            ) => {
                 let t = img.to_rgb16().pixels().map(|p| p.0.map(|c| c as f32 / 257.0)).collect();
-                Image::from_level(Level { width: w, height: h, texels: Texels::Hdr(t) }, false)
+                Image::from_level(level(Texels::Hdr(t)), false)
             }
-            _ => {
+            (Channels::Rgb, _) => {
                 // `into_`, not `to_`: an 8-bit RGB file (most JPEGs) keeps its
                 // decoded buffer, which becomes the texels as it is.
                 let t = rgb_texels(img.into_rgb8().into_raw());
-                Image::from_level(Level { width: w, height: h, texels: Texels::Ldr(t) }, false)
+                Image::from_level(level(Texels::Ldr(t)), false)
             }
         })
     }
@@ -217,12 +268,33 @@ impl Image {
 
     fn decode(&mut self, f: impl Fn(f32) -> f32) {
         let scale = if self.hdr { 1.0 } else { 255.0 };
+        self.map_texels(|c| Vec3::from_array((c.max(Vec3::ZERO) / scale).to_array().map(|c| f(c) * scale)));
+    }
+
+    /// Turns a tangent-space normal map in OpenGL's convention (+Y up in
+    /// the image, glTF's) into the one `replace_normal` reads (+Y along +v,
+    /// down the image), with x and y scaled by `scale` as glTF's
+    /// `normalTexture.scale` does: `t = 2c − 1` becomes
+    /// `(scale·tx, −scale·ty, tz)`, stored again as `255 (t + 1) / 2`.
+    /// Call before [`Image::build_mipmaps`].
+    pub fn gl_normal(&mut self, scale: f32) {
+        let unit = if self.hdr { 1.0 } else { 255.0 };
+        self.map_texels(|c| {
+            let t = c / unit * 2.0 - Vec3::ONE;
+            (Vec3::new(scale * t.x, -scale * t.y, t.z) + Vec3::ONE) * 127.5
+        });
+        // The texels are now on the 0–255 scale that normal maps read.
+        self.hdr = false;
+    }
+
+    /// Replaces every texel `c` by `f(c)`, kept as floats.
+    fn map_texels(&mut self, f: impl Fn(Vec3) -> Vec3) {
         for level in &mut self.levels {
-            let linear: Vec<[f32; 3]> = (0..level.height)
+            let out: Vec<[f32; 3]> = (0..level.height)
                 .flat_map(|y| (0..level.width).map(move |x| (x, y)))
-                .map(|(x, y)| (level.fetch(x, y).max(Vec3::ZERO) / scale).to_array().map(|c| f(c) * scale))
+                .map(|(x, y)| f(level.fetch(x, y)).to_array())
                 .collect();
-            level.texels = Texels::Hdr(linear);
+            level.texels = Texels::Hdr(out);
         }
     }
 

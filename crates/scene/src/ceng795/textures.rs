@@ -61,7 +61,7 @@ pub fn read_all(
                 return Err(r.err(im, "<Image> names no file"));
             }
             let degamma = r.bool_attr(im, "degamma", false)?;
-            images.push(ImageDesc { id: id_of(im), path: base_dir.join(path), degamma, loc: im.loc.clone() });
+            images.push(ImageDesc::file(id_of(im), base_dir.join(path), degamma, im.loc.clone()));
         }
     }
     let image_ids: HashMap<&str, usize> =

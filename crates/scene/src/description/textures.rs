@@ -5,19 +5,62 @@ use crate::error::Loc;
 use luster_core::math::Vec3;
 use luster_shading::shader::ParamValue;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// An image file that texture maps read.
 #[derive(Clone, Debug)]
 pub struct ImageDesc {
     /// The image's id.
     pub id: String,
-    /// Resolved path.
+    /// Resolved path; for an image held in [`bytes`](Self::bytes), only its
+    /// name in messages.
     pub path: PathBuf,
     /// Whether texels are display-encoded colours to raise to the power 2.2
     /// (`degamma="true"` on the image or on a texture map reading it).
     pub degamma: bool,
     /// Where.
     pub loc: Loc,
+    /// The encoded image (PNG, JPEG) when it is not a file of its own: one
+    /// inside a glTF binary buffer or a `data:` URI.
+    pub bytes: Option<Arc<[u8]>>,
+    /// What the texels hold, and so how they are decoded.
+    pub encoding: ImageEncoding,
+}
+
+impl ImageDesc {
+    /// An image file read as the scene's display transform reads images.
+    pub fn file(id: String, path: PathBuf, degamma: bool, loc: Loc) -> ImageDesc {
+        ImageDesc { id, path, degamma, loc, bytes: None, encoding: ImageEncoding::Scene }
+    }
+
+    /// Whether two descriptions decode to the same texels (one image read once).
+    pub fn same_texels(&self, other: &ImageDesc) -> bool {
+        self.path == other.path && self.encoding == other.encoding && self.degamma == other.degamma
+    }
+}
+
+/// What an image's texels hold: how the renderer turns them into values.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ImageEncoding {
+    /// As the scene's display transform says: under a linear workflow
+    /// 8-bit colour images are sRGB-decoded (unless only normal and bump
+    /// maps read them), otherwise texels are used as stored.
+    Scene,
+    /// sRGB-encoded colour: 8- and 16-bit texels are always decoded (glTF's
+    /// base colour, emissive, sheen and specular colour textures).
+    Srgb,
+    /// Linear data, used as stored (glTF's metallic-roughness, transmission,
+    /// clearcoat textures).
+    Linear,
+    /// The image's alpha channel as grey, linear (1 where the image has none).
+    Alpha,
+    /// A tangent-space normal map in OpenGL's convention (glTF's: +Y is up
+    /// in the image, towards decreasing v), with x and y scaled by `scale`:
+    /// decoded into luster's `replace_normal` convention (+Y along +v).
+    GlNormal {
+        /// glTF's `normalTexture.scale`.
+        scale: f32,
+    },
 }
 
 /// How an image texture is filtered.

@@ -44,7 +44,7 @@ impl Additions {
         for pm in part_maps {
             let mut map = pm.map.clone();
             if let (TextureSource::Image { image, .. }, Some(img)) = (&mut map.source, &pm.image) {
-                let local = match self.images.iter().position(|i| i.path == img.path) {
+                let local = match self.images.iter().position(|i| i.same_texels(img)) {
                     Some(k) => k,
                     None => {
                         self.images.push(img.clone());

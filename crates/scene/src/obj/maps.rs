@@ -127,7 +127,7 @@ pub fn read(file: &MtlFile, m: usize, warnings: &mut Vec<Warning>) -> Result<Vec
                     interpolation: Interpolation::Bilinear,
                     normalizer: None,
                 };
-                (source, Some(ImageDesc { id: id.clone(), path, degamma: false, loc: loc.clone() }))
+                (source, Some(ImageDesc::file(id.clone(), path, false, loc.clone())))
             }
             Kind::Shader => {
                 let code = read_script(&path).map_err(|why| {

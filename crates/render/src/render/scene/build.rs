@@ -12,7 +12,7 @@ use crate::render::camera::Camera;
 use crate::texture::{shader, Image, TexList, Textures};
 use crate::volume::{Baking, Volumes};
 use luster_core::math::{Aabb, Vec2, Vec3};
-use luster_scene::description::{Description, MeshSource, Shape};
+use luster_scene::description::{Description, ImageEncoding, MeshSource, Shape};
 use luster_scene::ply::read_ply;
 use luster_scene::{SceneError, Warning};
 use luster_shading::shader::ShaderImages;
@@ -340,11 +340,17 @@ fn build_textures(desc: &Description, opts: &BuildOptions) -> Result<Textures, S
                 return Image::from_rgb8(1, 1, vec![[0, 0, 0]])
                     .ok_or_else(|| SceneError::at(&desc.file, &d.loc, "internal error"));
             }
-            let mut img = Image::load(&d.path).map_err(|e| SceneError::at(&desc.file, &d.loc, e))?;
-            if d.degamma {
-                img.degamma();
-            } else if desc.display.is_linear_workflow() && !img.is_hdr() && !data_only[i] {
-                img.srgb_decode();
+            let mut img = load_image(d).map_err(|e| SceneError::at(&desc.file, &d.loc, e))?;
+            match d.encoding {
+                _ if d.degamma => img.degamma(),
+                ImageEncoding::Scene => {
+                    if desc.display.is_linear_workflow() && !img.is_hdr() && !data_only[i] {
+                        img.srgb_decode();
+                    }
+                }
+                ImageEncoding::Srgb if !img.is_hdr() => img.srgb_decode(),
+                ImageEncoding::Srgb | ImageEncoding::Linear | ImageEncoding::Alpha => {}
+                ImageEncoding::GlNormal { scale } => img.gl_normal(scale),
             }
             if trilinear[i] {
                 img.build_mipmaps();
@@ -360,6 +366,16 @@ fn build_textures(desc: &Description, opts: &BuildOptions) -> Result<Textures, S
     )
     .map_err(|e| SceneError::at(&desc.file, &desc.texture_maps[e.map].loc, e.message))?;
     Ok(Textures::new(images, &desc.texture_maps, desc.background_texture, shaders))
+}
+
+/// Decodes image `d` from its file or its bytes, in the channels its encoding reads.
+fn load_image(d: &luster_scene::description::ImageDesc) -> Result<Image, String> {
+    use crate::texture::image::Channels;
+    let channels = if d.encoding == ImageEncoding::Alpha { Channels::Alpha } else { Channels::Rgb };
+    match &d.bytes {
+        Some(bytes) => Image::decode_bytes(bytes, &d.path.display().to_string(), channels),
+        None => Image::load_channels(&d.path, channels),
+    }
 }
 
 /// The scene's images as shaders sample them with `texture()`.
