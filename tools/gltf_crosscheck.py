@@ -35,15 +35,17 @@ DEPTH = 8
 
 
 def make_sky(path, w=512, h=256):
-    """A smooth sky with a warm sun, in luster's lat-long convention (the
-    map's centre is -z, +y its top row; docs/environment-light.md)."""
+    """A smooth sky with a warm sun, in `--env`'s convention (Blender's
+    world with no mapping; docs/environment-light.md): in glTF's axes the
+    map's centre faces +x, a quarter across -z, three quarters +z, its top
+    row +y."""
     import numpy as np
     v = (np.arange(h) + 0.5) / h
     u = (np.arange(w) + 0.5) / w
     theta = v[:, None] * math.pi
-    phi = (2 * u[None, :] - 1) * math.pi
-    d = np.stack([np.sin(theta) * np.sin(phi), np.cos(theta) * np.ones_like(phi),
-                  -np.sin(theta) * np.cos(phi)], -1)
+    phi = (u[None, :] - 0.5) * 2 * math.pi
+    d = np.stack([np.sin(theta) * np.cos(phi), np.cos(theta) * np.ones_like(phi),
+                  np.sin(theta) * np.sin(phi)], -1)
     up = np.clip(d[..., 1], -1, 1)
     sky = np.where(up[..., None] > 0,
                    np.array([0.35, 0.55, 1.0]) * (0.6 + 0.4 * (1 - up[..., None])),
@@ -165,30 +167,15 @@ def render_cycles(work, spp, seed, out):
     imf.file_format, imf.color_depth, imf.color_mode = "OPEN_EXR", "32", "RGB"
     sc.camera = next(o for o in sc.objects if o.type == "CAMERA")
 
-    # luster's lat-long convention (docs/environment-light.md) in Blender's
-    # world: a glTF (= luster) direction l arrives in Blender as
-    # b = (lx, -lz, ly), and Blender's equirect map of the vector
-    # (-lz, -lx, ly) = (by, -bx, bz) is luster's lookup of l.
+    # `--env` reads the map as Blender's world does with no mapping.
     world = bpy.data.worlds.new("env")
     world.use_nodes = True
     wn, wl = world.node_tree.nodes, world.node_tree.links
     bg = wn["Background"]
-    tc = wn.new("ShaderNodeTexCoord")
-    sep = wn.new("ShaderNodeSeparateXYZ")
-    comb = wn.new("ShaderNodeCombineXYZ")
-    negx = wn.new("ShaderNodeMath")
-    negx.operation = "MULTIPLY"
-    negx.inputs[1].default_value = -1.0
-    wl.new(tc.outputs["Generated"], sep.inputs[0])
-    wl.new(sep.outputs["X"], negx.inputs[0])
-    wl.new(sep.outputs["Y"], comb.inputs["X"])
-    wl.new(negx.outputs[0], comb.inputs["Y"])
-    wl.new(sep.outputs["Z"], comb.inputs["Z"])
     tex = wn.new("ShaderNodeTexEnvironment")
     tex.image = bpy.data.images.load(os.path.join(work, "sky.exr"))
     tex.image.colorspace_settings.name = "Non-Color"
     tex.interpolation = "Closest"
-    wl.new(comb.outputs[0], tex.inputs["Vector"])
     wl.new(tex.outputs["Color"], bg.inputs["Color"])
     sc.world = world
     t0 = time.time()

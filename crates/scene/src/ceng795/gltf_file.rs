@@ -110,6 +110,7 @@ pub fn read(
                 None => {
                     let g = m.and_then(|i| mats.get(i)).unwrap_or(&default);
                     let done = pending.add.add_with_maps(&g.material, &g.maps);
+                    g.add_images_to(&mut pending.add.images);
                     added.insert(m, done.clone());
                     done
                 }

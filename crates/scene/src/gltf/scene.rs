@@ -57,6 +57,7 @@ pub fn scene(path: &Path, view: &ModelView) -> Result<Description, SceneError> {
         }
         let g = m.and_then(|i| mats.get(i)).unwrap_or(&default);
         let done = add.add_with_maps(&g.material, &g.maps);
+        g.add_images_to(&mut add.images);
         added.insert(m, done.clone());
         Ok(done)
     })?;
