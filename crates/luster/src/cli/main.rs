@@ -21,6 +21,7 @@ mod args;
 mod compare;
 mod merge;
 mod part;
+mod passes;
 mod reframe;
 mod render;
 mod signal;
@@ -105,6 +106,8 @@ enum Command {
         model: ModelArgs,
         #[command(flatten)]
         frame: reframe::FrameArgs,
+        #[command(flatten)]
+        passes: passes::PassArgs,
     },
     /// Preview a scene live in the browser, re-rendering whenever its files are saved.
     ///
@@ -308,11 +311,20 @@ fn main() -> ExitCode {
             time,
             model,
             frame,
+            passes,
         } => {
             luster::shader::set_library_dirs(shader_lib);
             let filter = filter.filter();
             let time_limit = time.map(std::time::Duration::from_secs_f64);
-            let opts = luster::render::RenderOptions { spp, seed, filter, time_limit, ..Default::default() };
+            let opts = luster::render::RenderOptions {
+                spp,
+                seed,
+                filter,
+                time_limit,
+                passes: passes.passes(),
+                adaptive: passes.adaptive(),
+                ..Default::default()
+            };
             let build = luster::render::BuildOptions {
                 shader_timeout: std::time::Duration::from_secs_f64(shader_timeout),
             };

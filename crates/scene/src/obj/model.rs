@@ -133,6 +133,7 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         // PNG: MTL colours are linear reflectances, as in other renderers.
         tonemaps: Vec::new(),
         num_samples: view.samples,
+        noise_threshold: None,
         aperture_size: 0.0,
         focus_distance: 1.0,
         renderer: Default::default(),
