@@ -141,3 +141,16 @@ fn stopping_decisions_do_not_depend_on_the_threads() {
     assert!(one.aovs == two.aovs);
     assert!(one.mean_spp < 64.0, "some pixels stopped early: {}", one.mean_spp);
 }
+
+#[test]
+fn a_threshold_out_of_range_is_an_error_naming_its_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = scene(50.0, 8, 1.0, "0 0 0", "<NoiseThreshold>2</NoiseThreshold>");
+    let p = dir.path().join("s.xml");
+    std::fs::write(&p, text).unwrap();
+    let e = match luster::scene::load(&p) {
+        Ok(_) => panic!("a threshold of 2 was accepted"),
+        Err(e) => e.to_string(),
+    };
+    assert!(e.contains("line 7") && e.contains("<NoiseThreshold> must be between 0 and 1, found 2"), "{e}");
+}
