@@ -68,6 +68,7 @@ pub fn framing_camera(
         // PNG: model colours are linear reflectances, as in other renderers.
         tonemaps: Vec::new(),
         num_samples: view.samples,
+        noise_threshold: None,
         aperture_size: 0.0,
         focus_distance: 1.0,
         renderer: Default::default(),

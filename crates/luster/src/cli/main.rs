@@ -21,6 +21,7 @@ mod args;
 mod compare;
 mod merge;
 mod part;
+mod passes;
 mod reframe;
 mod render;
 mod signal;
@@ -112,6 +113,8 @@ enum Command {
         env: EnvArgs,
         #[command(flatten)]
         frame: reframe::FrameArgs,
+        #[command(flatten)]
+        passes: passes::PassArgs,
     },
     /// Preview a scene live in the browser, re-rendering whenever its files are saved.
     ///
@@ -319,6 +322,7 @@ fn main() -> ExitCode {
             model,
             env,
             frame,
+            passes,
         } => {
             let env = match env.hdri() {
                 Ok(env) => env,
@@ -331,7 +335,15 @@ fn main() -> ExitCode {
             let view = luster::scene::obj::ModelView { camera, ..model.view() };
             let filter = filter.filter();
             let time_limit = time.map(std::time::Duration::from_secs_f64);
-            let opts = luster::render::RenderOptions { spp, seed, filter, time_limit, ..Default::default() };
+            let opts = luster::render::RenderOptions {
+                spp,
+                seed,
+                filter,
+                time_limit,
+                passes: passes.passes(),
+                adaptive: passes.adaptive(),
+                ..Default::default()
+            };
             let build = luster::render::BuildOptions {
                 shader_timeout: std::time::Duration::from_secs_f64(shader_timeout),
             };

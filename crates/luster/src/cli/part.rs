@@ -83,8 +83,14 @@ fn run_in_pool(
     let part = split.part;
     // Everything that changes a pixel is in the job id; the shader time limit
     // is not (a render it stops fails instead of writing a part).
-    let options =
-        format!("spp={:?} seed={} filter={:?} view={view:?} env={env:?}", opts.spp, opts.seed, opts.filter);
+    let options = format!(
+        "spp={:?} seed={} filter={:?} view={view:?} env={env:?} aov={} adaptive={:?}",
+        opts.spp,
+        opts.seed,
+        opts.filter,
+        opts.passes.names(),
+        opts.adaptive
+    );
     let job = JobId::new(part.n, scenes, &options)?;
     // Every part numbers the images of the job alike, from every scene's
     // cameras; the names must not clash across scenes, since the parts of

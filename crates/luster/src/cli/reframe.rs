@@ -115,6 +115,7 @@ mod tests {
             image_name: "a.png".into(),
             tonemaps: Vec::new(),
             num_samples: 1,
+            noise_threshold: None,
             aperture_size: 0.0,
             focus_distance: 1.0,
             renderer: Default::default(),

@@ -4,6 +4,7 @@
 
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
+use luster::film::aov::{aov_file_name, write_aov_exr};
 use luster::film::write_outputs;
 use luster::film::FilmReserve;
 use luster::image::outputs::{first_clash, plan_outputs};
@@ -69,14 +70,17 @@ fn render_scene(
     // A model's --size already made its camera; --scale and --crop apply to both.
     super::reframe::apply(&mut desc, if obj { None } else { frame.0 }, &frame.1)
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    luster::film::check_memory(desc.cameras.iter().map(|c| c.resolution))
+    let adaptive = opts.adaptive.threshold.or_else(|| desc.cameras.iter().find_map(|c| c.noise_threshold));
+    let adaptive = adaptive.is_some_and(|t| t > 0.0);
+    luster::film::check_memory_with(desc.cameras.iter().map(|c| c.resolution), opts.passes, adaptive)
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     for w in &desc.warnings {
         super::report("warning", &format_args!("{}: {w}", path.display()));
     }
     // While the scene loads (an image decoding alone, say), a free worker
     // writes the first camera's film memory.
-    let reserve = desc.cameras.first().map(|c| FilmReserve::start(c.resolution.0, c.resolution.1));
+    let reserve =
+        desc.cameras.first().map(|c| FilmReserve::start_with(c.resolution.0, c.resolution.1, opts.passes));
     let scene = Scene::build_with(&desc, build)?;
     for w in &scene.warnings {
         super::report("warning", &format_args!("{}: {w}", path.display()));
@@ -87,7 +91,14 @@ fn render_scene(
         .map(|c| plan_outputs(&c.image_name, &c.tonemaps, c.display))
         .collect::<Result<Vec<_>, _>>()
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    if let Some(clash) = first_clash(plans.iter().flatten().map(|o| o.name.as_path())) {
+    // The passes' file of each camera, when passes are asked for.
+    let aov_names: Vec<PathBuf> = match opts.passes.is_empty() {
+        true => Vec::new(),
+        false => scene.cameras.iter().map(|c| aov_file_name(&c.image_name)).collect(),
+    };
+    let names =
+        plans.iter().flatten().map(|o| o.name.as_path()).chain(aov_names.iter().map(PathBuf::as_path));
+    if let Some(clash) = first_clash(names) {
         anyhow::bail!("{}: two outputs would be written to {}", path.display(), clash.display());
     }
     let setup = t0.elapsed().as_secs_f64();
@@ -114,20 +125,29 @@ fn render_scene(
     if rayon::current_num_threads() > 1 {
         rayon::spawn(move || drop((scene, desc)));
     }
-    for ((img, secs), plan) in done.iter().zip(&plans) {
-        let written = write_outputs(&img.film, outdir, plan)
+    for (i, ((img, secs), plan)) in done.iter().zip(&plans).enumerate() {
+        let mut written = write_outputs(&img.film, outdir, plan)
             .with_context(|| format!("rendering {}", path.display()))?;
+        if let (Some(aovs), Some(aov_name)) = (&img.aovs, aov_names.get(i)) {
+            let name = outdir.join(aov_name);
+            write_aov_exr(&name, &img.film, aovs).with_context(|| format!("rendering {}", path.display()))?;
+            written.push(name);
+        }
         if !quiet {
             let names: Vec<String> = written
                 .iter()
                 .map(|p| luster::text::shown(&p.display().to_string(), false).into_owned())
                 .collect();
+            // Adaptive sampling's pixels took different counts: the mean, and the most.
+            let spp = match img.mean_spp < f64::from(img.spp) {
+                true => format!("{:.1} spp mean (max {})", img.mean_spp, img.spp),
+                false => format!("{} spp", img.spp),
+            };
             println!(
-                "{}  {}x{}  {} spp  {:.2} s render (+{:.2} s load and build)  {:.1} Mrays/s  {} triangles",
+                "{}  {}x{}  {spp}  {:.2} s render (+{:.2} s load and build)  {:.1} Mrays/s  {} triangles",
                 names.join(" + "),
                 img.width,
                 img.height,
-                img.spp,
                 secs,
                 setup,
                 img.stats.total() as f64 / secs.max(1e-9) / 1e6,

@@ -19,6 +19,7 @@ use super::partfile::{tile_count, tile_rect, PartFile, Pixels};
 use super::{images_of_part, parse_part_name, parts_of, share, tiles_of, ClusterError, Part};
 use luster_core::image::outputs::{first_clash, plan_outputs, Output};
 use luster_core::text::shown;
+use luster_render::film::aov::{aov_file_name, write_aov_exr, Aovs, Passes};
 use luster_render::film::write_outputs;
 use luster_render::film::Film;
 use std::collections::BTreeMap;
@@ -65,6 +66,8 @@ struct ImagePlan {
     name: String,
     size: (u32, u32),
     outputs: Vec<Output>,
+    /// The render passes, written to [`aov_file_name`] when there are any.
+    passes: Passes,
     parts: Vec<PathBuf>,
 }
 
@@ -141,10 +144,17 @@ pub fn merge(outdir: &Path) -> Result<Merged, ClusterError> {
                     name: p.image_name.clone(),
                     size: (p.width, p.height),
                     outputs,
+                    passes: p.passes,
                     parts: Vec::new(),
                 })
             }
         };
+        if plan.passes != p.passes {
+            return Err(ClusterError(format!(
+                "{here}: another part of image {} holds other render passes",
+                p.image + 1
+            )));
+        }
         if plan.name != p.image_name || plan.size != (p.width, p.height) {
             return Err(ClusterError(format!(
                 "{here}: another part says image {} of the job is {} ({}x{}), this one says {} ({}x{})",
@@ -180,7 +190,10 @@ pub fn merge(outdir: &Path) -> Result<Merged, ClusterError> {
         }
     }
     let plans: Vec<ImagePlan> = images.into_values().collect();
-    if let Some(clash) = first_clash(plans.iter().flat_map(|p| p.outputs.iter().map(|o| o.name.as_path()))) {
+    let aov_names: Vec<PathBuf> =
+        plans.iter().filter(|p| !p.passes.is_empty()).map(|p| aov_file_name(&p.name)).collect();
+    let names = plans.iter().flat_map(|p| p.outputs.iter().map(|o| o.name.as_path()));
+    if let Some(clash) = first_clash(names.chain(aov_names.iter().map(PathBuf::as_path))) {
         return Err(ClusterError(format!(
             "{}: two images of the job would be written to {}",
             outdir.display(),
@@ -191,31 +204,42 @@ pub fn merge(outdir: &Path) -> Result<Merged, ClusterError> {
     // one at a time, since an animation's films together may not fit in memory.
     let mut written = Vec::new();
     for plan in &plans {
-        let film = assemble(plan, job)?;
+        let (film, aovs) = assemble(plan, job)?;
         written.extend(write_outputs(&film, outdir, &plan.outputs).map_err(|e| ClusterError(e.to_string()))?);
+        if let Some(aovs) = aovs {
+            let path = outdir.join(aov_file_name(&plan.name));
+            write_aov_exr(&path, &film, &aovs).map_err(|e| ClusterError(e.to_string()))?;
+            written.push(path);
+        }
     }
     Ok(Merged { written, parts: found.len() })
 }
 
-/// The film of one image from its parts (checked by [`merge`]).
-fn assemble(plan: &ImagePlan, job: [u8; 32]) -> Result<Film, ClusterError> {
+/// The film of one image and its passes from its parts (checked by [`merge`]).
+fn assemble(plan: &ImagePlan, job: [u8; 32]) -> Result<(Film, Option<Aovs>), ClusterError> {
     let (w, h) = plan.size;
     let mut film = Film::new(w, h);
+    let mut aovs = (!plan.passes.is_empty()).then(|| Aovs::new(w, h, plan.passes));
     for path in &plan.parts {
         let p = PartFile::read(path)?;
-        if (p.width, p.height) != plan.size || p.job != job {
-            return Err(ClusterError(format!("{}: the file changed during the merge", path.display())));
+        let changed = || ClusterError(format!("{}: the file changed during the merge", path.display()));
+        if (p.width, p.height) != plan.size || p.job != job || p.passes != plan.passes {
+            return Err(changed());
         }
-        // The reader checked that the pixels are exactly the listed tiles'.
-        let mut at = 0;
+        // The reader checked that the pixels and passes are exactly the
+        // listed tiles'.
+        let (mut at, mut aov_at) = (0, 0);
         for &t in &p.tiles {
             let rect = tile_rect(t, w, h);
             let len = ((rect.2 - rect.0) * (rect.3 - rect.1)) as usize;
             pull_tile(&mut film, &p.pixels[at..at + len], rect);
             at += len;
+            if let Some(a) = &mut aovs {
+                aov_at += a.pull_rect(p.aov.get(aov_at..).unwrap_or_default(), rect).ok_or_else(changed)?;
+            }
         }
     }
-    Ok(film)
+    Ok((film, aovs))
 }
 
 /// Most lines about unfinished parts in a progress report; the rest are counted.

@@ -83,12 +83,15 @@ pub fn render_part(
         display: camera.display,
         tiles: Vec::new(),
         pixels: Vec::new(),
+        passes: opts.passes,
+        aov: Vec::new(),
     };
     let same_job = |f: &PartFile| {
         let mut a = f.clone();
         a.finished = false;
         a.tiles.clear();
         a.pixels.clear();
+        a.aov.clear();
         a == template
     };
     let mut file = template.clone();
@@ -131,6 +134,9 @@ pub fn render_part(
         for &t in c.iter() {
             file.tiles.push(t);
             push_tile(&mut file.pixels, &img.film, tile_rect(t, w, h));
+            if let Some(aovs) = &img.aovs {
+                aovs.push_rect(&mut file.aov, tile_rect(t, w, h));
+            }
         }
         let last = ci + 1 == chunks.len();
         if pj.resume && !last && saved.elapsed() >= pj.checkpoint_every {

@@ -7,7 +7,7 @@
 //! | bytes | field |
 //! |---|---|
 //! | 8 | magic `LUSTPART` |
-//! | 4 | format version (2) |
+//! | 4 | format version (3) |
 //! | 4 | state: 1 a finished part, 0 a checkpoint of an unfinished one |
 //! | 32 | job id: SHA-256 of the luster version, the scene files' bytes and the options that change pixels ([`super::JobId`]) |
 //! | 4 + 4 | N, K: this is part K of N |
@@ -17,12 +17,14 @@
 //! | 4 + L | L, then the image's `ImageName` (UTF-8) |
 //! | 4 + 18·t | t, then the camera's tone mappings: operator (u8: 0 photographic, 1 ACES, 2 filmic), key, burn-out, saturation (f32), gamma (u8: 0 power, 1 sRGB; f32 exponent) |
 //! | 1 | the scene's display transform (u8: 0 course, 1 sRGB, 2 ACES, 3 filmic) |
+//! | 1 | the render passes held (u8: a bit per pass of [`Pass::ALL`](luster_render::film::aov::Pass::ALL), from the lowest) |
 //! | 4 + 4·T | T, then the indices of the tiles held, ascending (tiles are numbered row by row) |
 //! | 12·P | the tiles' pixels, tile after tile, each row by row: linear RGB as three f32 |
+//! | 4·C·P | the tiles' passes, tile after tile, each pass after pass, row by row, a pixel's channels together (f32; [`Aovs::push_rect`](luster_render::film::aov::Aovs::push_rect)) |
 //! | 4 | CRC-32 (IEEE) of every byte before it |
 //!
 //! P is the number of pixels in the listed tiles (edge tiles are cut at the
-//! image border).
+//! image border), C the passes' channels per pixel.
 //!
 //! A file named like a part may be anything (a FIFO, a link to a device, a
 //! sparse file of gigabytes, a forged header with a right checksum), so
@@ -36,28 +38,31 @@
 use super::{ClusterError, MAX_IMAGES, MAX_PARTS};
 use luster_core::math::Vec3;
 use luster_core::tonemap::{Display, Gamma, Operator, Tonemap};
+use luster_render::film::aov::Passes;
 use luster_render::render::TILE;
 use luster_scene::ceng795::camera::{MAX_PIXELS, MAX_SIDE};
 use std::io::Read;
 use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"LUSTPART";
-const VERSION: u32 = 2;
+const VERSION: u32 = 3;
 
 /// Longest `ImageName` a part file may hold, in bytes (a path's limit on Linux).
 pub const MAX_NAME: u32 = 4096;
 /// Most tone mappings a part file may hold.
 pub const MAX_TONEMAPS: u32 = 4096;
 /// Bytes of the fields of fixed size: magic to tile edge, the three counts
-/// (L, t, T), the display byte and the checksum.
-const FIXED: u64 = 8 + 4 + 4 + 32 + 7 * 4 + 4 + 4 + 1 + 4 + 4;
+/// (L, t, T), the display and passes bytes and the checksum.
+const FIXED: u64 = 8 + 4 + 4 + 32 + 7 * 4 + 4 + 4 + 1 + 1 + 4 + 4;
+/// Most pass channels a pixel may have (every pass).
+const MAX_CHANNELS: u64 = 15;
 /// Bytes of one tone mapping.
 const TONEMAP_BYTES: u64 = 18;
 /// The largest part file: the header at its longest, then every tile of the
 /// largest image (a tile holds at least one pixel) with its pixels. Larger
 /// files are refused before a byte is read.
 pub const MAX_FILE: u64 =
-    FIXED + MAX_NAME as u64 + TONEMAP_BYTES * MAX_TONEMAPS as u64 + (4 + 12) * MAX_PIXELS;
+    FIXED + MAX_NAME as u64 + TONEMAP_BYTES * MAX_TONEMAPS as u64 + (4 + 12 + 4 * MAX_CHANNELS) * MAX_PIXELS;
 
 /// The contents of a part file (or of a checkpoint).
 #[derive(Clone, Debug, PartialEq)]
@@ -89,6 +94,12 @@ pub struct PartFile {
     /// Their pixels, tile after tile (empty when read with [`Pixels::Skip`]
     /// or [`Pixels::Check`]).
     pub pixels: Vec<Vec3>,
+    /// The render passes held.
+    pub passes: Passes,
+    /// Their values, tile after tile
+    /// ([`Aovs::push_rect`](luster_render::film::aov::Aovs::push_rect); empty as
+    /// `pixels` is).
+    pub aov: Vec<f32>,
 }
 
 /// What [`PartFile::read_with`] does with the pixels.
@@ -164,6 +175,7 @@ impl PartFile {
             Display::Aces => 2,
             Display::Filmic => 3,
         });
+        b.push(self.passes.bits());
         u(&mut b, self.tiles.len() as u32);
         for &t in &self.tiles {
             u(&mut b, t);
@@ -172,6 +184,9 @@ impl PartFile {
             for c in p.to_array() {
                 b.extend_from_slice(&c.to_le_bytes());
             }
+        }
+        for v in &self.aov {
+            b.extend_from_slice(&v.to_le_bytes());
         }
         let crc = crc32fast::hash(&b);
         u(&mut b, crc);
@@ -345,8 +360,8 @@ fn fields<R: Read>(r: &mut Reader<R>, pixels: Pixels) -> Result<PartFile, Fail> 
     {
         return Err(inconsistent());
     }
-    // What follows the name: t, the display byte, T and the checksum.
-    let rest = 4 + 1 + 4 + 4;
+    // What follows the name: t, the display and passes bytes, T and the checksum.
+    let rest = 4 + 1 + 1 + 4 + 4;
     let len = r.u32()?;
     if len > MAX_NAME {
         return Err(Fail::bad("its image name is longer than any file name"));
@@ -386,6 +401,7 @@ fn fields<R: Read>(r: &mut Reader<R>, pixels: Pixels) -> Result<PartFile, Fail> 
         3 => Display::Filmic,
         _ => return Err(inconsistent()),
     };
+    let passes = Passes::from_bits(r.u8()?).ok_or_else(inconsistent)?;
     let count = tile_count(width, height);
     let t = r.u32()?;
     if u64::from(t) > count {
@@ -402,7 +418,8 @@ fn fields<R: Read>(r: &mut Reader<R>, pixels: Pixels) -> Result<PartFile, Fail> 
     // The size the header implies, checked before a pixel is read: a huge
     // or sparse file behind a small header is refused here.
     let p = pixels_in(&tiles, width, height);
-    let expected = p * 12 + 4;
+    let channels = passes.channels() as u64;
+    let expected = p * (12 + 4 * channels) + 4;
     if r.left != expected {
         let at = r.len - r.left;
         return Err(Fail::Bad(format!(
@@ -411,7 +428,10 @@ fn fields<R: Read>(r: &mut Reader<R>, pixels: Pixels) -> Result<PartFile, Fail> 
             r.len
         )));
     }
-    let pixels = if pixels == Pixels::Skip { Vec::new() } else { read_pixels(r, p, pixels == Pixels::Keep)? };
+    let (pixels, aov) = match pixels {
+        Pixels::Skip => (Vec::new(), Vec::new()),
+        _ => read_pixels(r, p, channels, pixels == Pixels::Keep)?,
+    };
     Ok(PartFile {
         finished,
         job,
@@ -426,11 +446,19 @@ fn fields<R: Read>(r: &mut Reader<R>, pixels: Pixels) -> Result<PartFile, Fail> 
         display,
         tiles,
         pixels,
+        passes,
+        aov,
     })
 }
 
-/// Reads `p` pixels (kept when `keep`) and checks the checksum that ends the file.
-fn read_pixels<R: Read>(r: &mut Reader<R>, p: u64, keep: bool) -> Result<Vec<Vec3>, Fail> {
+/// Reads `p` pixels and their `channels` pass values each (kept when
+/// `keep`) and checks the checksum that ends the file.
+fn read_pixels<R: Read>(
+    r: &mut Reader<R>,
+    p: u64,
+    channels: u64,
+    keep: bool,
+) -> Result<(Vec<Vec3>, Vec<f32>), Fail> {
     // The caller checked that the file holds exactly these bytes.
     let mut out = Vec::with_capacity(if keep { p as usize } else { 0 });
     // In chunks of whole pixels, so a large part never needs its bytes and
@@ -449,11 +477,21 @@ fn read_pixels<R: Read>(r: &mut Reader<R>, p: u64, keep: bool) -> Result<Vec<Vec
             }));
         }
     }
+    let mut aov = Vec::with_capacity(if keep { (p * channels) as usize } else { 0 });
+    let mut todo = p * channels * 4;
+    while todo > 0 {
+        let chunk = &mut buf[..todo.min(CHUNK) as usize];
+        r.fill(chunk)?;
+        todo -= chunk.len() as u64;
+        if keep {
+            aov.extend(chunk.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])));
+        }
+    }
     let computed = r.crc.clone().finalize();
     if u32::from_le_bytes(r.array()?) != computed {
         return Err(Fail::bad("its checksum does not match: truncated or corrupt"));
     }
-    Ok(out)
+    Ok((out, aov))
 }
 
 #[cfg(test)]
@@ -478,6 +516,8 @@ mod tests {
             display: Display::Filmic,
             tiles,
             pixels: (0..p).map(|i| Vec3::new(i as f32, 0.5, -1.0)).collect(),
+            passes: Passes::parse("albedo,depth").unwrap(),
+            aov: (0..p * 4).map(|i| i as f32 * 0.25).collect(),
         }
     }
 
@@ -531,7 +571,7 @@ mod tests {
         let bytes = f.encode();
         let name_at = 8 + 4 + 4 + 32 + 7 * 4;
         let tonemaps_at = name_at + 4 + f.image_name.len();
-        let tiles_at = tonemaps_at + 4 + 18 * f.tonemaps.len() + 1;
+        let tiles_at = tonemaps_at + 4 + 18 * f.tonemaps.len() + 2;
         let images_at = 8 + 4 + 4 + 32 + 8;
         for (what, at, v) in [
             ("a 4 GiB name", name_at, u32::MAX),
@@ -561,7 +601,8 @@ mod tests {
         let last = flipped.len() - 1;
         flipped[last] ^= 1;
         let head = parse(&flipped[..], flipped.len() as u64, Path::new("p"), Pixels::Skip).unwrap();
-        assert!(head.pixels.is_empty() && head.tiles == f.tiles);
+        assert!(head.pixels.is_empty() && head.aov.is_empty() && head.tiles == f.tiles);
+        assert_eq!(head.passes, f.passes);
         assert!(parse(&flipped[..], flipped.len() as u64, Path::new("p"), Pixels::Check).is_err());
     }
 

@@ -305,12 +305,20 @@ fn partfile_fuzz_smoke_run_finds_no_panic() {
             display: Display::Srgb,
             tiles,
             pixels: (0..p).map(|i| Vec3::new(i as f32, 0.5, 2.0)).collect(),
+            passes: Default::default(),
+            aov: Vec::new(),
         };
         seeds.push(part.encode());
     }
     // Counts of one, two and 2^31-1, the version, a tile edge.
-    let tokens: &[&str] =
-        &["LUSTPART", "\u{1}\0\0\0", "\u{2}\0\0\0", "\u{7f}\u{7f}\u{7f}\u{7f}", "\u{10}\0\0\0"];
+    let tokens: &[&str] = &[
+        "LUSTPART",
+        "\u{1}\0\0\0",
+        "\u{2}\0\0\0",
+        "\u{3}\0\0\0",
+        "\u{7f}\u{7f}\u{7f}\u{7f}",
+        "\u{10}\0\0\0",
+    ];
     let iterations = env("LUSTER_FUZZ_ITERATIONS").unwrap_or(ITERATIONS);
     let budget = env("LUSTER_FUZZ_SECONDS").map_or(BUDGET, |s| Duration::from_secs(s as u64));
     let mut rng = Rng(0x005e_ed0f_9a27_f11e);

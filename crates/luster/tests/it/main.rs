@@ -2,6 +2,8 @@
 //! hostile input, golden images of the course scenes, shaders, volumes,
 //! OBJ models, glTF scenes, split renders, the watch server and the fuzz smoke run.
 
+mod adaptive;
+mod aov;
 mod bad_input;
 mod camera_gaze;
 mod closures;

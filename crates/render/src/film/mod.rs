@@ -4,6 +4,9 @@
 //! - [`Film`]: one linear RGB value per pixel, the reconstruction [`Filter`]'s
 //!   weighted mean of the pixel's samples. Tiles accumulate into a [`Tile`]
 //!   and are merged when done, so the render loop never sees 8 bits.
+//! - [`aov`]: render passes (albedo, normal, depth, object id, ...) beside
+//!   the beauty image, and their multi-layer EXR.
+//! - [`adaptive`]: adaptive sampling's error estimate and stopping rule.
 //! - [`reserve`]: the first camera's film memory, written ahead by a worker
 //!   that would otherwise wait while the scene loads.
 //! - [`write`](mod@write): writing the files a camera's `ImageName` and `Tonemap`s ask
@@ -14,9 +17,12 @@
 //! `ImageName` (its extension picks the format) and `Tonemap`; the scene's
 //! `Display`.
 
+pub mod adaptive;
+pub mod aov;
 pub mod reserve;
 pub mod write;
 
+pub use aov::{Aovs, Pass, Passes};
 pub use reserve::FilmReserve;
 pub use write::{rgb8, write_outputs};
 
@@ -130,6 +136,11 @@ impl<'a> Tile<'a> {
         }
     }
 
+    /// The pixels' sums, `[r, g, b, weight]`, row by row.
+    pub fn sums(&self) -> &[[f32; 4]] {
+        self.acc
+    }
+
     /// The pixels it covers: `(x0, y0, x1, y1)`, ends excluded.
     pub fn bounds(&self) -> (u32, u32, u32, u32) {
         let h = (self.acc.len() as u32).checked_div(self.width).unwrap_or(0);
@@ -156,13 +167,25 @@ const OUTPUT_BYTES_PER_PIXEL: u64 = 16;
 /// camera, its tiles' sums and the files written from it. What a render
 /// checks against the memory it may use before it starts.
 pub fn memory_needed(sizes: impl IntoIterator<Item = (u32, u32)>) -> u64 {
+    memory_needed_with(sizes, Passes::NONE, false)
+}
+
+/// [`memory_needed`] of a render with `passes` (kept with every film) and,
+/// if `adaptive`, adaptive sampling's state (for the largest camera).
+pub fn memory_needed_with(
+    sizes: impl IntoIterator<Item = (u32, u32)>,
+    passes: Passes,
+    adaptive: bool,
+) -> u64 {
     let (mut films, mut largest) = (0u64, 0u64);
+    let aov = passes.bytes_per_pixel();
     for (w, h) in sizes {
         let n = u64::from(w) * u64::from(h);
-        films += n * std::mem::size_of::<Vec3>() as u64;
+        films += n * (std::mem::size_of::<Vec3>() as u64 + aov);
         largest = largest.max(n);
     }
-    films + largest * (std::mem::size_of::<[f32; 4]>() as u64 + OUTPUT_BYTES_PER_PIXEL)
+    let state = if adaptive { std::mem::size_of::<adaptive::PixelState>() as u64 } else { 0 };
+    films + largest * (std::mem::size_of::<[f32; 4]>() as u64 + OUTPUT_BYTES_PER_PIXEL + state)
 }
 
 /// Refuses, in a sentence, a render of cameras of these sizes whose
@@ -170,7 +193,16 @@ pub fn memory_needed(sizes: impl IntoIterator<Item = (u32, u32)>) -> u64 {
 /// ([`luster_core::memory::headroom`]): an allocation failing midway would
 /// abort it.
 pub fn check_memory(sizes: impl IntoIterator<Item = (u32, u32)> + Clone) -> Result<(), String> {
-    let needed = memory_needed(sizes.clone());
+    check_memory_with(sizes, Passes::NONE, false)
+}
+
+/// [`check_memory`] with [`memory_needed_with`].
+pub fn check_memory_with(
+    sizes: impl IntoIterator<Item = (u32, u32)> + Clone,
+    passes: Passes,
+    adaptive: bool,
+) -> Result<(), String> {
+    let needed = memory_needed_with(sizes.clone(), passes, adaptive);
     match luster_core::memory::headroom() {
         Some(left) if needed > left => {
             let (w, h) =

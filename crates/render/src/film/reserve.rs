@@ -13,7 +13,10 @@
 //! are when it starts: each buffer the worker finished (one it did not is
 //! dropped, and the render allocates its own as it would have). On one
 //! thread nothing is started: there is no idle worker to give the work to.
+//! A render with passes ([`super::aov`]) has a third buffer, their
+//! accumulators, written after the other two ([`FilmReserve::start_with`]).
 
+use super::aov::{Layout, Passes};
 use luster_core::math::Vec3;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
@@ -25,6 +28,8 @@ pub(crate) struct FilmMemory {
     pub store: Option<Vec<[f32; 4]>>,
     /// The film's pixels.
     pub pixels: Option<Vec<Vec3>>,
+    /// The passes' accumulators (see [`super::aov::AovTile`]).
+    pub aov: Option<Vec<f32>>,
 }
 
 /// The memory of a render of `width`×`height` pixels, being written by a
@@ -32,6 +37,7 @@ pub(crate) struct FilmMemory {
 pub struct FilmReserve {
     width: u32,
     height: u32,
+    passes: Passes,
     shared: Arc<Shared>,
 }
 
@@ -49,20 +55,27 @@ impl FilmReserve {
     /// Starts writing the memory of a `width`×`height` render on a worker of
     /// the current rayon pool, if it has more than one thread.
     pub fn start(width: u32, height: u32) -> FilmReserve {
+        FilmReserve::start_with(width, height, Passes::NONE)
+    }
+
+    /// [`start`](Self::start) for a render with `passes`: their
+    /// accumulators are written too.
+    pub fn start_with(width: u32, height: u32, passes: Passes) -> FilmReserve {
         let shared = Arc::new(Shared { memory: Mutex::new(None), stop: AtomicBool::new(false) });
         let n = width as usize * height as usize;
+        let aov = n * Layout::of(passes).stride;
         if rayon::current_num_threads() > 1 && n > 0 {
             let s = Arc::clone(&shared);
-            rayon::spawn(move || s.write(n));
+            rayon::spawn(move || s.write(n, aov));
         }
-        FilmReserve { width, height, shared }
+        FilmReserve { width, height, passes, shared }
     }
 
     /// Stops the worker and takes the memory it wrote, if the render is of
     /// the size reserved: each buffer the worker finished, zeroed (`None` for
     /// one it did not: completing it here would fault its pages on one
     /// thread, where the render's workers share them).
-    pub(crate) fn take(&self, width: u32, height: u32) -> FilmMemory {
+    pub(crate) fn take(&self, width: u32, height: u32, passes: Passes) -> FilmMemory {
         self.shared.stop.store(true, Ordering::Relaxed);
         let n = width as usize * height as usize;
         // The worker, if it is writing, holds the lock for at most a page more.
@@ -71,6 +84,7 @@ impl FilmReserve {
             Some(m) if (width, height) == (self.width, self.height) => FilmMemory {
                 store: m.store.filter(|s| s.len() == n),
                 pixels: m.pixels.filter(|p| p.len() == n),
+                aov: m.aov.filter(|a| passes == self.passes && a.len() == n * Layout::of(passes).stride),
             },
             _ => FilmMemory::default(),
         }
@@ -86,7 +100,7 @@ impl Drop for FilmReserve {
 impl Shared {
     /// Writes zeros into the two buffers of `n` pixels a page at a time
     /// until done or stopped, then leaves them for [`FilmReserve::take`].
-    fn write(&self, n: usize) {
+    fn write(&self, n: usize, aov_len: usize) {
         let Ok(mut slot) = self.memory.lock() else { return };
         if self.stop.load(Ordering::Relaxed) {
             return;
@@ -95,13 +109,17 @@ impl Shared {
         // the render allocates (or reports) it itself.
         let mut store = Vec::new();
         let mut pixels = Vec::new();
+        let mut aov = Vec::new();
         if store.try_reserve_exact(n).is_ok()
             && fill(&mut store, n, [0.0; 4], &self.stop)
             && pixels.try_reserve_exact(n).is_ok()
+            && fill(&mut pixels, n, Vec3::ZERO, &self.stop)
+            && aov_len > 0
+            && aov.try_reserve_exact(aov_len).is_ok()
         {
-            fill(&mut pixels, n, Vec3::ZERO, &self.stop);
+            fill(&mut aov, aov_len, 0.0, &self.stop);
         }
-        *slot = Some(FilmMemory { store: Some(store), pixels: Some(pixels) });
+        *slot = Some(FilmMemory { store: Some(store), pixels: Some(pixels), aov: Some(aov) });
     }
 }
 
@@ -133,7 +151,7 @@ mod tests {
             for wait in [0, 1, 50] {
                 let r = FilmReserve::start(300, 200);
                 std::thread::sleep(std::time::Duration::from_millis(wait));
-                let m = r.take(300, 200);
+                let m = r.take(300, 200, Passes::NONE);
                 for len in
                     [m.store.as_ref().map(Vec::len), m.pixels.as_ref().map(Vec::len)].into_iter().flatten()
                 {
@@ -144,9 +162,25 @@ mod tests {
                 if wait == 50 {
                     assert!(m.store.is_some() && m.pixels.is_some(), "a worker had 50 ms for 1.7 MB");
                 }
-                let again = r.take(300, 200);
+                let again = r.take(300, 200, Passes::NONE);
                 assert!(again.store.is_none() && again.pixels.is_none(), "taken once");
             }
+        });
+    }
+
+    #[test]
+    fn the_passes_accumulators_come_for_the_passes_reserved_only() {
+        pool(2).install(|| {
+            let passes = Passes::parse("albedo,depth").unwrap();
+            let r = FilmReserve::start_with(40, 30, passes);
+            std::thread::sleep(std::time::Duration::from_millis(50));
+            let m = r.take(40, 30, passes);
+            let aov = m.aov.expect("a worker had 50 ms for 100 kB");
+            assert_eq!(aov.len(), 40 * 30 * Layout::of(passes).stride);
+            assert!(aov.iter().all(|&v| v == 0.0));
+            let r = FilmReserve::start_with(40, 30, passes);
+            std::thread::sleep(std::time::Duration::from_millis(50));
+            assert!(r.take(40, 30, Passes::NONE).aov.is_none(), "other passes");
         });
     }
 
@@ -155,11 +189,11 @@ mod tests {
         pool(2).install(|| {
             let r = FilmReserve::start(64, 64);
             std::thread::sleep(std::time::Duration::from_millis(20));
-            let m = r.take(64, 65);
+            let m = r.take(64, 65, Passes::NONE);
             assert!(m.store.is_none() && m.pixels.is_none());
         });
         pool(1).install(|| {
-            let m = FilmReserve::start(64, 64).take(64, 64);
+            let m = FilmReserve::start(64, 64).take(64, 64, Passes::NONE);
             assert!(m.store.is_none() && m.pixels.is_none());
         });
     }

@@ -11,6 +11,7 @@
 //! Both are pure functions of (scene, ray, per-sample state) and hand their
 //! radiance to the render loop, which puts it on the film.
 
+pub mod aov;
 pub mod media;
 pub mod path;
 mod state;

@@ -30,6 +30,8 @@ pub struct Camera {
     pub display: luster_core::tonemap::Display,
     /// Samples per pixel the scene asks for.
     pub num_samples: u32,
+    /// Adaptive sampling's threshold the scene asks for (`<NoiseThreshold>`).
+    pub noise_threshold: Option<f32>,
     /// The integrator the camera asks for (`<Renderer>`, `<RendererParams>`).
     pub renderer: luster_scene::description::RendererDesc,
     /// Unit gaze, and the lens's right and up axes scaled by the aperture edge.
@@ -67,6 +69,7 @@ impl Camera {
             tonemaps: d.tonemaps.clone(),
             display: Default::default(),
             num_samples: d.num_samples,
+            noise_threshold: d.noise_threshold,
             renderer: d.renderer,
             gaze,
             lens_u: u * d.aperture_size,
@@ -141,6 +144,7 @@ mod tests {
             image_name: "x.png".into(),
             tonemaps: Vec::new(),
             num_samples: 1,
+            noise_threshold: None,
             aperture_size: 0.0,
             focus_distance: 1.0,
             renderer: Default::default(),

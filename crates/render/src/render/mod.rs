@@ -10,6 +10,13 @@
 //! pixel at the same sample count. A pixel's samples are summed in the same
 //! order whatever the passes and the threads, so the image's bytes depend
 //! only on the scene, the options and the samples taken.
+//!
+//! Render passes ([`RenderOptions::passes`], [`crate::film::aov`]) and
+//! adaptive sampling ([`RenderOptions::adaptive`], [`crate::film::adaptive`])
+//! each choose another instantiation of the tile loop once per render, so a
+//! render without them runs the loop it always ran. Adaptive sampling
+//! decides between passes, from each tile's own pixels: a pixel that stops
+//! keeps the samples it has, and the others go on with the next pass.
 
 pub mod camera;
 pub mod sampler;
@@ -19,6 +26,8 @@ pub use scene::{BuildOptions, Scene};
 
 pub use crate::film::Filter;
 
+use crate::film::adaptive::{auto_min_spp, Adaptive, AdaptiveTile};
+use crate::film::aov::{AovTile, Aovs, Passes};
 use crate::film::reserve::FilmMemory;
 use crate::film::{Film, FilmReserve, Tile};
 use crate::integrator::{Integrator, PathState, RayStats};
@@ -70,8 +79,12 @@ pub struct RenderedImage {
     /// Rays traced.
     pub stats: RayStats,
     /// Samples per pixel taken (fewer than asked when a time limit stopped
-    /// the render).
+    /// the render); with adaptive sampling, by the pixels that took most.
     pub spp: u32,
+    /// Samples per pixel taken on average over the pixels rendered.
+    pub mean_spp: f64,
+    /// The render passes asked for ([`RenderOptions::passes`]).
+    pub aovs: Option<Aovs>,
 }
 
 impl std::ops::Deref for RenderedImage {
@@ -98,6 +111,22 @@ pub struct RenderOptions {
     pub tiles: Option<TileSelection>,
     /// This integrator instead of the one the camera asks for.
     pub integrator: Option<Integrator>,
+    /// Render passes to record beside the image (none: no cost).
+    pub passes: Passes,
+    /// Adaptive sampling; the threshold, when given, replaces the camera's
+    /// `<NoiseThreshold>`.
+    pub adaptive: Adaptive,
+}
+
+impl RenderOptions {
+    /// The noise threshold and minimum samples of adaptive sampling of
+    /// `camera` at `spp` samples, or `None` when it is off.
+    pub fn adaptive_for(&self, camera: &camera::Camera, spp: u32) -> Option<(f32, u32)> {
+        let t = self.adaptive.threshold.or(camera.noise_threshold).filter(|&t| t > 0.0)?;
+        let min = self.adaptive.min_spp.unwrap_or_else(|| auto_min_spp(t, spp));
+        // Two samples at least: the error compares two halves.
+        Some((t, min.clamp(2, spp.max(2))))
+    }
 }
 
 /// Units of work in rendering camera `cam` with `opts`: pixels times samples.
@@ -157,7 +186,7 @@ pub fn try_render_reserved(
 ) -> Result<RenderedImage, Box<ShaderError>> {
     let failed = OnceLock::new();
     let camera = &scene.cameras[cam];
-    let memory = reserve.map(|r| r.take(camera.width, camera.height)).unwrap_or_default();
+    let memory = reserve.map(|r| r.take(camera.width, camera.height, opts.passes)).unwrap_or_default();
     let img = render_tiles(scene, cam, opts, on_tile, &failed, None, memory);
     match failed.into_inner() {
         Some(e) => Err(e),
@@ -225,11 +254,35 @@ fn render_tiles(
     let rects: Vec<(u32, u32, u32, u32)> =
         origins.into_iter().map(|(x0, y0)| (x0, y0, (x0 + TILE).min(w), (y0 + TILE).min(h))).collect();
     let (mut store, pixels) = (memory.store.unwrap_or_default(), memory.pixels);
-    let mut tiles: Vec<(Tile, RayStats)> =
-        Tile::all_in(&mut store, &rects, opts.filter).into_iter().map(|t| (t, RayStats::default())).collect();
+    let mut aov_store = memory.aov.unwrap_or_default();
+    let mut adaptive_store = Vec::new();
+    let passes = opts.passes;
+    let adaptive = opts.adaptive_for(camera, spp);
+    let mut aov_tiles = match passes.is_empty() {
+        true => Vec::new(),
+        false => AovTile::all_in(&mut aov_store, &rects, opts.filter, passes),
+    }
+    .into_iter();
+    let mut adaptive_tiles = match adaptive {
+        None => Vec::new(),
+        Some(_) => AdaptiveTile::all_in(&mut adaptive_store, &rects, opts.filter),
+    }
+    .into_iter();
+    let mut tiles: Vec<Work> = Tile::all_in(&mut store, &rects, opts.filter)
+        .into_iter()
+        .map(|tile| Work {
+            tile,
+            aov: aov_tiles.next(),
+            adaptive: adaptive_tiles.next(),
+            stats: RayStats::default(),
+            samples: 0,
+        })
+        .collect();
     let pass_floor = if progress.is_some() { 1 } else { BATCH_PASS };
     let mut taken = 0;
-    while taken < spp && !stop() {
+    // Tiles with pixels still sampled (without adaptive sampling, all).
+    let mut active = usize::MAX;
+    while taken < spp && active > 0 && !stop() {
         let n = pass_size(taken, spp, pass_floor);
         if let (Some(limit), true) = (opts.time_limit, taken > 0) {
             // Stop if this pass would end after the limit, at the pace so far.
@@ -253,29 +306,71 @@ fn render_tiles(
             samples: taken..taken + n,
             failed,
         };
-        tiles.par_iter_mut().with_max_len(1).for_each(|(tile, stats)| {
-            pass.tile(tile, stats, &stop);
-            on_tile(tile.len() as u64 * u64::from(n));
-        });
+        let run = |work: &mut Work| {
+            // The loop for what this render records, chosen once per render.
+            let done = match (passes.is_empty(), adaptive.is_some()) {
+                (true, false) => pass.tile::<false, false>(work, &stop),
+                (false, false) => pass.tile::<true, false>(work, &stop),
+                (true, true) => pass.tile::<false, true>(work, &stop),
+                (false, true) => pass.tile::<true, true>(work, &stop),
+            };
+            on_tile(done as u64 * u64::from(n));
+        };
+        tiles.par_iter_mut().with_max_len(1).for_each(run);
         taken += n;
+        if let Some((threshold, min_spp)) = adaptive {
+            if taken >= min_spp {
+                tiles.par_iter_mut().for_each(|w| {
+                    if let Some(a) = &mut w.adaptive {
+                        a.converge(&w.tile, threshold);
+                    }
+                });
+            }
+            active =
+                tiles.iter().filter(|w| w.adaptive.as_ref().is_none_or(|a| a.active_count() > 0)).count();
+        }
         if let (Some(p), false) = (progress.as_mut(), stop()) {
             (p.on_pass)(&merged(w, h, &tiles, None), taken);
         }
     }
     let mut stats = RayStats::default();
-    for (_, s) in &tiles {
-        stats.add(s);
+    let (mut samples, mut rendered) = (0u64, 0u64);
+    for t in &tiles {
+        stats.add(&t.stats);
+        samples += t.samples;
+        rendered += t.tile.len() as u64;
     }
     let film = merged(w, h, &tiles, pixels);
+    let aovs = (!passes.is_empty()).then(|| {
+        let mut out = Aovs::new(w, h, passes);
+        for t in &tiles {
+            if let Some(a) = &t.aov {
+                a.write(&t.tile, &mut out);
+            }
+        }
+        out
+    });
     drop(tiles);
     // Unmapping the accumulators would hold up the thread that goes on to
     // encode the image: a free worker does it. On
     // one thread it would wait for the end of the command, every camera's
     // store held till then.
     if rayon::current_num_threads() > 1 {
-        rayon::spawn(move || drop(store));
+        rayon::spawn(move || drop((store, aov_store, adaptive_store)));
     }
-    RenderedImage { film, stats, spp: taken }
+    let mean_spp = if rendered > 0 { samples as f64 / rendered as f64 } else { 0.0 };
+    RenderedImage { film, stats, spp: taken, mean_spp, aovs }
+}
+
+/// One tile of a render: its film accumulators, its passes' and adaptive
+/// state where the render has them, the rays it traced and the samples it
+/// took.
+struct Work<'a> {
+    tile: Tile<'a>,
+    aov: Option<AovTile<'a>>,
+    adaptive: Option<AdaptiveTile<'a>>,
+    stats: RayStats,
+    samples: u64,
 }
 
 /// What the tiles of one pass share: the scene, the integrator, the camera
@@ -293,15 +388,30 @@ struct Pass<'a> {
 }
 
 impl Pass<'_> {
-    /// Takes this pass's samples of every pixel of `tile`, adding the rays
-    /// traced to `stats`; between rows, stops once `stop` says so.
-    fn tile(&self, tile: &mut Tile, stats: &mut RayStats, stop: &impl Fn() -> bool) {
+    /// Takes this pass's samples of every pixel of the tile that still
+    /// takes samples, adding the rays traced to its count, and, with `AOV`,
+    /// its passes' first-hit records; with `ADAPTIVE`, skipping the pixels
+    /// that stopped and adding to the odd half of the others. Between rows,
+    /// stops once `stop` says so. Returns the pixels sampled.
+    fn tile<const AOV: bool, const ADAPTIVE: bool>(
+        &self,
+        work: &mut Work,
+        stop: &impl Fn() -> bool,
+    ) -> usize {
+        let Work { tile, aov, adaptive, stats, samples: taken } = work;
         let (scene, integrator, look, samples) = (self.scene, self.integrator, &self.look, &self.samples);
         let (seed, spp) = (self.seed, look.spp);
         if samples.start == 0 {
             // Written first: see `Tile::clear`.
             tile.clear();
+            if let Some(a) = aov {
+                a.clear();
+            }
         }
+        if ADAPTIVE && adaptive.as_ref().is_some_and(|a| a.active_count() == 0) {
+            return 0;
+        }
+        let mut sampled = 0;
         let (x0, y0, x1, y1) = tile.bounds();
         // One state for the tile, readied per sample: the view, spread
         // and counts carry over.
@@ -318,6 +428,10 @@ impl Pass<'_> {
                 break;
             }
             for x in x0..x1 {
+                if ADAPTIVE && adaptive.as_ref().is_some_and(|a| !a.active(x, y)) {
+                    continue;
+                }
+                sampled += 1;
                 st.sampler = PixelSampler::new(seed, x, y, 0, spp).batched(samples.clone());
                 st2.sampler = st.sampler;
                 let mut s = samples.start;
@@ -329,6 +443,14 @@ impl Pass<'_> {
                     let [la, lb] = integrator.radiance_pair(scene, [&ra, &rb], &mut st, &mut st2);
                     tile.add_sample(x, y, jxa, jya, la);
                     tile.add_sample(x, y, jxb, jyb, lb);
+                    if let (true, Some(a)) = (AOV, aov.as_mut()) {
+                        a.add(x, y, jxa, jya, &crate::integrator::aov::first_hit(scene, &ra, &mut st));
+                        a.add(x, y, jxb, jyb, &crate::integrator::aov::first_hit(scene, &rb, &mut st2));
+                    }
+                    if let (true, Some(a)) = (ADAPTIVE, adaptive.as_mut()) {
+                        a.add(x, y, s, jxa, jya, la);
+                        a.add(x, y, s + 1, jxb, jyb, lb);
+                    }
                     if let Some(e) = st.error.take().or_else(|| st2.error.take()) {
                         let _ = self.failed.set(e);
                         break 'rows;
@@ -340,6 +462,12 @@ impl Pass<'_> {
                     s += 1;
                     let l = integrator.radiance(scene, &ray, &mut st);
                     tile.add_sample(x, y, jx, jy, l);
+                    if let (true, Some(a)) = (AOV, aov.as_mut()) {
+                        a.add(x, y, jx, jy, &crate::integrator::aov::first_hit(scene, &ray, &mut st));
+                    }
+                    if let (true, Some(a)) = (ADAPTIVE, adaptive.as_mut()) {
+                        a.add(x, y, s - 1, jx, jy, l);
+                    }
                     if let Some(e) = st.error.take() {
                         let _ = self.failed.set(e);
                         break 'rows;
@@ -349,6 +477,8 @@ impl Pass<'_> {
         }
         st.stats.add(&st2.stats);
         *stats = st.stats;
+        *taken += sampled as u64 * (samples.end - samples.start) as u64;
+        sampled
     }
 }
 
@@ -398,7 +528,7 @@ impl Look<'_> {
 /// tile, so the bytes are those of a serial merge. `zeroed`, of the film's
 /// size, is used instead of a new buffer (memory written ahead,
 /// [`FilmReserve`]).
-fn merged(w: u32, h: u32, tiles: &[(Tile, RayStats)], zeroed: Option<Vec<Vec3>>) -> Film {
+fn merged(w: u32, h: u32, tiles: &[Work], zeroed: Option<Vec<Vec3>>) -> Film {
     let band = (w as usize * TILE as usize).max(1);
     let n = w as usize * h as usize;
     let mut pixels: Vec<Vec3> = match zeroed {
@@ -407,10 +537,10 @@ fn merged(w: u32, h: u32, tiles: &[(Tile, RayStats)], zeroed: Option<Vec<Vec3>>)
     };
     pixels.par_chunks_mut(band).enumerate().for_each(|(b, rows)| {
         let y0 = b as u32 * TILE;
-        let first = tiles.partition_point(|(t, _)| t.bounds().1 < y0);
-        let end = tiles.partition_point(|(t, _)| t.bounds().1 < y0 + TILE);
-        for (tile, _) in &tiles[first..end] {
-            tile.write_rows(rows, w as usize, y0);
+        let first = tiles.partition_point(|t| t.tile.bounds().1 < y0);
+        let end = tiles.partition_point(|t| t.tile.bounds().1 < y0 + TILE);
+        for t in &tiles[first..end] {
+            t.tile.write_rows(rows, w as usize, y0);
         }
     });
     Film { width: w, height: h, pixels }
@@ -474,7 +604,7 @@ mod tests {
                     }
                 }
             }
-            tiles.push((t, RayStats::default()));
+            tiles.push(Work { tile: t, aov: None, adaptive: None, stats: RayStats::default(), samples: 0 });
         }
         let film = merged(w, h, &tiles, None);
         assert_eq!((film.width, film.height, film.pixels.len()), (w, h, (w * h) as usize));

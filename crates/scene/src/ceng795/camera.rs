@@ -11,6 +11,7 @@
 //! | `ImageName` | output file name: a relative path without `..`, ending in one of [`OUTPUT_EXTENSIONS`]; `.exr`/`.hdr` also write a tone-mapped `.png` |
 //! | `Tonemap` | tone mapping of the image (see [`super::tonemap`]); several allowed |
 //! | `NumSamples` | samples per pixel (default 1) |
+//! | `NoiseThreshold` | adaptive sampling: a pixel stops once its estimated relative error is below this (luster's extension; 0 or absent: off; `--noise-threshold` replaces it; see docs/passes.md) |
 //! | `ApertureSize` | edge of the square lens (default 0: a pinhole) |
 //! | `FocusDistance` | distance along the gaze that is in focus (needed with an aperture) |
 //! | `Transformations` | named transforms (as for objects) moving the camera: `Position` and `GazePoint` as points, `Gaze` and `Up` as directions (see [`transform_all`]) |
@@ -93,6 +94,7 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
         "ImageResolution",
         "ImageName",
         "NumSamples",
+        "NoiseThreshold",
         "GazePoint",
         "FovY",
         "ApertureSize",
@@ -129,6 +131,16 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
         }
         None => 1,
     };
+    let noise_threshold = match c.child("NoiseThreshold") {
+        Some(el) => {
+            let t = r.float(el)?;
+            if !(0.0..=1.0).contains(&t) {
+                return Err(r.err(el, format!("<NoiseThreshold> must be between 0 and 1, found {t}")));
+            }
+            (t > 0.0).then_some(t)
+        }
+        None => None,
+    };
     let (aperture_size, focus_distance) = lens(r, c, near_distance)?;
     Ok(CameraDesc {
         id: c.attr("id").unwrap_or("").to_string(),
@@ -140,6 +152,7 @@ fn read(r: &Reader, c: &Element, w: &mut Warnings) -> Result<CameraDesc, SceneEr
         image_name,
         tonemaps: super::tonemap::read_all(r, c, w)?,
         num_samples,
+        noise_threshold,
         aperture_size,
         focus_distance,
         renderer: renderer(r, c)?,

@@ -138,6 +138,8 @@ pub struct CameraDesc {
     pub tonemaps: Vec<luster_core::tonemap::Tonemap>,
     /// Samples per pixel requested by the scene.
     pub num_samples: u32,
+    /// Adaptive sampling's noise threshold (`NoiseThreshold`; `None`: off).
+    pub noise_threshold: Option<f32>,
     /// Edge of the square lens (0: a pinhole).
     pub aperture_size: f32,
     /// Distance along the gaze of the plane in focus.

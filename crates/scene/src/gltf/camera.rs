@@ -87,6 +87,7 @@ pub fn camera_desc(
         image_name,
         tonemaps: Vec::new(),
         num_samples: view.samples,
+        noise_threshold: None,
         aperture_size: 0.0,
         focus_distance: 1.0,
         renderer: Default::default(),

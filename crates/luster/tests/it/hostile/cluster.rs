@@ -44,6 +44,8 @@ fn part(images: u32) -> PartFile {
         display: Display::Course,
         tiles: vec![0],
         pixels: vec![Vec3::new(0.5, 0.25, 1.0); 64],
+        passes: Default::default(),
+        aov: Vec::new(),
     }
 }
 
