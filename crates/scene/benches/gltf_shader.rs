@@ -108,6 +108,18 @@ fn main() {
             set_of("empty", "function material(s) return diffuse{} end", vec![], None),
         ),
         ("bare openpbr{}", set_of("openpbr", "function material(s) return openpbr{} end", vec![], None)),
+        (
+            "3 texture() calls and diffuse{}",
+            set_of(
+                "lookups",
+                "function material(s)\n  local u, v = s.uv.u, s.uv.v\n  local a = texture(NAME, u, v)\n  \
+                 local b = texture(NAME, u, v)\n  local c = texture(NAME, u, v)\n  return diffuse{albedo = a * b * c}\nend"
+                    .replace("NAME", &format!("{:?}", textured.images[0].id))
+                    .as_str(),
+                vec![],
+                Some(&textured),
+            ),
+        ),
         ("gltf_pbr, factors only", gltf_set(&plain)),
         ("gltf_pbr, 3 textures + alpha blend", gltf_set(&textured)),
         ("gltf_pbr, 2 textures + coat, sheen, transmission", gltf_set(&layered)),

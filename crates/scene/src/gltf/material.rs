@@ -4,7 +4,7 @@
 //! Every glTF material becomes one `DecalMode material` shader map running
 //! the built-in script `gltf_pbr.lua` (`material/pbr.lua`), which returns
 //! `openpbr{...}` from the material's factors and textures (parameters
-//! [`params`] fills), preceded by a `replace_normal` image map when the
+//! `material/params.rs` fills), preceded by a `replace_normal` image map when the
 //! material has a normal texture. The mapping, its units and what is
 //! approximated are in `docs/gltf-materials.md`. A [`MaterialOverride`]
 //! replaces a material by a user's Lua material shader instead.

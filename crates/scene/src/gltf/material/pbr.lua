@@ -95,59 +95,68 @@ local function fetch(u, v)
   end
 end
 
+-- openpbr{}'s arguments: one table per thread, reused on every call, with
+-- only the parameters this material sets (openpbr{} checks each key it is
+-- given) and colours as {r, g, b} tables updated in place, so a call
+-- allocates nothing.
+local args = {}
+local BASE, SPEC_C, TINT, EMIT, FUZZ = { BR, BG, BB }, { SR, SG, SB }, { BR * TR, BG * TG, BB * TB },
+  { ER, EG, EB }, { HR, HG, HB }
+if UNLIT then
+  args.base_weight, args.specular_weight = 0, 0
+  args.emission_luminance, args.emission_color = 255, BASE
+else
+  args.base_color, args.base_metalness, args.specular_roughness = BASE, METAL, ROUGH
+  if IOR ~= 1.5 then args.specular_ior = IOR end
+  if SPEC ~= 1 or T_SPEC > 0 then args.specular_weight = SPEC end
+  if SR ~= 1 or SG ~= 1 or SB ~= 1 or T_SPEC_COLOR > 0 then args.specular_color = SPEC_C end
+  if TRANS > 0 then
+    args.transmission_weight, args.transmission_color = TRANS, TINT
+    if THIN then args.geometry_thin_walled = true end
+  end
+  if COAT > 0 then args.coat_weight, args.coat_roughness, args.coat_ior = COAT, COAT_ROUGH, 1.5 end
+  if SHEEN > 0 then args.fuzz_weight, args.fuzz_color, args.fuzz_roughness = SHEEN, FUZZ, SHEEN_ROUGH end
+  if ESCALE > 0 then args.emission_luminance, args.emission_color = ESCALE, EMIT end
+end
+if ALPHA_MODE > 0 then args.geometry_opacity = 1 end
+
 function material(s)
   if n > 0 then
     local uv = s.uv
     fetch(uv.u, uv.v)
+    if T_BASE > 0 then
+      local br, bg, bb = BR * R[T_BASE], BG * G[T_BASE], BB * B[T_BASE]
+      BASE[1], BASE[2], BASE[3] = br, bg, bb
+      if TRANS > 0 then TINT[1], TINT[2], TINT[3] = br * TR, bg * TG, bb * TB end
+    end
+    if not UNLIT then
+      if T_METAL > 0 then args.base_metalness = METAL * B[T_METAL] end
+      if T_ROUGH > 0 then args.specular_roughness = ROUGH * G[T_ROUGH] end
+      if ESCALE > 0 and T_EMIT > 0 then EMIT[1], EMIT[2], EMIT[3] = ER * R[T_EMIT], EG * G[T_EMIT], EB * B[T_EMIT] end
+      if T_SPEC > 0 then args.specular_weight = SPEC * R[T_SPEC] end
+      if T_SPEC_COLOR > 0 then
+        SPEC_C[1], SPEC_C[2], SPEC_C[3] = SR * R[T_SPEC_COLOR], SG * G[T_SPEC_COLOR], SB * B[T_SPEC_COLOR]
+      end
+      if TRANS > 0 and T_TRANS > 0 then args.transmission_weight = TRANS * R[T_TRANS] end
+      if COAT > 0 then
+        if T_COAT > 0 then args.coat_weight = COAT * R[T_COAT] end
+        if T_COAT_ROUGH > 0 then args.coat_roughness = COAT_ROUGH * G[T_COAT_ROUGH] end
+      end
+      if SHEEN > 0 then
+        if T_SHEEN > 0 then FUZZ[1], FUZZ[2], FUZZ[3] = HR * R[T_SHEEN], HG * G[T_SHEEN], HB * B[T_SHEEN] end
+        if T_SHEEN_ROUGH > 0 then args.fuzz_roughness = SHEEN_ROUGH * R[T_SHEEN_ROUGH] end
+      end
+    end
   end
-
-  local br, bg, bb = BR, BG, BB
-  if T_BASE > 0 then br, bg, bb = br * R[T_BASE], bg * G[T_BASE], bb * B[T_BASE] end
-  local opacity = 1
   if ALPHA_MODE > 0 then
     local a = ALPHA
     if T_ALPHA > 0 then a = a * R[T_ALPHA] end
     if ALPHA_MODE == 1 then
-      opacity = a >= CUTOFF and 1 or 0
+      args.geometry_opacity = a >= CUTOFF and 1 or 0
     else
-      opacity = a
+      args.geometry_opacity = a
     end
   end
-  if UNLIT then
-    local c = openpbr{base_weight = 0, specular_weight = 0, emission_luminance = 255,
-      emission_color = vec3(br, bg, bb), geometry_opacity = opacity}
-    return c
-  end
-
-  local metal, rough = METAL, ROUGH
-  if T_METAL > 0 then metal = metal * B[T_METAL] end
-  if T_ROUGH > 0 then rough = rough * G[T_ROUGH] end
-  local el, er, eg, eb = ESCALE, ER, EG, EB
-  if el > 0 and T_EMIT > 0 then er, eg, eb = er * R[T_EMIT], eg * G[T_EMIT], eb * B[T_EMIT] end
-  local spec, sr, sg, sb = SPEC, SR, SG, SB
-  if T_SPEC > 0 then spec = spec * R[T_SPEC] end
-  if T_SPEC_COLOR > 0 then sr, sg, sb = sr * R[T_SPEC_COLOR], sg * G[T_SPEC_COLOR], sb * B[T_SPEC_COLOR] end
-  local trans = TRANS
-  if trans > 0 and T_TRANS > 0 then trans = trans * R[T_TRANS] end
-  local coat, coat_rough = COAT, COAT_ROUGH
-  if coat > 0 then
-    if T_COAT > 0 then coat = coat * R[T_COAT] end
-    if T_COAT_ROUGH > 0 then coat_rough = coat_rough * G[T_COAT_ROUGH] end
-  end
-  local sheen, hr, hg, hb, sheen_rough = SHEEN, HR, HG, HB, SHEEN_ROUGH
-  if sheen > 0 then
-    if T_SHEEN > 0 then hr, hg, hb = hr * R[T_SHEEN], hg * G[T_SHEEN], hb * B[T_SHEEN] end
-    if T_SHEEN_ROUGH > 0 then sheen_rough = sheen_rough * R[T_SHEEN_ROUGH] end
-  end
-
-  local c = openpbr{
-    base_color = vec3(br, bg, bb), base_metalness = metal,
-    specular_weight = spec, specular_color = vec3(sr, sg, sb), specular_roughness = rough, specular_ior = IOR,
-    transmission_weight = trans, transmission_color = vec3(br * TR, bg * TG, bb * TB),
-    coat_weight = coat, coat_roughness = coat_rough, coat_ior = 1.5,
-    fuzz_weight = sheen, fuzz_color = vec3(hr, hg, hb), fuzz_roughness = sheen_rough,
-    emission_luminance = el, emission_color = vec3(er, eg, eb),
-    geometry_opacity = opacity, geometry_thin_walled = THIN,
-  }
+  local c = openpbr(args)
   return c
 end
