@@ -101,6 +101,11 @@ enum Command {
         /// than the camera's or --spp's count). Prints the samples used.
         #[arg(long, value_name = "SECONDS", value_parser = parse_timeout)]
         time: Option<f64>,
+        /// Denoise each image with Intel Open Image Denoise before writing it
+        /// (a build with `--features oidn`; see docs/denoising.md). Not with
+        /// --part: the denoiser needs the whole image.
+        #[arg(long, conflicts_with = "part")]
+        denoise: bool,
         #[command(flatten)]
         model: ModelArgs,
         #[command(flatten)]
@@ -306,6 +311,7 @@ fn main() -> ExitCode {
             resume,
             checkpoint,
             time,
+            denoise,
             model,
             frame,
         } => {
@@ -324,7 +330,17 @@ fn main() -> ExitCode {
                 }
                 None => {
                     let frame = (model.size, frame);
-                    render::run(&scenes, &outdir, threads, quiet, &opts, &build, &model.view(), &frame)
+                    render::run(
+                        &scenes,
+                        &outdir,
+                        threads,
+                        quiet,
+                        denoise,
+                        &opts,
+                        &build,
+                        &model.view(),
+                        &frame,
+                    )
                 }
             }
         }

@@ -4,13 +4,15 @@
 
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
+use luster::denoise::Denoiser;
 use luster::film::write_outputs;
 use luster::film::FilmReserve;
 use luster::image::outputs::{first_clash, plan_outputs};
-use luster::render::{self, BuildOptions, RenderOptions, Scene};
+use luster::render::{self, BuildOptions, RenderOptions, RenderedImage, Scene};
 use luster::scene::obj::ModelView;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Mutex;
 use std::time::Instant;
 
 /// Renders every scene; errors in one scene do not stop the others.
@@ -20,6 +22,7 @@ pub fn run(
     outdir: &Path,
     threads: Option<usize>,
     quiet: bool,
+    denoise: bool,
     opts: &RenderOptions,
     build: &BuildOptions,
     view: &ModelView,
@@ -29,9 +32,18 @@ pub fn run(
         Ok(p) => p,
         Err(code) => return code,
     };
+    // Started before any render, so a machine OIDN cannot run on fails at once.
+    let denoiser = match denoise.then(|| Denoiser::new(pool.current_num_threads())).transpose() {
+        Ok(d) => d.map(Mutex::new),
+        Err(e) => {
+            super::report("error", &format_args!("--denoise: {e}"));
+            return ExitCode::from(2);
+        }
+    };
     let mut failed = 0;
     for s in scenes {
-        if let Err(e) = pool.install(|| render_scene(s, outdir, quiet, opts, build, view, frame)) {
+        let out = Output { dir: outdir, quiet, denoiser: denoiser.as_ref() };
+        if let Err(e) = pool.install(|| render_scene(s, &out, opts, build, view, frame)) {
             super::report("error", &format_args!("{e:#}"));
             failed += 1;
         }
@@ -45,17 +57,25 @@ pub fn run(
     ExitCode::SUCCESS
 }
 
+/// Where and how a scene's images are written.
+struct Output<'a> {
+    dir: &'a Path,
+    quiet: bool,
+    /// Denoises each image before it is written (`--denoise`).
+    denoiser: Option<&'a Mutex<Denoiser>>,
+}
+
 /// Renders every camera of one scene, then writes the images: a shader that
 /// fails in any camera leaves no image of the scene behind.
 fn render_scene(
     path: &Path,
-    outdir: &Path,
-    quiet: bool,
+    out: &Output,
     opts: &RenderOptions,
     build: &BuildOptions,
     view: &ModelView,
     frame: &(Option<(u32, u32)>, super::reframe::FrameArgs),
 ) -> anyhow::Result<()> {
+    let (outdir, quiet) = (out.dir, out.quiet);
     let t0 = Instant::now();
     let obj = luster::scene::is_obj(path);
     let mut desc = luster::scene::load_viewed(path, view)?;
@@ -98,8 +118,13 @@ fn render_scene(
         let reserve = if i == 0 { reserve.as_ref() } else { None };
         let img = render::try_render_reserved(&scene, i, opts, &|n| bar.inc(n), reserve);
         bar.finish_and_clear();
-        let img = img.map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-        done.push((img, t.elapsed().as_secs_f64()));
+        let mut img = img.map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+        let secs = t.elapsed().as_secs_f64();
+        let denoised = match out.denoiser {
+            Some(d) => Some(denoise(d, &mut img).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?),
+            None => None,
+        };
+        done.push((img, secs, denoised));
     }
     let triangles = scene.triangle_count();
     // Freed by a free worker while the images are encoded, not after them
@@ -107,7 +132,7 @@ fn render_scene(
     if rayon::current_num_threads() > 1 {
         rayon::spawn(move || drop((scene, desc)));
     }
-    for ((img, secs), plan) in done.iter().zip(&plans) {
+    for ((img, secs, denoised), plan) in done.iter().zip(&plans) {
         let written = write_outputs(&img.film, outdir, plan)
             .with_context(|| format!("rendering {}", path.display()))?;
         if !quiet {
@@ -115,13 +140,15 @@ fn render_scene(
                 .iter()
                 .map(|p| luster::text::shown(&p.display().to_string(), false).into_owned())
                 .collect();
+            let denoised = denoised.map(|s| format!(" (+{s:.2} s denoise)")).unwrap_or_default();
             println!(
-                "{}  {}x{}  {} spp  {:.2} s render (+{:.2} s load and build)  {:.1} Mrays/s  {} triangles",
+                "{}  {}x{}  {} spp  {:.2} s render{} (+{:.2} s load and build)  {:.1} Mrays/s  {} triangles",
                 names.join(" + "),
                 img.width,
                 img.height,
                 img.spp,
                 secs,
+                denoised,
                 setup,
                 img.stats.total() as f64 / secs.max(1e-9) / 1e6,
                 triangles
@@ -129,4 +156,15 @@ fn render_scene(
         }
     }
     Ok(())
+}
+
+/// Replaces the image's beauty with its denoised version; returns the
+/// seconds it took.
+fn denoise(denoiser: &Mutex<Denoiser>, img: &mut RenderedImage) -> Result<f64, String> {
+    let t = Instant::now();
+    // A poisoned lock only means another scene's denoise panicked; the device is still usable.
+    let d = denoiser.lock().unwrap_or_else(|e| e.into_inner());
+    let film = &mut img.film;
+    film.pixels = d.denoise(film.width, film.height, &film.pixels, None, None)?;
+    Ok(t.elapsed().as_secs_f64())
 }
