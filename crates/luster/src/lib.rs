@@ -17,6 +17,7 @@
 
 pub mod bench;
 pub mod cluster;
+pub mod denoise;
 pub mod watch;
 
 pub use luster_core::{file, image, math, memory, text, tonemap};

@@ -126,7 +126,10 @@ pub(super) fn parse_env_rotate(s: &str) -> Result<f32, String> {
 pub(super) fn parse_env_strength(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
         Ok(v) if (0.0..=1e36).contains(&v) => Ok(v),
-        _ => Err(format!("\"{}\" is not a strength (a number from 0 to 1e36)", luster_core::text::shown(s, false))),
+        _ => Err(format!(
+            "\"{}\" is not a strength (a number from 0 to 1e36)",
+            luster_core::text::shown(s, false)
+        )),
     }
 }
 

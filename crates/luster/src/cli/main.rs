@@ -107,6 +107,11 @@ enum Command {
         /// camera when the file has none).
         #[arg(long, value_name = "N")]
         camera: Option<usize>,
+        /// Denoise each image with Intel Open Image Denoise before writing it
+        /// (a build with `--features oidn`; see docs/denoising.md). Not with
+        /// --part: the denoiser needs the whole image.
+        #[arg(long, conflicts_with = "part")]
+        denoise: bool,
         #[command(flatten)]
         model: ModelArgs,
         #[command(flatten)]
@@ -319,6 +324,7 @@ fn main() -> ExitCode {
             checkpoint,
             time,
             camera,
+            denoise,
             model,
             env,
             frame,
@@ -355,7 +361,18 @@ fn main() -> ExitCode {
                 }
                 None => {
                     let frame = (model.size, frame);
-                    render::run(&scenes, &outdir, threads, quiet, &opts, &build, &view, env.as_ref(), &frame)
+                    render::run(
+                        &scenes,
+                        &outdir,
+                        threads,
+                        quiet,
+                        denoise,
+                        &opts,
+                        &build,
+                        &view,
+                        env.as_ref(),
+                        &frame,
+                    )
                 }
             }
         }

@@ -11,6 +11,7 @@ mod cluster;
 mod cluster_camera;
 mod common;
 mod compare;
+mod denoise;
 mod display;
 mod distribution;
 mod ellipsoid;
