@@ -214,9 +214,12 @@ def render_luster(args):
 
 
 def load_luster_beauty(folder):
-    """The beauty image luster wrote (its `.exr`), linear."""
-    path = next(os.path.join(folder, f) for f in sorted(os.listdir(folder)) if f.endswith(".exr"))
-    return load_exr(path)
+    """The beauty layer of the passes file luster wrote (`--aov`), linear
+    film units."""
+    import numpy as np
+    path = next(os.path.join(folder, f) for f in sorted(os.listdir(folder)) if f.endswith(".aov.exr"))
+    layers = dict(_bitmap()(path).split())
+    return np.array(layers["<root>"], dtype=np.float64)[..., :3]
 
 
 def stats(pair):

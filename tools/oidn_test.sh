@@ -38,8 +38,7 @@ if [ -z "${OIDN_DIR:-}" ]; then
             apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3-pip >/dev/null
         fi
         say "downloading $wheel"
-        python3 -m pip download --quiet --no-deps --only-binary=:all: --platform manylinux2014_x86_64 \
-            --python-version 3 --implementation py -d "$cache/dl" "pyoidn==$version"
+        python3 -m pip download --quiet --no-deps --only-binary=:all: -d "$cache/dl" "pyoidn==$version"
         mv "$cache/dl/$wheel" "$cache/$wheel"
     fi
     echo "$sha256  $cache/$wheel" | sha256sum --check --quiet - ||
