@@ -106,6 +106,10 @@ fn remove_studio(desc: &mut Description, studio: &Studio, loc: &Loc) {
     if studio.ambient {
         desc.ambient_light = luster_core::math::Vec3::ZERO;
     }
+    // The ground is the last object, so no other object's index moves.
+    if studio.ground.is_some_and(|g| g + 1 == desc.objects.len()) {
+        desc.objects.pop();
+    }
     for &m in &studio.materials {
         if let Some(m) = desc.materials.get_mut(m) {
             if m.brdf.is_none() {

@@ -118,7 +118,7 @@ mod with_oidn {
     }
 
     /// The command line writes what the library's denoiser makes of the
-    /// same render, byte for byte, and says how long denoising took.
+    /// same render and its albedo and normal passes, byte for byte, and says how long denoising took.
     #[test]
     fn render_denoise_writes_the_denoised_image() {
         let dir = common::folder(&[("s.xml", CORNELL)]);
@@ -126,8 +126,17 @@ mod with_oidn {
         assert_eq!(run.code, Some(0), "{}", run.stderr);
         let written = image::open(dir.path().join("cornell.exr")).expect("the EXR").into_rgb32f();
         let desc = luster::scene::load(&dir.path().join("s.xml")).expect("scene loads");
-        let noisy = render(&desc, 4, 0);
-        let expected = luster::denoise::denoise(128, 128, &noisy, None, None).expect("denoised");
+        // The command line renders the albedo and normal passes to guide the denoiser.
+        use luster::film::aov::{Pass, Passes};
+        use luster::render::{render_with, RenderOptions, Scene};
+        let scene = Scene::build(&desc).expect("scene builds");
+        let passes = Passes::NONE.with(Pass::Albedo).with(Pass::Normal);
+        let opts = RenderOptions { spp: Some(4), seed: 0, passes, ..Default::default() };
+        let img = render_with(&scene, 0, &opts, &|_| {});
+        let aovs = img.aovs.as_ref().expect("the passes asked for");
+        let noisy = img.film.pixels.clone();
+        let expected =
+            luster::denoise::denoise(128, 128, &noisy, aovs.albedo(), aovs.normal()).expect("denoised");
         let got: Vec<Vec3> = written.pixels().map(|p| Vec3::from_array(p.0)).collect();
         assert_eq!(got, expected);
         assert_ne!(got, noisy);

@@ -437,8 +437,9 @@ fn resolve_instances(
                     return Err(r.err(
                         &loc_el(objs, &out[p.index]),
                         format!(
-                            "baseMeshId \"{}\" is an OBJ or glTF mesh that makes several objects (one per \
-                             material or primitive); an instance needs one",
+                            "baseMeshId \"{}\" is an OBJ or glTF mesh with several materials (or glTF \
+                             primitives), which makes several objects; an instance needs one (give that \
+                             Mesh a <Material>)",
                             inst.base_id
                         ),
                     ));

@@ -126,4 +126,9 @@ pub struct Studio {
     /// the normalized Blinn-Phong, so that a reflectance is an albedo as in
     /// other renderers.
     pub materials: Vec<usize>,
+    /// Index into [`Description::objects`](super::Description::objects) of
+    /// a ground the studio added that an HDRI takes away (a glTF file's:
+    /// it is rendered as Blender imports it, on the HDRI alone); always the
+    /// last object.
+    pub ground: Option<usize>,
 }

@@ -99,13 +99,15 @@ pub fn scene(path: &Path, view: &ModelView) -> Result<Description, SceneError> {
         // The sky dome lights the model about as the OBJ studio's ambient light does.
         background = studio::SKY * 0.3;
         let ground_material = add.add_material(studio::ground_material(&loc));
+        let before = objects.len();
         objects.extend(studio::ground(view, &camera, center, radius, lowest, ground_material, &loc));
-        // An HDRI (`--env`) replaces the studio's lights; the ground stays,
-        // its course material read as an albedo.
+        // An HDRI (`--env`) replaces the studio's lights and its ground:
+        // the file is then lit and seen as Blender imports it.
         studio_parts = Some(Studio {
             point_lights: (0..desc_lights.point.len()).collect(),
             ambient: false,
             materials: vec![ground_material],
+            ground: (objects.len() == before + 1).then_some(before),
         });
     }
     let mut all_warnings = model.notes.warnings;

@@ -131,6 +131,7 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
         point_lights: (0..point_lights.len()).collect(),
         ambient: true,
         materials: (0..add.materials.len()).collect(),
+        ground: None,
     };
     Ok(Description {
         file: path.to_path_buf(),
