@@ -28,7 +28,7 @@ const MAX_SCENE_BYTES: u64 = 1 << 30;
 /// `.xml`) or, failing that, by its first character. An `.obj` file is a
 /// model, rendered in the scene [`obj::model_scene`] makes around it with the
 /// default [`obj::ModelView`]; a `.gltf` or `.glb` file is a glTF scene
-/// ([`gltf::scene`]).
+/// ([`gltf::scene()`]).
 pub fn load(path: &Path) -> Result<Description, SceneError> {
     load_viewed(path, &obj::ModelView::default())
 }

@@ -6,7 +6,7 @@
 //! `<Mesh><Faces gltfFile="model.glb"/></Mesh>` (`scene::ceng795::gltf_file`).
 //! Both read the file with [`read`]: the document and buffers
 //! ([`document`]), the drawn nodes ([`nodes`]) and their meshes ([`mesh`],
-//! through [`accessor`]); [`objects`] makes the description's objects, one
+//! through [`accessor`]); [`Model::objects`] makes the description's objects, one
 //! per primitive of each drawn node, a mesh drawn by several nodes being
 //! one geometry and instances of it. Materials are [`material`]'s.
 //!
