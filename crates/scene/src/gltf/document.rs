@@ -228,26 +228,9 @@ fn file_uri(path: &Path, uri: &str, json_path: &str) -> Result<PathBuf, SceneErr
     if scheme {
         return Err(at(path, json_path, "only relative file paths and data URIs are read, not URLs"));
     }
-    percent_decode(uri).ok_or_else(|| at(path, json_path, "the URI's percent-encoding is invalid"))
-}
-
-/// A URI path with its `%XX` escapes decoded; `None` if an escape is
-/// malformed or the result is not UTF-8.
-fn percent_decode(uri: &str) -> Option<PathBuf> {
-    let b = uri.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
-    let mut i = 0;
-    while i < b.len() {
-        if b[i] == b'%' {
-            let hex = std::str::from_utf8(b.get(i + 1..i + 3)?).ok()?;
-            out.push(u8::from_str_radix(hex, 16).ok()?);
-            i += 3;
-        } else {
-            out.push(b[i]);
-            i += 1;
-        }
-    }
-    String::from_utf8(out).ok().map(PathBuf::from)
+    super::material::percent_decode(uri)
+        .map(PathBuf::from)
+        .ok_or_else(|| at(path, json_path, "the URI's percent-encoding is invalid"))
 }
 
 #[cfg(test)]
@@ -285,13 +268,6 @@ mod tests {
         assert!(e.contains("GLB header: the header is cut short (10 of 12 bytes)"), "{e}");
         let e = split_glb(p, &b[..b.len() - 2]).unwrap_err().to_string();
         assert!(e.contains("GLB header") && e.contains("cut short"), "{e}");
-    }
-
-    #[test]
-    fn percent_escapes_decode_and_bad_ones_fail() {
-        assert_eq!(percent_decode("a%20b.bin"), Some(PathBuf::from("a b.bin")));
-        assert_eq!(percent_decode("a%2"), None);
-        assert_eq!(percent_decode("a%zz"), None);
     }
 
     #[test]

@@ -14,6 +14,8 @@
 //! ids of the form `FILE#images[i]/ENCODING`.
 
 mod images;
+
+pub(crate) use images::percent_decode;
 mod params;
 
 use crate::ceng795::shader_map::read_script;

@@ -158,7 +158,7 @@ fn data_uri(uri: &str) -> Result<Arc<[u8]>, String> {
 
 /// A URI's percent-escapes decoded (`%20` is a space); `None` when an escape
 /// is malformed or the result is not UTF-8.
-pub(super) fn percent_decode(s: &str) -> Option<String> {
+pub(crate) fn percent_decode(s: &str) -> Option<String> {
     let b = s.as_bytes();
     let mut out = Vec::with_capacity(b.len());
     let mut i = 0;
