@@ -49,19 +49,7 @@ pub fn read(
         el,
         &["Material", "Transformations", "Faces", "MotionBlur", "Textures", "Interior", "MaterialShader"],
     );
-    let faces = r.required(el, "Faces")?;
-    for (k, _) in &faces.attrs {
-        if k != "gltfFile" {
-            w.at(faces, format!("<Faces> attribute {k} does not apply to a gltfFile; ignored"));
-        }
-    }
-    if !faces.text.trim().is_empty() {
-        w.at(faces, "<Faces> with a gltfFile takes its faces from the file; the indices given are ignored");
-    }
-    let rel = faces.attr("gltfFile").unwrap_or("").trim();
-    if rel.is_empty() {
-        return Err(r.err(faces, "<Faces> has an empty gltfFile attribute"));
-    }
+    let (faces, rel) = super::obj_file::file_faces(ctx, el, w, "a gltfFile")?;
     let path = ctx.base_dir.join(rel);
     let model = crate::gltf::read(&path).map_err(|e| r.err(faces, e.to_string()))?;
     for warning in &model.notes.warnings {

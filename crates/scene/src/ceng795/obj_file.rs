@@ -62,19 +62,7 @@ pub fn read(
 ) -> Result<(), SceneError> {
     let r = &ctx.r;
     w.unknown_children(el, &["Material", "Transformations", "Faces", "MotionBlur", "Textures", "Interior"]);
-    let faces = r.required(el, "Faces")?;
-    for (k, _) in &faces.attrs {
-        if k != "objFile" {
-            w.at(faces, format!("<Faces> attribute {k} does not apply to an objFile; ignored"));
-        }
-    }
-    if !faces.text.trim().is_empty() {
-        w.at(faces, "<Faces> with an objFile takes its faces from the file; the indices given are ignored");
-    }
-    let rel = faces.attr("objFile").unwrap_or("").trim();
-    if rel.is_empty() {
-        return Err(r.err(faces, "<Faces> has an empty objFile attribute"));
-    }
+    let (faces, rel) = file_faces(ctx, el, w, "an objFile")?;
     let model = obj::load(&ctx.base_dir.join(rel)).map_err(|e| r.err(faces, e.to_string()))?;
     for warning in &model.warnings {
         w.at(faces, format!("{rel}: {warning}"));
@@ -120,4 +108,35 @@ pub fn read(
         out.push(object(shape, mat, maps, loc)?);
     }
     Ok(())
+}
+
+/// The `<Faces>` of a mesh whose faces come from a file, and the file's
+/// path as written: `attr` names the attribute with its article (`an
+/// objFile`, `a gltfFile`). Other attributes and inline indices are warned
+/// about; an empty path is an error.
+pub fn file_faces<'e>(
+    ctx: &Context,
+    el: &'e Element,
+    w: &mut Warnings,
+    attr: &str,
+) -> Result<(&'e Element, &'e str), SceneError> {
+    let r = &ctx.r;
+    let name = attr.rsplit(' ').next().unwrap_or(attr);
+    let faces = r.required(el, "Faces")?;
+    for (k, _) in &faces.attrs {
+        if k != name {
+            w.at(faces, format!("<Faces> attribute {k} does not apply to {attr}; ignored"));
+        }
+    }
+    if !faces.text.trim().is_empty() {
+        w.at(
+            faces,
+            format!("<Faces> with {attr} takes its faces from the file; the indices given are ignored"),
+        );
+    }
+    let rel = faces.attr(name).unwrap_or("").trim();
+    if rel.is_empty() {
+        return Err(r.err(faces, format!("<Faces> has an empty {name} attribute")));
+    }
+    Ok((faces, rel))
 }
