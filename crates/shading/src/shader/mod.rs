@@ -55,6 +55,7 @@
 //! none calls back into Lua from C, so no recursion of a script grows the
 //! native stack beyond what [`STACK_SIZE`] holds (`docs/robustness.md`).
 
+mod builtin_modules;
 mod call;
 pub mod closure;
 mod compile;
@@ -80,6 +81,8 @@ mod tests_closure;
 mod tests_limits;
 #[cfg(test)]
 mod tests_modules;
+#[cfg(test)]
+mod tests_patterns;
 #[cfg(test)]
 mod tests_sandbox;
 mod threads;

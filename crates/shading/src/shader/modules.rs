@@ -10,12 +10,14 @@
 //! a link cannot lead out. It is read through the scene reader's regular-file
 //! and size checks. The prelude caches each module per Lua state, runs it in
 //! its own sandboxed environment under the calling shader's time limit, and
-//! refuses cycles (`prelude.lua`, `require`).
+//! refuses cycles (`prelude.lua`, `require`). A name no folder has may be
+//! one of the modules built into luster (`builtin_modules.rs`).
 
 use std::collections::BTreeSet;
 use std::path::PathBuf;
 use std::sync::Mutex;
 
+use super::builtin_modules;
 use super::instrument::{instrument, ScanError};
 
 /// Largest module accepted, as for scripts.
@@ -86,6 +88,19 @@ fn relative_path(name: &str) -> Result<PathBuf, String> {
     Ok(path)
 }
 
+/// A module's code with the time-limit checks inserted, or why it cannot be.
+fn instrumented(shown: &str, code: &str) -> Result<String, String> {
+    match instrument(code) {
+        Ok(code) => Ok(code),
+        Err(ScanError::Reserved { line, name: word }) => {
+            Err(format!("{shown}:{line}: the name '{word}' is reserved for the shader runtime"))
+        }
+        Err(ScanError::Unterminated { line }) => {
+            Err(format!("{shown}:{line}: a string or comment opened here does not close"))
+        }
+    }
+}
+
 impl Modules {
     pub(crate) fn new(roots: Vec<PathBuf>) -> Modules {
         Modules { roots, required: Mutex::new(BTreeSet::new()) }
@@ -119,22 +134,19 @@ impl Modules {
             }
             let code = luster_core::file::read_text(&real, MAX_MODULE_BYTES)
                 .map_err(|why| format!("require: cannot read module {shown}: {why}"))?;
-            let code = match instrument(&code) {
-                Ok(code) => code,
-                Err(ScanError::Reserved { line, name: word }) => {
-                    return Err(format!(
-                        "{shown}:{line}: the name '{word}' is reserved for the shader runtime"
-                    ))
-                }
-                Err(ScanError::Unterminated { line }) => {
-                    return Err(format!("{shown}:{line}: a string or comment opened here does not close"))
-                }
-            };
+            let code = instrumented(&shown, &code)?;
             let key = real.display().to_string();
             if let Ok(mut r) = self.required.lock() {
                 r.insert(real);
             }
             return Ok((shown, code, key));
+        }
+        // No folder has it: a built-in module of that name, not watched (it
+        // is no file), identified by a key no canonical path can spell.
+        if let Some(code) = builtin_modules::source(name) {
+            let shown = builtin_modules::shown(name);
+            let code = instrumented(&shown, code)?;
+            return Ok((shown, code, format!("built-in:{name}")));
         }
         let looked: Vec<String> = self.roots.iter().map(|r| r.display().to_string()).collect();
         Err(format!(
