@@ -44,3 +44,5 @@ mod volpath;
 mod volumes;
 mod watch;
 mod whitted_glass;
+
+mod patterns;
