@@ -350,3 +350,16 @@ fn answers_depend_on_the_point_alone() {
     let distinct: std::collections::BTreeSet<u32> = forward.iter().map(|c| c[0].to_bits()).collect();
     assert!(distinct.len() > 3, "{distinct:?}");
 }
+
+#[test]
+fn normal_is_an_entry_point_returning_a_vector() {
+    let set = set_of("function normal(s) return bevel(s, 0.2, 16) end").unwrap();
+    assert!(set.has_normal(0) && !set.has_color(0) && !set.has_material(0));
+    // Near the edge the normal it gives is the rounded one; with no tracer, s.N.
+    let at = point([-0.01, 0.0, 0.0], UP);
+    let n = with_tracer(&edge(), || set.normal(0, &at)).unwrap();
+    assert!(n[0] > 0.3 && n[2] > 0.3, "{n:?}");
+    assert_eq!(set.normal(0, &at).unwrap(), UP);
+    let e = set_of("function normal(s) return 1, 0 end").unwrap().normal(0, &at).unwrap_err();
+    assert_eq!(e.kind, ShaderErrorKind::BadResult, "{e}");
+}
