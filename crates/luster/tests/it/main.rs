@@ -1,6 +1,6 @@
 //! The integration tests of luster, one binary: the command line, bad and
 //! hostile input, golden images of the course scenes, shaders, volumes,
-//! OBJ models, glTF scenes, split renders, the watch server and the fuzz smoke run.
+//! OBJ models, glTF scenes, rays from shaders, split renders, the watch server and the fuzz smoke run.
 
 mod adaptive;
 mod aov;
@@ -39,6 +39,7 @@ mod shader_context;
 mod shader_material;
 mod shaders;
 mod suite;
+mod trace;
 mod vdb;
 mod volpath;
 mod volumes;

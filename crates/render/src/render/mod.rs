@@ -32,7 +32,7 @@ use crate::film::reserve::FilmMemory;
 use crate::film::{Film, FilmReserve, Tile};
 use crate::integrator::{Integrator, PathState, RayStats};
 use luster_core::math::{Ray, Vec2, Vec3};
-use luster_shading::shader::ShaderError;
+use luster_shading::shader::{with_tracer, ShaderError};
 use rayon::prelude::*;
 use sampler::{PixelSampler, MIN_BATCH_RUN};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -307,13 +307,14 @@ fn render_tiles(
             failed,
         };
         let run = |work: &mut Work| {
-            // The loop for what this render records, chosen once per render.
-            let done = match (passes.is_empty(), adaptive.is_some()) {
+            // The loop for what this render records, chosen once per render;
+            // the shaders it calls cast their rays into this scene.
+            let done = with_tracer(scene, || match (passes.is_empty(), adaptive.is_some()) {
                 (true, false) => pass.tile::<false, false>(work, &stop),
                 (false, false) => pass.tile::<true, false>(work, &stop),
                 (true, true) => pass.tile::<false, true>(work, &stop),
                 (false, true) => pass.tile::<true, true>(work, &stop),
-            };
+            });
             on_tile(done as u64 * u64::from(n));
         };
         tiles.par_iter_mut().with_max_len(1).for_each(run);

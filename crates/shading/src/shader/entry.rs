@@ -27,10 +27,13 @@ pub enum Entry {
     /// `material(s)`: a closure (`docs/closures.md`), called only through
     /// [`ShaderSet::material`](super::ShaderSet::material), never alone.
     Material = 8,
+    /// `normal(s)`: a world-space shading normal (`DecalMode
+    /// replace_normal`; `bevel()` makes one).
+    Normal = 9,
 }
 
 /// How many entry points there are.
-pub const ENTRIES: usize = 9;
+pub const ENTRIES: usize = 10;
 
 impl Entry {
     /// Every entry point, in index order.
@@ -44,6 +47,7 @@ impl Entry {
         Entry::Roughness,
         Entry::Metalness,
         Entry::Material,
+        Entry::Normal,
     ];
 
     /// The function name a script defines.
@@ -58,6 +62,7 @@ impl Entry {
             Entry::Roughness => "roughness",
             Entry::Metalness => "metalness",
             Entry::Material => "material",
+            Entry::Normal => "normal",
         }
     }
 }

@@ -31,6 +31,9 @@
 //!   watchdog thread stores to; compiled Lua reads it with plain aligned
 //!   8-byte loads, which are single-copy atomic on the targets LuaJIT's JIT
 //!   supports, so a reader sees an old or a new value, never a torn one.
+//! * `trace`, `occlusion` and `bevel` (`trace.rs`) receive the prelude's
+//!   scratch records, and reach the scene through the tracer the renderer
+//!   installed for the thread, which outlives the call.
 //! * `find` receives two Lua strings with their lengths, as the prelude
 //!   passes them.
 //! * The built-ins are called by LuaJIT with arguments the trusted prelude
@@ -46,6 +49,7 @@ use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 use super::closure::{Closure, Node, NodeKind, MAX_NODES};
+use super::trace::{self, HitOut, RayIn};
 use super::{Entry, ImageSampler, MaterialOutputs, SampleFilter};
 use crate::noise::{course, fractal, perlin, simplex, voronoi};
 
@@ -167,14 +171,15 @@ fn closure_of(m: &MaterialOut) -> Option<Closure> {
 /// The per-call deadline (`luster_clock`), in periods of the watchdog's
 /// clock ([`epoch`]): a call has run past its limit once the clock reads
 /// more than `start + limit`. `depth` counts the coroutines the call has
-/// resumed inside one another (the prelude's bound on native recursion).
+/// resumed inside one another (the prelude's bound on native recursion),
+/// `rays` the rays it has cast (`trace.rs`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Clock {
     pub start: f64,
     pub limit: f64,
     pub depth: i32,
-    pub pad: i32,
+    pub rays: i32,
 }
 
 /// The Voronoi scratch record (`luster_cell`).
@@ -214,6 +219,10 @@ pub(crate) struct Builtins {
     course_noise: extern "C" fn(f64, f64, f64) -> f64,
     texture: extern "C" fn(*const c_void, i32, f64, f64, i32, *mut Vec3) -> i32,
     course_perlin: extern "C" fn(f64, f64, f64, f64, i32, i32) -> f64,
+    trace: extern "C" fn(*const RayIn, *mut HitOut) -> i32,
+    occlusion: extern "C" fn(*const RayIn, i32) -> f64,
+    bevel: extern "C" fn(*const RayIn, u32, i32, i32, *mut Vec3) -> i32,
+    max_rays: i32,
 }
 
 // SAFETY: the record is immutable after construction and holds function
@@ -245,6 +254,10 @@ pub(crate) static BUILTINS: Builtins = Builtins {
     course_noise,
     texture,
     course_perlin,
+    trace: trace::trace_ffi,
+    occlusion: trace::occlusion_ffi,
+    bevel: trace::bevel_ffi,
+    max_rays: trace::MAX_RAYS,
 };
 
 /// The address of [`BUILTINS`], as the prelude's light userdata wants it.
@@ -567,6 +580,7 @@ impl IoBlock {
         (*self.out).bad = 0;
         (*self.clock).start = epoch_now();
         (*self.clock).depth = 0;
+        (*self.clock).rays = 0;
     }
 
     /// Writes the shading point and arms the clock for one `DecalMode

@@ -85,7 +85,10 @@ mod tests_modules;
 mod tests_patterns;
 #[cfg(test)]
 mod tests_sandbox;
+#[cfg(test)]
+mod tests_trace;
 mod threads;
+mod trace;
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -98,6 +101,7 @@ pub use error::{ShaderError, ShaderErrorKind};
 pub use input::ShadeInput;
 pub use input::ShadePoint;
 pub use modules::{search_path, set_library_dirs, MAX_MODULE_BYTES};
+pub use trace::{with_tracer, TraceHit, TraceRay, Tracer, MAX_RAYS};
 
 /// The pixel `--debug-pixel` names, packed (`u64::MAX`: none).
 static DEBUG_PIXEL: AtomicU64 = AtomicU64::new(u64::MAX);
@@ -316,6 +320,11 @@ impl ShaderSet {
         self.has(id, Entry::Emission)
     }
 
+    /// Whether shader `id` defines `normal(s)`.
+    pub fn has_normal(&self, id: usize) -> bool {
+        self.has(id, Entry::Normal)
+    }
+
     /// Whether shader `id` defines `material(s)` or any material output
     /// (`color`, `specular`, `roughness`, `metalness`, `emission` or
     /// `reflect`), one of which `DecalMode material` needs.
@@ -434,6 +443,13 @@ impl ShaderSet {
             code => state.finish_height3(id, code),
         })
         .map(|h| h.map(|x| x as f32))
+    }
+
+    /// The world-space shading normal shader `id`'s `normal(s)` gives at
+    /// `input`, as returned (the caller normalizes it).
+    #[inline]
+    pub fn normal(&self, id: usize, input: &ShadeInput) -> Result<[f32; 3], ShaderError> {
+        self.call(id, Entry::Normal, input).map(|c| c.map(|x| x as f32))
     }
 
     /// The reflective color of shader `id` at `input`.

@@ -33,8 +33,10 @@ typedef struct {
   luster_node nodes[32];
 } luster_material;
 typedef struct { double gen; int32_t index; } luster_closure;
-typedef struct { double start, limit; int32_t depth, pad; } luster_clock;
+typedef struct { double start, limit; int32_t depth, rays; } luster_clock;
 typedef struct { double f1, f2, px, py, pz, id; } luster_cell;
+typedef struct { luster_vec3 o, d; double maxdist, time; luster_vec3 ng; } luster_ray;
+typedef struct { double t; luster_vec3 P, N, Ng; int32_t object_id, instance_id; } luster_hit;
 typedef struct {
   double (*perlin1)(double);
   double (*perlin2)(double, double);
@@ -58,6 +60,10 @@ typedef struct {
   double (*course_noise)(double, double, double);
   int32_t (*texture)(const void *, int32_t, double, double, int32_t, luster_vec3 *);
   double (*course_perlin)(double, double, double, double, int32_t, int32_t);
+  int32_t (*trace)(const luster_ray *, luster_hit *);
+  double (*occlusion)(const luster_ray *, int32_t);
+  int32_t (*bevel)(const luster_ray *, uint32_t, int32_t, int32_t, luster_vec3 *);
+  int32_t max_rays;
 } luster_builtins;
 ]]
 
@@ -965,6 +971,136 @@ local BUILTINS = {
   collectgarbage = safe_collectgarbage,
 }
 
+---------------------------------------------------------------------------
+-- Rays from shaders (docs/tracing.md): trace(), occlusion(), edgewear() and
+-- bevel(). Rust casts them into the scene the renderer installed for this
+-- thread (trace.rs), or finds nothing when none is. clock.rays counts a
+-- call's rays (Rust clears it when the call starts); past B.max_rays the
+-- call fails at the script's line. Rays leave the current point's surface
+-- (the record `shade`, whose Ng and time they take) on the side they head.
+---------------------------------------------------------------------------
+-- A function of its own: a function may have only 200 locals.
+local function tracing()
+  local ray_in, hit_out, bevel_out = ffi.new("luster_ray"), ffi.new("luster_hit"), ffi.new("luster_vec3")
+  local function finite_number(v) return type(v) == "number" and v - v == 0 end
+  -- The checks below raise their errors at `level` (default 3: the script's
+  -- line that called the built-in that checks).
+  local function spend(n, fname, level)
+    local used = clock.rays + n
+    if used > B.max_rays then
+      error(format("%s: the call would cast %d rays, over the cap of %d rays per shader call "
+        .. "(fewer samples, or fewer calls per point)", fname, used, B.max_rays), level or 3)
+    end
+    clock.rays = used
+  end
+  local function vec_arg(v, fname, what, level)
+    if not isvec(v) then error(format("%s: %s must be a vec3, got a %s", fname, what, typename(v)), level or 3) end
+    if not (finite_number(v.x) and finite_number(v.y) and finite_number(v.z)) then
+      error(format("%s: %s must be finite, got %s", fname, what, tostring(v)), level or 3)
+    end
+  end
+  local function positive_arg(v, default, fname, what)
+    if v == nil then return default end
+    if type(v) ~= "number" or not (v > 0) then
+      error(format("%s: %s must be a positive number, got %s", fname, what, tostring(v)), 3)
+    end
+    return v
+  end
+  local function samples_arg(v, default, fname)
+    if v == nil then return default end
+    if type(v) ~= "number" or v ~= floor(v) or v < 1 or v > B.max_rays then
+      error(format("%s: samples must be a whole number from 1 to %d, got %s", fname, B.max_rays, tostring(v)), 3)
+    end
+    return v
+  end
+  local function set_vec(dst, v) dst.x, dst.y, dst.z = v.x, v.y, v.z end
+  -- The ray record for a ray from `o` along `d` (a direction or an axis).
+  local function ray_from(o, d, maxdist)
+    set_vec(ray_in.o, o)
+    set_vec(ray_in.d, d)
+    ray_in.maxdist = maxdist
+    ray_in.time = shade.time
+    set_vec(ray_in.ng, shade.Ng)
+  end
+  -- trace(origin, dir, [maxdist]): the nearest surface along the ray, as
+  -- { t, P, N, Ng, object_id, instance_id }, or nil.
+  local function trace(origin, dir, maxdist)
+    vec_arg(origin, "trace", "origin")
+    vec_arg(dir, "trace", "dir")
+    maxdist = positive_arg(maxdist, math.huge, "trace", "maxdist")
+    local l = length(dir)
+    if l == 0 then error("trace: dir must not be the zero vector", 2) end
+    spend(1, "trace")
+    ray_from(origin, dir / l, maxdist)
+    local found = B.trace(ray_in, hit_out)
+    if found < 0 then error("trace: the renderer failed to trace the ray", 2) end
+    if found == 0 then return nil end
+    local h = hit_out
+    return {
+      t = h.t,
+      P = vec3_t(h.P.x, h.P.y, h.P.z),
+      N = vec3_t(h.N.x, h.N.y, h.N.z),
+      Ng = vec3_t(h.Ng.x, h.Ng.y, h.Ng.z),
+      object_id = h.object_id,
+      instance_id = h.instance_id,
+    }
+  end
+  local function is_shade(v) return type(v) == "cdata" and ffi.istype(shade_t, v) end
+  -- The shared half of occlusion and edgewear: the fraction of `samples`
+  -- cosine-weighted directions around `axis` blocked within `reach`.
+  -- Errors at level 3 from here are the script's line (the callers below
+  -- call it in no tail call).
+  local function blocked(fname, P, axis, samples, reach)
+    vec_arg(P, fname, "P", 4)
+    vec_arg(axis, fname, "N", 4)
+    if length(axis) == 0 then error(format("%s: N must not be the zero vector", fname), 3) end
+    spend(samples, fname, 4)
+    ray_from(P, axis, reach)
+    local f = B.occlusion(ray_in, samples)
+    if f ~= f then error(format("%s: the renderer failed to trace the rays", fname), 3) end
+    return f
+  end
+  -- occlusion(P, N, [samples], [maxdist]) or occlusion(s, [samples], [maxdist]):
+  -- ambient occlusion, 0 (open) to 1 (enclosed).
+  local function occlusion(P, N, samples, maxdist)
+    if is_shade(P) then P, N, samples, maxdist = P.Pw, P.N, N, samples end
+    samples = samples_arg(samples, 16, "occlusion")
+    maxdist = positive_arg(maxdist, math.huge, "occlusion", "maxdist")
+    local f = blocked("occlusion", P, N, samples, maxdist)
+    return f
+  end
+  -- edgewear(P, N, radius, [samples]) or edgewear(s, radius, [samples]): the
+  -- fraction of rays into the object that leave it within radius, 0 on a flat
+  -- face of a thick object, rising towards a convex edge or corner.
+  local function edgewear(P, N, radius, samples)
+    if is_shade(P) then P, N, radius, samples = P.Pw, P.N, N, radius end
+    if radius == nil then error("edgewear: the radius is missing (edgewear(P, N, radius, [samples]))", 2) end
+    radius = positive_arg(radius, nil, "edgewear", "radius")
+    samples = samples_arg(samples, 16, "edgewear")
+    vec_arg(N, "edgewear", "N")
+    local f = blocked("edgewear", P, -N, samples, radius)
+    return f
+  end
+  -- bevel(radius, [samples]) or bevel(s, radius, [samples]): the shading
+  -- normal rounded over radius at the current point, as Cycles' Bevel node.
+  local function bevel(s, radius, samples)
+    if not is_shade(s) then s, radius, samples = shade, s, radius end
+    if radius == nil then error("bevel: the radius is missing (bevel(radius, [samples]))", 2) end
+    radius = positive_arg(radius, nil, "bevel", "radius")
+    samples = samples_arg(samples, 8, "bevel")
+    ray_from(s.Pw, s.N, radius)
+    set_vec(ray_in.ng, s.Ng)
+    local budget = B.max_rays - clock.rays
+    local rays = B.bevel(ray_in, s.instance_id, samples, budget, bevel_out)
+    if rays == -1 then spend(budget + 1, "bevel") end
+    if rays < 0 then error("bevel: the renderer failed to trace the rays", 2) end
+    spend(rays, "bevel")
+    return vec3_t(bevel_out.x, bevel_out.y, bevel_out.z)
+  end
+  return trace, occlusion, edgewear, bevel
+end
+BUILTINS.trace, BUILTINS.occlusion, BUILTINS.edgewear, BUILTINS.bevel = tracing()
+
 -- What a script gets instead of a removed global or library function: an
 -- error saying it was removed on purpose, and why.
 local REMOVED = {
@@ -1788,5 +1924,6 @@ return {
   clock = address(clock),
   sizes = { shade = ffi.sizeof("luster_shade"), out = ffi.sizeof("luster_out"),
     material = ffi.sizeof("luster_material"), node = ffi.sizeof("luster_node"),
-    clock = ffi.sizeof("luster_clock"), cell = ffi.sizeof("luster_cell") },
+    clock = ffi.sizeof("luster_clock"), cell = ffi.sizeof("luster_cell"),
+    ray = ffi.sizeof("luster_ray"), hit = ffi.sizeof("luster_hit") },
 }

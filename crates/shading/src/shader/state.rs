@@ -115,6 +115,8 @@ impl ThreadState {
             ("node", std::mem::size_of::<ffi::NodeOut>()),
             ("clock", std::mem::size_of::<ffi::Clock>()),
             ("cell", std::mem::size_of::<ffi::CellOut>()),
+            ("ray", std::mem::size_of::<super::trace::RayIn>()),
+            ("hit", std::mem::size_of::<super::trace::HitOut>()),
         ] {
             if sizes.get::<usize>(k).map_err(internal)? != size {
                 let msg = format!("shader runtime: luster_{k} differs between prelude.lua and ffi.rs");

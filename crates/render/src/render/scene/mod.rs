@@ -30,6 +30,7 @@ use std::sync::Arc;
 
 mod build;
 mod shaded_lights;
+mod tracer;
 mod traverse;
 pub use build::BuildOptions;
 

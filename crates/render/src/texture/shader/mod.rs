@@ -11,10 +11,10 @@
 //! | `replace_km` | `reflect` | the mirror reflectance |
 //! | `bump_normal` | `height` | [`bump::height_bump`], scaled by `BumpFactor` |
 //! | `material` | every material output the script defines | [`apply_outputs`] |
+//! | `replace_normal` | `normal` | the world shading normal it returns, normalized (a zero vector keeps the normal) |
 //!
-//! `replace_normal` and `replace_background` take no shader: a tangent-space
-//! normal is what `height` already expresses better, and the background has
-//! no surface point to give a script.
+//! `replace_background` takes no shader: the background has no surface
+//! point to give a script.
 
 use std::time::Duration;
 
@@ -50,7 +50,8 @@ fn entry_for(decal: DecalMode) -> Option<&'static str> {
         DecalMode::ReplaceKm => Some("reflect"),
         DecalMode::BumpNormal => Some("height"),
         DecalMode::Material => Some("material"),
-        DecalMode::ReplaceNormal | DecalMode::ReplaceBackground => None,
+        DecalMode::ReplaceNormal => Some("normal"),
+        DecalMode::ReplaceBackground => None,
     }
 }
 
@@ -111,7 +112,7 @@ pub fn compile_with_modules(
                 map: m,
                 message: format!(
                     "a shader cannot drive DecalMode {} (shaders take replace_kd, blend_kd, replace_ks, \
-                     replace_all, replace_km, bump_normal or material)",
+                     replace_all, replace_km, bump_normal, replace_normal or material)",
                     decal_name(decal)
                 ),
             });
@@ -120,6 +121,7 @@ pub fn compile_with_modules(
             "color" => set.has_color(id),
             "reflect" => set.has_reflect(id),
             "material" => set.has_material(id),
+            "normal" => set.has_normal(id),
             _ => set.has_height(id),
         };
         if !has {
@@ -358,7 +360,15 @@ impl Textures {
                     )));
                 }
             }
-            DecalMode::ReplaceNormal | DecalMode::ReplaceBackground => {}
+            DecalMode::ReplaceNormal => {
+                let mut c = Vec3::ZERO;
+                rgb(set, id, Entry::Normal, &hit, &mut c)?;
+                // The renderer turns it to the side of the geometric normal.
+                if let Some(u) = c.try_normalize() {
+                    *n = u;
+                }
+            }
+            DecalMode::ReplaceBackground => {}
         }
         Ok(None)
     }
