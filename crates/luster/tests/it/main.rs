@@ -43,4 +43,5 @@ mod vdb;
 mod volpath;
 mod volumes;
 mod watch;
+mod watch_editor;
 mod whitted_glass;
