@@ -9,6 +9,12 @@
 # it, on <body>); then saves the shader with another colour and checks the
 # page's image changed at the object; then saves a syntax error and checks
 # the page shows it (with the script's file:line) over the kept image.
+# Then the shader editor: the page has opened look.lua in CodeMirror with the
+# error marked at its line; the test replaces the text through the editor
+# (the view's dispatch), clicks Save and sees the file written and new
+# pixels; saves a syntax error from the editor and sees CodeMirror's lint
+# mark on the line Lua names; fixes it, and moves the params{} slider and
+# sees the image darken.
 # Installs Debian's chromium when absent (needs root then). Exit code 0 only
 # when everything was seen; never skips. Environment:
 #   LUSTER  the binary (default target/release/luster, built if missing)
@@ -285,6 +291,86 @@ shown = tab.call("Runtime.evaluate", expression="getComputedStyle(document.getEl
                  returnByValue=True)["result"]["value"]
 if shown != "block":
     fail("the error overlay is not visible")
+
+# The shader editor.
+def js(expr):
+    r = tab.call("Runtime.evaluate", expression=expr, returnByValue=True)
+    if "exceptionDetails" in r:
+        fail(f"{expr}: {r['exceptionDetails']}")
+    return r["result"].get("value")
+
+
+def wait_page(what, expr):
+    end = time.time() + LIMIT
+    while time.time() < end:
+        v = js(expr)
+        if v:
+            return v
+        time.sleep(0.1)
+    fail(f"the page never showed {what}; page state {dataset(tab)}")
+
+
+LINT_LINE = """(() => {
+  const r = document.querySelector('.cm-lintRange-error');
+  if (!r) return 0;
+  return [...document.querySelectorAll('.cm-content .cm-line')].indexOf(r.closest('.cm-line')) + 1;
+})()"""
+
+
+def edit_and_save(text):
+    saves = int(js("document.body.dataset.saves"))
+    js("lusterEditor.dispatch({changes: {from: 0, to: lusterEditor.state.doc.length, insert: %s}})"
+       % json.dumps(text))
+    js("document.getElementById('save').click()")
+    wait_page("the save's answer", f"Number(document.body.dataset.saves) > {saves}")
+    with open(os.path.join(tmp, "look.lua")) as f:
+        if f.read() != text:
+            fail("the editor's save did not write the text to look.lua")
+
+
+wait_page("look.lua in the editor", "document.body.dataset.file === 'look.lua' && !!window.lusterEditor")
+line = wait_page("the error marked in the editor", LINT_LINE)
+if line != 4:
+    fail(f"the editor marks line {line}, not the error's line 4")
+print("watch_chromium: the editor marks look.lua line 4")
+
+tinted = ("params{ tint = rgb(0.1, 0.8, 0.1), gain = range(1, 0, 1) }\n"
+          "function color(s)\n  local t = math.floor(s.P.y * 8) % 2\n"
+          "  return t == 0 and param.tint * param.gain or vec3(0.9, 0.9, 0.9)\nend\n")
+edit_and_save(tinted)
+kept = int(d["frame"])
+s, d = settle(tab, "a new frame after the editor's save",
+              lambda s, d: s["frame"] > kept and not s["error"] and d["frame"] == str(s["frame"]))
+green = rgb(d)
+print(f"watch_chromium: after the editor's save: frame {d['frame']}, centre pixel {green}")
+if not (green[1] > green[0] + 60 and green[1] > green[2] + 60):
+    fail(f"the page's image did not change to the green stripe: {green}")
+if js(LINT_LINE) != 0:
+    fail("the error mark stayed after a good render")
+
+edit_and_save("params{ gain = range(1, 0, 1) }\nfunction color(s)\n  local x = = 1\nend\n")
+s, d = settle(tab, "the editor's syntax error", lambda s, d: "look.lua:3" in d["error"])
+line = wait_page("the syntax error marked in the editor", LINT_LINE)
+if line != 3:
+    fail(f"the editor marks line {line}, not the error's line 3")
+print("watch_chromium: a syntax error saved from the editor is marked at line 3")
+
+edit_and_save(tinted)
+kept = int(d["frame"])
+s, d = settle(tab, "the fixed render", lambda s, d: s["frame"] > kept and not s["error"]
+              and d["frame"] == str(s["frame"]) and s["spp"] == s["target_spp"])
+before = rgb(d)
+wait_page("the gain slider", "!!document.querySelector('input[type=range][data-param=gain]')")
+kept = int(d["frame"])
+js("(() => { const i = document.querySelector('input[type=range][data-param=gain]');"
+   " i.value = 0.25; i.dispatchEvent(new Event('input', {bubbles: true})); })()")
+s, d = settle(tab, "a new frame after the slider moved",
+              lambda s, d: s["frame"] > kept and d["frame"] == str(s["frame"]) and rgb(d)[1] < before[1] - 60)
+print(f"watch_chromium: slider gain 1 -> 0.25: centre pixel {before} -> {rgb(d)}")
+with open(os.path.join(tmp, "look.lua")) as f:
+    if f.read() != tinted:
+        fail("the slider wrote to the script")
+
 if shot:
     png = base64.b64decode(tab.call("Page.captureScreenshot", format="png")["data"])
     with open(shot, "wb") as f:

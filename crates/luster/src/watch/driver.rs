@@ -87,6 +87,8 @@ pub struct Driver {
     pub grids: GridCache,
     /// The tev viewer the passes go to as well.
     pub tev: std::sync::Mutex<Option<super::tev::Tev>>,
+    /// The page's shader editor: its files, parameters and overrides.
+    pub editor: Arc<super::editor::Editor>,
 }
 
 impl Driver {
@@ -112,10 +114,14 @@ impl Driver {
             if let Some(e) = &error {
                 eprintln!("error: {}", luster_core::text::shown(e, false));
             }
+            let at = error.as_deref().and_then(|e| self.editor.locate(e));
+            let editor = self.editor.seq();
             self.hub.update(|s| {
                 s.busy = false;
+                s.editor = editor;
                 if error.is_some() {
                     s.error = error;
+                    s.error_at = at;
                 }
             });
             match self.next_change() {
@@ -164,13 +170,17 @@ impl Driver {
         // so fixing any of it counts.
         let mut loose = known.clone();
         loose.insert(super::files::watched_name(&self.opts.scene));
-        let desc = match desc {
+        let mut desc = match desc {
             Ok(d) => d,
             Err(e) => {
                 self.files.set_files(&loose, true);
                 return Err(e);
             }
         };
+        self.editor.publish(&desc, &loose, self.opts.build.shader_timeout);
+        self.editor.apply(&mut desc);
+        let editor = self.editor.seq();
+        self.hub.update(|s| s.editor = editor);
         loose.extend(scene_files(&desc));
         // Watched before the build, which may take seconds: a save during it counts.
         self.files.set_files(&loose, true);
@@ -203,6 +213,7 @@ impl Driver {
             loose.extend(scene.textures.shader_modules());
             loose.extend(scene.volumes.shader_modules());
             self.files.set_files(&loose, true);
+            self.editor.modules(&loose);
             previewed?;
             if coarse.is_none() {
                 built = Some(scene);
@@ -227,6 +238,7 @@ impl Driver {
         known.extend(scene.textures.shader_modules());
         known.extend(scene.volumes.shader_modules());
         self.files.set_files(known, false);
+        self.editor.modules(known);
         refined
     }
 
@@ -304,7 +316,7 @@ impl Driver {
         opts: &RenderOptions,
         labels: &mut Labels,
     ) -> Result<(), Box<luster_shading::shader::ShaderError>> {
-        let hub = &self.hub;
+        let (hub, editor) = (&self.hub, &self.editor);
         let image_name = scene.cameras[self.opts.camera].image_name.clone();
         let mut on_pass = |film: &Film, spp: u32| {
             labels.pass += 1;
@@ -334,6 +346,8 @@ impl Driver {
                 };
                 s.frame = Some(f);
                 s.error = None;
+                s.error_at = None;
+                s.editor = editor.seq();
             });
         };
         let progress = Progress { cancel: &self.cancel, on_pass: &mut on_pass };

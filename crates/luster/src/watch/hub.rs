@@ -50,6 +50,12 @@ pub struct State {
     pub busy: bool,
     /// The scene file.
     pub scene: String,
+    /// The shader file and line the error points at, when it names one of
+    /// the files the editor lists (the name the editor lists it under).
+    pub error_at: Option<(String, u32)>,
+    /// The editor's [`seq`](super::editor::Editor::seq): the page asks for
+    /// `/shaders` again when it changes.
+    pub editor: u64,
 }
 
 impl State {
@@ -71,6 +77,8 @@ impl State {
             "preview": f.map(|f| f.preview),
             "display_width": f.map(|f| f.display_width),
             "ms": f.map(|f| f.ms),
+            "error_at": self.error_at.as_ref().map(|(file, line)| serde_json::json!({ "file": file, "line": line })),
+            "editor": self.editor,
         })
         .to_string()
     }

@@ -10,13 +10,16 @@
 //! flight is cancelled and the scene reloads ([`driver`]). A page on
 //! 127.0.0.1 ([`server`]) shows the frames as they come, the pass and spp,
 //! and the newest error (the sentence `luster render` prints, with the
-//! shader's `file:line`) over the last good image ([`hub`]).
+//! shader's `file:line`) over the last good image ([`hub`]). The page's
+//! editor opens and saves the scene's shader scripts and sets their
+//! `params{}` values for the session ([`editor`]).
 //!
 //! Reads the scene as `luster render` does, plus each camera's
 //! `ImageResolution`, `NumSamples`, `ImageName` and `Tonemap` for the frames.
 
 mod conns;
 pub mod driver;
+pub mod editor;
 pub mod files;
 pub mod hub;
 pub mod request;
@@ -77,6 +80,11 @@ impl Session {
         let hub = Hub::new(opts.scene.display().to_string());
         let cancel = Arc::new(AtomicBool::new(false));
         let (tx, changes) = std::sync::mpsc::channel::<Instant>();
+        let (stop, poke) = (Arc::clone(&cancel), tx.clone());
+        let editor = Arc::new(editor::Editor::new(move || {
+            stop.store(true, Ordering::SeqCst);
+            let _ = poke.send(Instant::now());
+        }));
         let stop = Arc::clone(&cancel);
         let files = files::FileWatch::new(move || {
             stop.store(true, Ordering::SeqCst);
@@ -98,6 +106,7 @@ impl Session {
             preview_cost: std::sync::atomic::AtomicU64::new(0),
             grids: Default::default(),
             tev: std::sync::Mutex::new(tev),
+            editor: Arc::clone(&editor),
         };
         let spawn = |name: &str, f: Box<dyn FnOnce() + Send>| {
             std::thread::Builder::new()
@@ -108,7 +117,7 @@ impl Session {
         };
         let render = spawn("watch-driver", Box::new(move || driver.run(&pool)))?;
         let (s, h) = (Arc::clone(&server), Arc::clone(&hub));
-        let serve = spawn("watch-server", Box::new(move || s.serve(h)))?;
+        let serve = spawn("watch-server", Box::new(move || s.serve(h, editor)))?;
         Ok(Session { hub, addr, server, cancel, threads: vec![render, serve] })
     }
 

@@ -8,9 +8,17 @@
 //! | `/events` | `text/event-stream`: a `state` event (the JSON of `/state`) at every change |
 //! | `/state` | the state: frame number, pass, spp, size, error, ... |
 //! | `/frame.png` | the newest frame (header `X-Luster-Frame`: its number); 404 before the first |
+//! | `/editor.js` | the editor component (CodeMirror 6, bundled by `tools/editor/build.sh`) |
+//! | `/shaders` | the shader files the page may edit and each script's `params{}` ([`Editor::to_json`]) |
+//! | `/shader/NAME` | GET: the text of listed file `NAME` (percent-encoded); POST: saves the body as it |
+//! | `/params` | POST `{"shader": ID, "name": P, "value": V}`: overrides a parameter for the session (`null`: not) |
+//! | `/params/reset` | POST: drops every override |
+//!
+//! Every other path answers 404, and a method a path does not take 405.
+//! A POST may change only the files and parameters [`Editor`] lists.
 //!
 //! A small HTTP/1.1 server on `std::net`, heads parsed by [`request`]
-//! (httparse): four fixed paths need caps and timeouts, not an async runtime.
+//! (httparse): a few fixed paths need caps and timeouts, not an async runtime.
 //! No client can stall or exhaust it:
 //!
 //! | what | limit | then |
@@ -25,6 +33,7 @@
 //! | `Host`, `Origin` | see [`request::admit`] | 421, 403 |
 
 use super::conns::Conns;
+use super::editor::{percent_decode, Editor, Refused};
 use super::hub::Hub;
 use super::request::{self, Method, Refusal, Request, MAX_BODY, MAX_HEAD};
 use std::io::{ErrorKind, Read, Write};
@@ -34,6 +43,10 @@ use std::time::{Duration, Instant};
 
 /// The page, plain HTML and JavaScript with nothing fetched from elsewhere.
 const PAGE: &str = include_str!("page.html");
+
+/// The editor component: CodeMirror 6 (MIT licence), minified by
+/// `tools/editor/build.sh` from the versions in its package-lock.json.
+const EDITOR_JS: &str = include_str!("editor.js");
 
 pub use super::conns::{MAX_CONNECTIONS, MAX_STREAMS};
 
@@ -83,7 +96,7 @@ impl Server {
 
     /// Accepts connections until the hub closes, each on a thread of its own
     /// up to [`MAX_CONNECTIONS`].
-    pub fn serve(&self, hub: Arc<Hub>) {
+    pub fn serve(&self, hub: Arc<Hub>, editor: Arc<Editor>) {
         for conn in self.listener.incoming() {
             if hub.is_closed() {
                 break;
@@ -103,8 +116,10 @@ impl Server {
                 continue;
             };
             let (conns, hub, port) = (Arc::clone(&self.conns), Arc::clone(&hub), self.addr.port());
+            let editor = Arc::clone(&editor);
             let spawned = std::thread::Builder::new().name("watch-http".into()).spawn(move || {
-                Connection { socket, id, conns: &conns, hub: &hub, port, buf: Vec::new() }.run();
+                let editor = &editor;
+                Connection { socket, id, conns: &conns, hub: &hub, editor, port, buf: Vec::new() }.run();
                 conns.leave(id);
             });
             if spawned.is_err() {
@@ -150,6 +165,20 @@ impl Answer {
     fn refusal(r: Refusal) -> Answer {
         Answer::text(r.status, r.why)
     }
+
+    fn refused(r: Refused) -> Answer {
+        Answer::new(r.status, "text/plain; charset=utf-8", Body::Owned(r.why.into_bytes()))
+    }
+
+    fn json(text: String) -> Answer {
+        Answer::new(200, "application/json", Body::Owned(text.into_bytes()))
+    }
+
+    fn not_allowed(allow: &'static str) -> Answer {
+        let mut a = Answer::text(405, "that method is not served at this path");
+        a.fields.push(("Allow", allow.into()));
+        a
+    }
 }
 
 fn reason(status: u16) -> &'static str {
@@ -160,6 +189,7 @@ fn reason(status: u16) -> &'static str {
         403 => "Forbidden",
         404 => "Not Found",
         405 => "Method Not Allowed",
+        409 => "Conflict",
         408 => "Request Timeout",
         413 => "Content Too Large",
         417 => "Expectation Failed",
@@ -233,6 +263,7 @@ struct Connection<'a> {
     id: u64,
     conns: &'a Conns,
     hub: &'a Hub,
+    editor: &'a Editor,
     port: u16,
     /// Bytes read and not yet used (a head being read, or what followed one).
     buf: Vec<u8>,
@@ -355,35 +386,83 @@ impl Connection<'_> {
     }
 
     /// Answers an admitted request; `false` when the connection is done.
-    fn answer(&mut self, req: &Request, _body: &[u8]) -> bool {
+    fn answer(&mut self, req: &Request, body: &[u8]) -> bool {
         let head_only = req.method == Method::Head;
-        if !matches!(req.method, Method::Get | Method::Head) {
-            let mut a = Answer::text(405, "only GET and HEAD are served");
-            a.fields.push(("Allow", "GET, HEAD".into()));
-            return write_answer(&mut self.socket, &a, false, req.keep_alive).is_ok();
-        }
-        let a = match req.path.as_str() {
-            "/events" => {
-                self.stream(head_only);
-                return false;
+        let get = matches!(req.method, Method::Get | Method::Head);
+        let post = req.method == Method::Post;
+        let path = req.path.as_str();
+        let a = if let Some(name) = path.strip_prefix("/shader/") {
+            match percent_decode(name) {
+                None => Answer::text(400, "the file name is not percent-encoded UTF-8"),
+                Some(name) if get => match self.editor.read(&name) {
+                    Ok(text) => Answer::new(200, "text/plain; charset=utf-8", Body::Owned(text.into_bytes())),
+                    Err(r) => Answer::refused(r),
+                },
+                Some(name) if post => match self.editor.save(&name, body) {
+                    Ok(()) => Answer::text(200, "saved"),
+                    Err(r) => Answer::refused(r),
+                },
+                Some(_) => Answer::not_allowed("GET, HEAD, POST"),
             }
-            "/" | "/index.html" => {
-                Answer::new(200, "text/html; charset=utf-8", Body::Static(PAGE.as_bytes()))
-            }
-            "/state" => {
-                Answer::new(200, "application/json", Body::Owned(self.hub.snapshot().to_json().into_bytes()))
-            }
-            "/frame.png" => match self.hub.snapshot().frame {
-                Some(f) => {
-                    let mut a = Answer::new(200, "image/png", Body::Shared(f.png));
-                    a.fields.push(("X-Luster-Frame", f.number.to_string()));
-                    a
+        } else if matches!(path, "/params" | "/params/reset") {
+            if !post {
+                Answer::not_allowed("POST")
+            } else if path == "/params/reset" {
+                self.editor.reset();
+                Answer::json(self.editor.to_json())
+            } else {
+                match self.set_param(body) {
+                    Ok(()) => Answer::json(self.editor.to_json()),
+                    Err(r) => Answer::refused(r),
                 }
-                None => Answer::text(404, "no frame yet"),
-            },
-            _ => Answer::text(404, "not found"),
+            }
+        } else if !get {
+            let known = matches!(
+                path,
+                "/" | "/index.html" | "/state" | "/frame.png" | "/events" | "/editor.js" | "/shaders"
+            );
+            if known {
+                Answer::not_allowed("GET, HEAD")
+            } else {
+                Answer::text(404, "not found")
+            }
+        } else {
+            match path {
+                "/events" => {
+                    self.stream(head_only);
+                    return false;
+                }
+                "/" | "/index.html" => {
+                    Answer::new(200, "text/html; charset=utf-8", Body::Static(PAGE.as_bytes()))
+                }
+                "/editor.js" => {
+                    Answer::new(200, "text/javascript; charset=utf-8", Body::Static(EDITOR_JS.as_bytes()))
+                }
+                "/shaders" => Answer::json(self.editor.to_json()),
+                "/state" => Answer::json(self.hub.snapshot().to_json()),
+                "/frame.png" => match self.hub.snapshot().frame {
+                    Some(f) => {
+                        let mut a = Answer::new(200, "image/png", Body::Shared(f.png));
+                        a.fields.push(("X-Luster-Frame", f.number.to_string()));
+                        a
+                    }
+                    None => Answer::text(404, "no frame yet"),
+                },
+                _ => Answer::text(404, "not found"),
+            }
         };
         write_answer(&mut self.socket, &a, head_only, req.keep_alive).is_ok()
+    }
+
+    /// `POST /params`: `{"shader": ID, "name": P, "value": V}`.
+    fn set_param(&self, body: &[u8]) -> Result<(), Refused> {
+        let bad = |why: &str| Refused { status: 400, why: why.to_string() };
+        let v: serde_json::Value = serde_json::from_slice(body).map_err(|_| bad("the body is not JSON"))?;
+        let (Some(id), Some(name), Some(value)) = (v["shader"].as_str(), v["name"].as_str(), v.get("value"))
+        else {
+            return Err(bad("expected {\"shader\": id, \"name\": parameter, \"value\": value}"));
+        };
+        self.editor.set(id, name, value)
     }
 
     /// Streams the state as Server-Sent Events until the client leaves or

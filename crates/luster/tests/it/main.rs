@@ -44,6 +44,7 @@ mod vdb;
 mod volpath;
 mod volumes;
 mod watch;
+mod watch_editor;
 mod whitted_glass;
 
 mod patterns;

@@ -16,9 +16,9 @@ use std::sync::mpsc::{channel, Receiver};
 use std::time::{Duration, Instant};
 
 /// Longest wait for any one state: generous for a loaded 2-core CI machine.
-const WAIT: Duration = Duration::from_secs(30);
+pub(crate) const WAIT: Duration = Duration::from_secs(30);
 
-fn scene(shader: &str) -> String {
+pub(crate) fn scene(shader: &str) -> String {
     format!(
         r#"<Scene>
     <BackgroundColor>0 0 0</BackgroundColor>
@@ -52,13 +52,13 @@ fn scene(shader: &str) -> String {
 
 /// Saves as editors do, writing a new file and renaming it over the old one:
 /// the watch never reads a half-written file.
-fn save(path: &std::path::Path, text: &str) {
+pub(crate) fn save(path: &std::path::Path, text: &str) {
     let tmp = path.with_extension("tmp");
     std::fs::write(&tmp, text).expect("a test file");
     std::fs::rename(&tmp, path).expect("a renamed test file");
 }
 
-fn shader(r: f32, g: f32, b: f32) -> String {
+pub(crate) fn shader(r: f32, g: f32, b: f32) -> String {
     format!("function color(s)\n  return vec3({r}, {g}, {b})\nend\n")
 }
 
@@ -102,7 +102,7 @@ pub(crate) fn start_with(dir: &std::path::Path, scene: &str, more: &[&str]) -> W
 }
 
 /// GET `path`: (status, headers, body).
-fn get(addr: &str, path: &str) -> (u16, String, Vec<u8>) {
+pub(crate) fn get(addr: &str, path: &str) -> (u16, String, Vec<u8>) {
     get_within(addr, path, WAIT).unwrap_or_else(|e| panic!("GET {path}: {e}"))
 }
 
@@ -119,7 +119,7 @@ fn get_within(addr: &str, path: &str, limit: Duration) -> Result<(u16, String, V
 /// Sends `request` on a new connection and reads until the server closes
 /// it; an error when that takes longer than `limit`. A reset after the
 /// server closed counts as closed.
-fn exchange(addr: &str, request: &[u8], limit: Duration) -> Result<Vec<u8>, String> {
+pub(crate) fn exchange(addr: &str, request: &[u8], limit: Duration) -> Result<Vec<u8>, String> {
     let mut s = TcpStream::connect(addr).map_err(|e| format!("cannot connect: {e}"))?;
     s.set_read_timeout(Some(limit)).unwrap();
     let end = Instant::now() + limit;
@@ -143,7 +143,7 @@ fn exchange(addr: &str, request: &[u8], limit: Duration) -> Result<Vec<u8>, Stri
 }
 
 /// The status code an answer starts with (`None`: the server closed without one).
-fn status(answer: &[u8]) -> Option<u16> {
+pub(crate) fn status(answer: &[u8]) -> Option<u16> {
     let line = answer.split(|&b| b == b'\r').next()?;
     std::str::from_utf8(line).ok()?.strip_prefix("HTTP/1.1 ")?.get(..3)?.parse().ok()
 }
@@ -567,8 +567,8 @@ fn a_foreign_host_or_origin_is_refused() {
         assert_eq!(code, Some(200), "Host {host}");
     }
     // A state-changing request from another site's page (CSRF) is refused by
-    // its Origin; one from the page itself reaches the router, where no path
-    // takes a POST yet.
+    // its Origin; one from the page itself reaches the router, where /state
+    // takes no POST.
     let post = |origin: &str| {
         ask(format!(
             "POST /state HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nOrigin: {origin}\r\nContent-Length: 2\r\n\

@@ -5,6 +5,7 @@
 use mlua::{Function, Table, Value};
 
 use super::call::Slot;
+use super::declared::{self, DeclaredParam};
 use super::error::{ShaderError, ShaderErrorKind};
 use super::ffi::Shade;
 use super::instrument::{instrument, ScanError};
@@ -26,6 +27,8 @@ pub(super) struct Compiled {
     /// Whether the script defines `material(s)`: then `material` calls it
     /// alone.
     pub(super) closure: bool,
+    /// What its `params{...}` declares (empty without one).
+    pub(super) declared: Vec<DeclaredParam>,
 }
 
 /// Wrappers kept per shader: one per entry point, `height3` and `material`.
@@ -39,6 +42,7 @@ struct Wrappers {
     height3: Option<Function>,
     material: Option<Function>,
     closure: bool,
+    declared: Vec<DeclaredParam>,
 }
 
 /// The prelude's functions that build a script's sandbox and its wrappers.
@@ -111,10 +115,12 @@ impl ThreadState {
         self.io.begin(|s| *s = Shade { pixel_x: -1, pixel_y: -1, ..Shade::default() });
         chunk.call::<()>(tick.clone()).map_err(lua_err)?;
         self.check_deadline(name)?;
-        if !declared.call::<bool>(()).map_err(lua_err)? {
+        let (has_params, declaration): (bool, Table) = declared.call(()).map_err(lua_err)?;
+        if !has_params {
             params::check_undeclared(src)
                 .map_err(|m| ShaderError::new(ShaderErrorKind::Parameter, name, format!("{file}: {m}")))?;
         }
+        let declared = declared::from_lua(&declaration).unwrap_or_default();
 
         let mut entries: [Option<Function>; ENTRIES] = Default::default();
         for entry in Entry::ALL {
@@ -137,7 +143,7 @@ impl ThreadState {
         }
         let height3 = make_height3.call((env.clone(), name)).map_err(lua_err)?;
         let material = make_material.call((env, name)).map_err(lua_err)?;
-        Ok(Wrappers { name: name.to_string(), file, entries, height3, material, closure })
+        Ok(Wrappers { name: name.to_string(), file, entries, height3, material, closure, declared })
     }
 
     /// Puts a shader's wrappers on the caller's stack.
@@ -153,6 +159,14 @@ impl ThreadState {
         }
         let height3 = keep(&w.height3).map_err(internal)?;
         let material = keep(&w.material).map_err(internal)?;
-        Ok(Compiled { name: w.name, file: w.file, entries, height3, material, closure: w.closure })
+        Ok(Compiled {
+            name: w.name,
+            file: w.file,
+            entries,
+            height3,
+            material,
+            closure: w.closure,
+            declared: w.declared,
+        })
     }
 }

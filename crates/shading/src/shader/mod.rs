@@ -59,6 +59,7 @@ mod builtin_modules;
 mod call;
 pub mod closure;
 mod compile;
+mod declared;
 mod entry;
 mod error;
 mod ffi;
@@ -95,6 +96,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
+pub use declared::{DeclaredParam, ParamKind};
 pub use entry::MaterialOutputs;
 pub use entry::{Entry, ENTRIES};
 pub use error::{ShaderError, ShaderErrorKind};
@@ -226,6 +228,8 @@ pub(crate) struct Shared {
 pub struct ShaderSet {
     shared: Arc<Shared>,
     entries: Vec<[bool; ENTRIES]>,
+    /// What each script's `params{...}` declares.
+    declared: Vec<Vec<DeclaredParam>>,
 }
 
 impl ShaderSet {
@@ -264,8 +268,9 @@ impl ShaderSet {
         });
         let state = state::ThreadState::new(&shared)?;
         let entries = (0..shared.sources.len()).map(|id| state.entries(id)).collect();
+        let declared = state.shaders.iter().map(|c| c.declared.clone()).collect();
         threads::adopt(&shared, state);
-        Ok(ShaderSet { shared, entries })
+        Ok(ShaderSet { shared, entries, declared })
     }
 
     /// How many shaders the set holds.
@@ -284,6 +289,13 @@ impl ShaderSet {
     /// watches these with the scripts.
     pub fn required_files(&self) -> Vec<PathBuf> {
         self.shared.modules.required()
+    }
+
+    /// The parameters shader `id` declares with `params{...}`, in name
+    /// order (empty for a script without `params{}`), with their defaults
+    /// and the ranges `range(default, min, max)` gives.
+    pub fn declared(&self, id: usize) -> &[DeclaredParam] {
+        self.declared.get(id).map_or(&[], Vec::as_slice)
     }
 
     /// The name of shader `id`.

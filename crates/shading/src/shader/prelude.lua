@@ -1197,6 +1197,36 @@ local function convert(kind, v)
   return nil, format("is %s, but the script declares %s", got[given] or given, want[kind])
 end
 
+---------------------------------------------------------------------------
+-- range(default, min, max) inside params{}: a number parameter whose
+-- slider in the watch page's editor spans min..max; the script sees a plain
+-- number. declaration_of() lists what params{} declared for Rust
+-- (ShaderSet::declared): name, kind, default and range of each.
+---------------------------------------------------------------------------
+local function range_param(default, lo, hi)
+  for i, v in ipairs({ default, lo, hi }) do
+    if type(v) ~= "number" or v ~= v or v == math.huge or v == -math.huge then
+      error(format("range(default, min, max): argument %d must be a finite number, got %s", i,
+        type(v) == "number" and tostring(v) or typename(v)), 2)
+    end
+  end
+  if not (lo < hi) or default < lo or default > hi then
+    error(format("range(%g, %g, %g): expected min < max and the default between them", default, lo, hi), 2)
+  end
+  return { [KIND_MARK] = "number", value = default, min = lo, max = hi }
+end
+local function declaration_of(names, decl, kinds)
+  local out = {}
+  for i, name in ipairs(names) do
+    local kind, v = kinds[name][1], kinds[name][2]
+    if kind == "rgb" or kind == "vec3" then v = { v.x, v.y, v.z } end
+    local d = decl[name]
+    local ranged = type(d) == "table" and d.min ~= nil
+    out[i] = { name = name, kind = kind, value = v, min = ranged and d.min or nil, max = ranged and d.max or nil }
+  end
+  return out
+end
+
 local require_module
 local function make_env(shader_name, params)
   local env = {}
@@ -1227,7 +1257,8 @@ local function make_env(shader_name, params)
   env.param = param
   env.rgb = rgb
   env.image = image_param
-  local declared = false
+  env.range = range_param
+  local declared, declaration = false, {}
   env.params = function(decl)
     if declared then error("params{...} may be called only once", 2) end
     if type(decl) ~= "table" then error("params{...} takes a table of name = default", 2) end
@@ -1243,6 +1274,7 @@ local function make_env(shader_name, params)
       kinds[name] = { kind, value }
     end
     table.sort(names)
+    declaration = declaration_of(names, decl, kinds)
     local listed = {}
     for i, name in ipairs(names) do
       local k = kinds[name]
@@ -1278,7 +1310,7 @@ local function make_env(shader_name, params)
   end
   env._G = env
   setmetatable(env, removed("", REMOVED))
-  return env, function() return declared end
+  return env, function() return declared, declaration end
 end
 
 ---------------------------------------------------------------------------
