@@ -110,6 +110,8 @@ pub fn ground(
         motion: Vec3::ZERO,
         textures: Vec::new(),
         loc: loc.clone(),
+        attributes: Vec::new(),
+        geometry_attributes: Vec::new(),
     })
 }
 

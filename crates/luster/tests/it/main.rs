@@ -4,6 +4,7 @@
 
 mod adaptive;
 mod aov;
+mod attributes;
 mod bad_input;
 mod camera_gaze;
 mod closures;

@@ -41,7 +41,7 @@ use luster_core::math::{Aabb, Vec3};
 use luster_scene::description::{Description, RendererDesc, VolumeDesc, VolumeKind};
 use luster_scene::SceneError;
 use luster_shading::shader::{
-    ShadeInput, ShaderError, ShaderErrorKind, ShaderImages, ShaderSet, ShaderSource,
+    ShadeInput, ShaderError, ShaderErrorKind, ShaderImages, ShaderOptions, ShaderSet, ShaderSource,
 };
 use std::sync::Arc;
 use std::time::Duration;
@@ -494,7 +494,13 @@ fn compile_scripts(
     Ok(if sources.is_empty() {
         None
     } else {
-        Some(ShaderSet::with_modules(sources, timeout, images, desc.module_search_path()).map_err(|e| {
+        let options = ShaderOptions {
+            timeout,
+            images,
+            module_dirs: desc.module_search_path(),
+            attributes: Arc::new(crate::texture::shader::attributes::for_volumes(desc)?),
+        };
+        Some(ShaderSet::build(sources, options).map_err(|e| {
             // The error names the failing script's index; its volume gives the location.
             let at = e.source.and_then(|i| owners.get(i)).map_or(owners[0].0, |o| o.0);
             err(&desc.volumes[at], e.to_string())

@@ -53,6 +53,7 @@ pub(super) fn surface(code: &str, radius: f32, grid: Option<u32>) -> VolumeDesc 
         grid,
         kind: VolumeKind::Surface { material: 0, threshold: 0.5, textures: Vec::new() },
         loc: Loc::default(),
+        attributes: Vec::new(),
     }
 }
 

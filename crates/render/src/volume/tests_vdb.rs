@@ -195,6 +195,7 @@ fn a_medium_takes_the_density_emission_bound_and_step_from_the_file() {
             octaves: 1,
         },
         loc: Loc::default(),
+        attributes: Vec::new(),
     };
     let file = |density: &str, emission: Option<&str>| VdbDesc {
         path: fixture(),

@@ -19,13 +19,14 @@
 //! `<MaterialShader name="...">` child replaces the glTF material of that
 //! name by a Lua material shader (relative to the scene file).
 //! `MotionBlur` and `Textures` apply to every object (the Mesh's `Textures`
-//! after the glTF's maps). The glTF's cameras and lights are not used (the
+//! after the glTF's maps), and so do `Attribute`s (above the file's mesh
+//! `extras`, below its node `extras`: see [`super::attributes`]). The glTF's cameras and lights are not used (the
 //! scene has its own); a warning says so. A `MeshInstance` may instance a
 //! glTF mesh that makes one object; one that makes several is refused.
 
 use super::objects::{material, textures, transform, Context};
 use super::Warnings;
-use crate::description::ObjectDesc;
+use crate::description::{ObjectDesc, Shape};
 use crate::element::Element;
 use crate::error::{Loc, SceneError};
 use crate::gltf::material::{read_materials, MaterialOverride};
@@ -47,8 +48,18 @@ pub fn read(
     let r = &ctx.r;
     w.unknown_children(
         el,
-        &["Material", "Transformations", "Faces", "MotionBlur", "Textures", "Interior", "MaterialShader"],
+        &[
+            "Material",
+            "Transformations",
+            "Faces",
+            "MotionBlur",
+            "Textures",
+            "Interior",
+            "MaterialShader",
+            super::attributes::CHILD,
+        ],
     );
+    let attributes = super::attributes::read(r, el)?;
     let (faces, rel) = super::obj_file::file_faces(ctx, el, w, "a gltfFile")?;
     let path = ctx.base_dir.join(rel);
     let model = crate::gltf::read(&path).map_err(|e| r.err(faces, e.to_string()))?;
@@ -118,6 +129,9 @@ pub fn read(
         o.id = id.clone();
         o.motion = motion;
         o.loc = Loc { line: el.loc.line, path: format!("{} ({rel}: {})", el.loc.path, o.loc.path) };
+        if !matches!(o.shape, Shape::Instance { .. }) {
+            o.geometry_attributes = super::attributes::merged(&attributes, &o.geometry_attributes);
+        }
         out.push(o);
     }
     Ok(())

@@ -22,6 +22,7 @@
 //! Anything else gets a warning naming it, so a scene that relies on a feature
 //! luster lacks says so instead of rendering silently wrong.
 
+pub mod attributes;
 pub mod brdf;
 pub mod camera;
 pub mod gltf_file;

@@ -61,7 +61,19 @@ pub fn read(
     out: &mut Vec<ObjectDesc>,
 ) -> Result<(), SceneError> {
     let r = &ctx.r;
-    w.unknown_children(el, &["Material", "Transformations", "Faces", "MotionBlur", "Textures", "Interior"]);
+    w.unknown_children(
+        el,
+        &[
+            "Material",
+            "Transformations",
+            "Faces",
+            "MotionBlur",
+            "Textures",
+            "Interior",
+            super::attributes::CHILD,
+        ],
+    );
+    let attributes = super::attributes::read(r, el)?;
     let (faces, rel) = file_faces(ctx, el, w, "an objFile")?;
     let model = obj::load(&ctx.base_dir.join(rel)).map_err(|e| r.err(faces, e.to_string()))?;
     for warning in &model.warnings {
@@ -86,6 +98,8 @@ pub fn read(
             motion: r.vec3_or(el, "MotionBlur", Vec3::ZERO)?,
             textures,
             loc,
+            attributes: Vec::new(),
+            geometry_attributes: attributes.clone(),
         })
     };
     if let Some(m) = el.child("Material") {

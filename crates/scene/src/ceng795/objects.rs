@@ -11,6 +11,9 @@
 //! | `LightMesh` | as `Mesh`, plus `Radiance` (RGB, not negative): an emitter (hw7) |
 //! | `LightSphere` | as `Sphere`, plus `Radiance`: an emitter (hw7) |
 //!
+//! Every object may carry user data for shaders in `Attribute` children
+//! (see [`super::attributes`]).
+//!
 //! Every object may list texture maps in `Textures` (hw4). Texture
 //! coordinates come from `TexCoordData`, numbered like `VertexData`: vertex
 //! `i` has coordinate `i`. A `Faces` element may shift both numberings
@@ -31,12 +34,13 @@
 //! `resetTransform="true"` (hw2 spec, eq. 3). Degenerate inline triangles (two
 //! equal indices) are dropped with a warning, as the course's specs advise.
 
+use super::attributes::{self, merged};
 use super::gltf_file;
 use super::obj_file::{self, Pending};
 use super::textures::object_textures;
 use super::transforms::compose;
 use super::Warnings;
-use crate::description::{EmitterDesc, InteriorDesc, MeshSource, ObjectDesc, Shape};
+use crate::description::{AttributeList, EmitterDesc, InteriorDesc, MeshSource, ObjectDesc, Shape};
 use crate::element::{Element, Reader};
 use crate::error::SceneError;
 use luster_core::math::{Quat, Transform, Vec2, Vec3};
@@ -128,7 +132,10 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Objec
         let shape = match el.name.as_str() {
             "Mesh" | "LightMesh" => mesh(ctx, el, w)?,
             "Triangle" => {
-                w.unknown_children(el, &["Material", "Transformations", "Indices", "MotionBlur", "Textures"]);
+                w.unknown_children(
+                    el,
+                    &["Material", "Transformations", "Indices", "MotionBlur", "Textures", attributes::CHILD],
+                );
                 let ix = r.uints(r.required(el, "Indices")?)?;
                 if ix.len() != 3 {
                     return Err(r.err(el, format!("<Indices> needs 3 vertex indices, found {}", ix.len())));
@@ -145,8 +152,16 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Objec
                 }
             }
             "Sphere" | "LightSphere" => {
-                let known =
-                    ["Material", "Transformations", "Center", "Radius", "MotionBlur", "Textures", "Interior"];
+                let known = [
+                    "Material",
+                    "Transformations",
+                    "Center",
+                    "Radius",
+                    "MotionBlur",
+                    "Textures",
+                    "Interior",
+                    attributes::CHILD,
+                ];
                 w.unknown_children(el, &emitter_children(el, &known));
                 let c = r.required(el, "Center")?;
                 let center = vertex(ctx, c, r.uint(c)?)?;
@@ -159,7 +174,10 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Objec
             }
             "Ellipsoid" => ellipsoid(ctx, el, w)?,
             "Plane" => {
-                w.unknown_children(el, &["Material", "Transformations", "Point", "Normal", "Textures"]);
+                w.unknown_children(
+                    el,
+                    &["Material", "Transformations", "Point", "Normal", "Textures", attributes::CHILD],
+                );
                 let p = r.required(el, "Point")?;
                 let point = vertex(ctx, p, r.uint(p)?)?;
                 let ne = r.required(el, "Normal")?;
@@ -172,7 +190,7 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Objec
             "MeshInstance" => {
                 w.unknown_children(
                     el,
-                    &["Material", "Transformations", "MotionBlur", "Textures", "Interior"],
+                    &["Material", "Transformations", "MotionBlur", "Textures", "Interior", attributes::CHILD],
                 );
                 let base_id = el
                     .attr("baseMeshId")
@@ -198,6 +216,8 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Objec
                     motion: ctx.r.vec3_or(el, "MotionBlur", Vec3::ZERO)?,
                     textures: Vec::new(),
                     loc: el.loc.clone(),
+                    attributes: attributes::read(r, el)?,
+                    geometry_attributes: Vec::new(),
                 });
                 interior(&out, &mut interiors)?;
                 continue;
@@ -219,6 +239,8 @@ pub fn read_all(ctx: &Context, objs: &Element, w: &mut Warnings) -> Result<Objec
             motion: if el.name == "Plane" { Vec3::ZERO } else { r.vec3_or(el, "MotionBlur", Vec3::ZERO)? },
             textures: textures(ctx, el)?.unwrap_or_default(),
             loc: el.loc.clone(),
+            attributes: Vec::new(),
+            geometry_attributes: attributes::read(r, el)?,
         });
         interior(&out, &mut interiors)?;
     }
@@ -255,7 +277,8 @@ fn register(ids: &mut HashMap<String, usize>, id: &str, index: usize, el: &Eleme
 
 fn mesh(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, SceneError> {
     let r = &ctx.r;
-    let known = ["Material", "Transformations", "Faces", "MotionBlur", "Textures", "Interior"];
+    let known =
+        ["Material", "Transformations", "Faces", "MotionBlur", "Textures", "Interior", attributes::CHILD];
     w.unknown_children(el, &emitter_children(el, &known));
     let smooth = match el.attr("shadingMode").map(str::trim) {
         None | Some("") | Some("flat") => false,
@@ -334,7 +357,17 @@ fn ellipsoid(ctx: &Context, el: &Element, w: &mut Warnings) -> Result<Shape, Sce
     let r = &ctx.r;
     w.unknown_children(
         el,
-        &["Material", "Transformations", "Center", "Radii", "Rotation", "MotionBlur", "Textures", "Interior"],
+        &[
+            "Material",
+            "Transformations",
+            "Center",
+            "Radii",
+            "Rotation",
+            "MotionBlur",
+            "Textures",
+            "Interior",
+            attributes::CHILD,
+        ],
     );
     let c = r.required(el, "Center")?;
     let center = vertex(ctx, c, r.uint(c)?)?;
@@ -415,12 +448,12 @@ fn resolve_instances(
 ) -> Result<(), SceneError> {
     let r = &ctx.r;
     let by_index: HashMap<usize, &PendingInstance> = pending.iter().map(|p| (p.index, p)).collect();
-    type Resolved = (usize, Transform, usize, Vec<usize>);
+    type Resolved = (usize, Transform, usize, Vec<usize>, AttributeList);
     let mut done: HashMap<usize, Resolved> = HashMap::new();
     for p in pending {
         // Walk down the chain, then compose on the way back up.
         let mut chain = vec![p.index];
-        let (mesh, mut t, mut mat, mut tex) = loop {
+        let (mesh, mut t, mut mat, mut tex, mut attrs) = loop {
             let cur = *chain.last().unwrap_or(&p.index);
             let inst = by_index[&cur];
             let base = *mesh_ids.get(&inst.base_id).ok_or_else(|| {
@@ -429,8 +462,8 @@ fn resolve_instances(
                     format!("baseMeshId \"{}\" names no Mesh or MeshInstance", inst.base_id),
                 )
             })?;
-            if let Some((m, t, mat, tex)) = done.get(&base) {
-                break (*m, *t, *mat, tex.clone());
+            if let Some((m, t, mat, tex, attrs)) = done.get(&base) {
+                break (*m, *t, *mat, tex.clone(), attrs.clone());
             }
             if !by_index.contains_key(&base) {
                 if ctx.obj.borrow().multi.contains(&base) {
@@ -444,7 +477,15 @@ fn resolve_instances(
                         ),
                     ));
                 }
-                break (base, out[base].transform, out[base].material, out[base].textures.clone());
+                // A mesh's attributes are its geometry's, which shaders
+                // reach through the instance's object id.
+                break (
+                    base,
+                    out[base].transform,
+                    out[base].material,
+                    out[base].textures.clone(),
+                    Vec::new(),
+                );
             }
             if chain.contains(&base) {
                 return Err(r.err(
@@ -461,14 +502,16 @@ fn resolve_instances(
             if let Some(own) = &inst.textures {
                 tex = own.clone();
             }
-            done.insert(i, (mesh, t, mat, tex.clone()));
+            attrs = merged(&out[i].attributes, &attrs);
+            done.insert(i, (mesh, t, mat, tex.clone(), attrs.clone()));
         }
     }
-    for (i, (mesh, t, mat, tex)) in done {
+    for (i, (mesh, t, mat, tex, attrs)) in done {
         out[i].shape = Shape::Instance { mesh };
         out[i].transform = t;
         out[i].material = mat;
         out[i].textures = tex;
+        out[i].attributes = attrs;
     }
     Ok(())
 }

@@ -101,19 +101,26 @@ pub fn param_value(name: &str, text: &str) -> Result<ParamValue, String> {
             "parameter name \"{name}\" is not a Lua name (letters, digits and _, not starting with a digit)"
         ));
     }
+    value_of("parameter", &format!("\"{name}\""), text)
+}
+
+/// A value as [`param_value`] reads it, for a `what` (`parameter`,
+/// `attribute`) named `shown` in messages.
+pub fn value_of(what: &str, shown: &str, text: &str) -> Result<ParamValue, String> {
     let text = text.trim();
     let numbers: Option<Vec<f64>> = text.split_ascii_whitespace().map(|t| t.parse::<f64>().ok()).collect();
     match numbers {
         Some(v) if !v.is_empty() => {
             if let Some(bad) = v.iter().find(|x| !x.is_finite()) {
-                return Err(format!("parameter \"{name}\" is not finite ({bad})"));
+                return Err(format!("{what} {shown} is not finite ({bad})"));
             }
             match v[..] {
                 [x] => Ok(ParamValue::Number(x)),
                 [x, y, z] => Ok(ParamValue::Vec3([x, y, z])),
                 _ => Err(format!(
-                    "parameter \"{name}\" has {} numbers; a parameter is one number, three (a vec3) or text",
-                    v.len()
+                    "{what} {shown} has {} numbers; a{} {what} is one number, three (a vec3) or text",
+                    v.len(),
+                    if what.starts_with(['a', 'e', 'i', 'o', 'u']) { "n" } else { "" }
                 )),
             }
         }

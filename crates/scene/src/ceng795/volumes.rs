@@ -41,6 +41,7 @@
 //! | `Anisotropy` (media) | Henyey–Greenstein g, −0.99 to 0.99 | 0 |
 //! | `ScatteringOctaves` (media) | terms of the multiple-scattering approximation, 1 to 8 (1: single scattering) | 1 |
 //! | `Material`, `Threshold`, `Textures` (hypertextures) | the surface's material, the density of the surface, its texture maps | required, 0.5, none |
+//! | `Attribute name` | what the volume's scripts read with `getattribute` (see [`super::attributes`]) | none |
 
 use super::objects::radii_and_rotation;
 use super::shader_map;
@@ -74,7 +75,7 @@ pub struct Context<'a> {
     pub base_dir: &'a Path,
 }
 
-const COMMON: [&str; 9] = [
+const COMMON: [&str; 10] = [
     "Sphere",
     "Box",
     "Ellipsoid",
@@ -84,6 +85,7 @@ const COMMON: [&str; 9] = [
     "Density",
     "StepSize",
     "GridResolution",
+    super::attributes::CHILD,
 ];
 
 /// Reads every `Volume` and `Hypertexture` of a `Volumes` element.
@@ -227,6 +229,7 @@ fn volume(ctx: &Context, v: &Element, kind: VolumeKind) -> Result<VolumeDesc, Sc
         grid,
         kind,
         loc: v.loc.clone(),
+        attributes: super::attributes::read(r, v)?,
     })
 }
 

@@ -3,6 +3,7 @@
 
 use crate::error::Loc;
 use luster_core::math::{Quat, Transform, Vec2, Vec3};
+use luster_shading::shader::ParamValue;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -106,4 +107,16 @@ pub struct ObjectDesc {
     pub textures: Vec<usize>,
     /// Where.
     pub loc: Loc,
+    /// The object's own attributes (an instance's, a glTF node's), which
+    /// shaders read with `getattribute` before [`ObjectDesc::geometry_attributes`].
+    pub attributes: AttributeList,
+    /// The attributes of the geometry, which every object drawing it shares
+    /// (a CENG795 `Mesh`'s or `Sphere`'s, a glTF mesh's); read when the
+    /// object's own have no such name. Only geometry objects (not
+    /// [`Shape::Instance`]) have them.
+    pub geometry_attributes: AttributeList,
 }
+
+/// User data for shaders (`<Attribute>`, glTF `extras`): names and values,
+/// each name once, in the order given.
+pub type AttributeList = Vec<(String, ParamValue)>;

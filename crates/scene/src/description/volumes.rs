@@ -112,4 +112,6 @@ pub struct VolumeDesc {
     pub kind: VolumeKind,
     /// Where.
     pub loc: Loc,
+    /// What its scripts read with `getattribute` (`<Attribute>`).
+    pub attributes: super::AttributeList,
 }

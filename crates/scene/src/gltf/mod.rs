@@ -8,7 +8,8 @@
 //! ([`document`]), the drawn nodes ([`nodes`]) and their meshes ([`mesh`],
 //! through [`accessor`]); [`Model::objects`] makes the description's objects, one
 //! per primitive of each drawn node, a mesh drawn by several nodes being
-//! one geometry and instances of it. Materials are [`material`]'s.
+//! one geometry and instances of it. Materials are [`material`]'s; nodes'
+//! and meshes' `extras` are the objects' attributes ([`extras`]).
 //!
 //! The file is read whole when the scene loads; every fault is one error
 //! naming the file and the JSON path (`accessors[3]`, `nodes[2].matrix`).
@@ -18,6 +19,7 @@
 pub mod accessor;
 pub mod camera;
 pub mod document;
+pub mod extras;
 pub mod lights;
 pub mod material;
 pub mod mesh;
@@ -27,7 +29,7 @@ pub mod scene;
 pub use document::GltfFile;
 pub use scene::scene;
 
-use crate::description::{MeshSource, ObjectDesc, Shape};
+use crate::description::{AttributeList, MeshSource, ObjectDesc, Shape};
 use crate::error::{Loc, SceneError, Warning};
 use luster_core::math::{Transform, Vec3};
 use std::collections::{HashMap, HashSet};
@@ -75,6 +77,10 @@ pub struct Model {
     pub placed: Vec<nodes::Placed>,
     /// By mesh index: the mesh's triangle primitives, for meshes drawn.
     pub meshes: Vec<Option<Vec<mesh::Primitive>>>,
+    /// By node index: the attributes of the drawn nodes' `extras` ([`extras`]).
+    pub node_attributes: Vec<AttributeList>,
+    /// By mesh index: the attributes of the drawn meshes' `extras`.
+    pub mesh_attributes: Vec<AttributeList>,
     /// What was accepted but not used.
     pub notes: Notes,
 }
@@ -107,14 +113,20 @@ pub fn read(path: &Path) -> Result<Model, SceneError> {
     let mut meshes: Vec<Option<Vec<mesh::Primitive>>> = vec![None; doc.meshes().len()];
     let all: Vec<gltf::Mesh> = doc.meshes().collect();
     let nodes: Vec<gltf::Node> = doc.nodes().collect();
+    let mut node_attributes = vec![AttributeList::new(); nodes.len()];
+    let mut mesh_attributes = vec![AttributeList::new(); all.len()];
     for p in &placed {
         if let Some(m) = nodes[p.node].mesh() {
             if meshes[m.index()].is_none() {
                 meshes[m.index()] = Some(mesh::read(&accessors, &all[m.index()], &mut notes)?);
+                let at = format!("meshes[{}]", m.index());
+                mesh_attributes[m.index()] = extras::attributes(m.extras(), &at, &mut notes);
             }
+            let at = format!("nodes[{}]", p.node);
+            node_attributes[p.node] = extras::attributes(nodes[p.node].extras(), &at, &mut notes);
         }
     }
-    Ok(Model { file, placed, meshes, notes })
+    Ok(Model { file, placed, meshes, node_attributes, mesh_attributes, notes })
 }
 
 /// A name from the file for a message: shown when it is a short
@@ -150,12 +162,13 @@ impl Model {
             let Some(prims) = self.meshes.get(m.index()).and_then(Option::as_ref) else { continue };
             let id = node.name().map_or_else(|| format!("nodes[{}]", p.node), identifier);
             for (k, prim) in prims.iter().enumerate() {
-                let shape = match made.get(&(m.index(), k)) {
-                    Some(&base) => Shape::Instance { mesh: base },
+                let (shape, geometry_attributes) = match made.get(&(m.index(), k)) {
+                    Some(&base) => (Shape::Instance { mesh: base }, Vec::new()),
                     None => {
                         made.insert((m.index(), k), first + out.len());
                         let smooth = prim.arrays.normals.is_some();
-                        Shape::Mesh { source: MeshSource::Arrays(prim.arrays.clone()), smooth }
+                        let shape = Shape::Mesh { source: MeshSource::Arrays(prim.arrays.clone()), smooth };
+                        (shape, self.mesh_attributes.get(m.index()).cloned().unwrap_or_default())
                     }
                 };
                 let (mat, textures) = material(prim.material)?;
@@ -167,6 +180,8 @@ impl Model {
                     motion: Vec3::ZERO,
                     textures,
                     loc: Loc { line: None, path: format!("nodes[{}] ({})", p.node, prim.path) },
+                    attributes: self.node_attributes.get(p.node).cloned().unwrap_or_default(),
+                    geometry_attributes,
                 });
             }
         }

@@ -116,6 +116,8 @@ pub fn model_scene(path: &Path, view: &ModelView) -> Result<Description, SceneEr
             motion: Vec3::ZERO,
             textures,
             loc: Loc { line: None, path: format!("{file_name} (material {})", part.name) },
+            attributes: Vec::new(),
+            geometry_attributes: Vec::new(),
         });
     }
     let lowest =

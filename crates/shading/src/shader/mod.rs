@@ -55,6 +55,7 @@
 //! none calls back into Lua from C, so no recursion of a script grows the
 //! native stack beyond what [`STACK_SIZE`] holds (`docs/robustness.md`).
 
+pub mod attributes;
 mod builtin_modules;
 mod call;
 pub mod closure;
@@ -96,6 +97,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
+pub use attributes::Attributes;
 pub use declared::{DeclaredParam, ParamKind};
 pub use entry::MaterialOutputs;
 pub use entry::{Entry, ENTRIES};
@@ -214,6 +216,31 @@ impl std::fmt::Debug for ShaderImages {
     }
 }
 
+/// What a [`ShaderSet`] is built with besides its scripts.
+#[derive(Debug, Clone)]
+pub struct ShaderOptions {
+    /// Bounds every call, and each script's top level.
+    pub timeout: Duration,
+    /// The images (if any) the scripts sample with `texture(name, u, v)`.
+    pub images: Option<ShaderImages>,
+    /// The folders `require` searches, in order ([`search_path`] makes them
+    /// from the scene's).
+    pub module_dirs: Vec<PathBuf>,
+    /// The attributes `getattribute` reads ([`attributes`]).
+    pub attributes: Arc<Attributes>,
+}
+
+impl Default for ShaderOptions {
+    fn default() -> ShaderOptions {
+        ShaderOptions {
+            timeout: DEFAULT_TIMEOUT,
+            images: None,
+            module_dirs: Vec::new(),
+            attributes: Arc::new(Attributes::default()),
+        }
+    }
+}
+
 /// What every thread's state is built from.
 pub(crate) struct Shared {
     id: u64,
@@ -221,6 +248,7 @@ pub(crate) struct Shared {
     timeout: Duration,
     images: Option<ShaderImages>,
     modules: Arc<modules::Modules>,
+    attributes: Arc<Attributes>,
 }
 
 /// A compiled set of shaders, addressed by their index in the list given to
@@ -258,13 +286,20 @@ impl ShaderSet {
         images: Option<ShaderImages>,
         module_dirs: Vec<PathBuf>,
     ) -> Result<ShaderSet, ShaderError> {
+        ShaderSet::build(sources, ShaderOptions { timeout, images, module_dirs, ..ShaderOptions::default() })
+    }
+
+    /// Like [`ShaderSet::new`], with everything [`ShaderOptions`] holds.
+    pub fn build(sources: Vec<ShaderSource>, options: ShaderOptions) -> Result<ShaderSet, ShaderError> {
         static NEXT_ID: AtomicU64 = AtomicU64::new(1);
+        let ShaderOptions { timeout, images, module_dirs, attributes } = options;
         let shared = Arc::new(Shared {
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
             sources,
             timeout,
             images,
             modules: Arc::new(modules::Modules::new(module_dirs)),
+            attributes,
         });
         let state = state::ThreadState::new(&shared)?;
         let entries = (0..shared.sources.len()).map(|id| state.entries(id)).collect();

@@ -1930,6 +1930,80 @@ local function trampoline(wrapper)
   return chunk({ wrapper })
 end
 
+---------------------------------------------------------------------------
+-- Attributes (attributes.rs): getattribute("name" [, default]) reads the
+-- scene's user data for the object being shaded: the instance's own table,
+-- then its geometry's, by the ids in the shading point (`shade`, or the s
+-- passed first: getattribute(s, "name" [, default])). Rust hands the tables
+-- over once per state (set_attributes), so a lookup is two table reads.
+---------------------------------------------------------------------------
+local set_attributes
+do
+  local by_instance, by_object, name_of = {}, {}, function() return nil end
+  -- object:name, fetched from Rust on first use, by instance id (false: none).
+  local names = {}
+  local function object_name(s)
+    local id = s.instance_id
+    local n = names[id]
+    if n == nil then
+      n = name_of(id) or false
+      names[id] = n
+    end
+    return n or nil
+  end
+  local KIND_NAMES = { number = "a number", string = "text" }
+  local function kind_name(v)
+    if isvec(v) then return "a vec3" end
+    return KIND_NAMES[type(v)] or "a " .. typename(v)
+  end
+  local function getattribute(a, b, c)
+    local s, name, default = shade, a, b
+    if type(a) == "cdata" and ffi.istype(shade_t, a) then s, name, default = a, b, c end
+    -- rgb(r, g, b), which marks a declared parameter's kind, is a colour here.
+    if type(default) == "table" and default[KIND_MARK] then default = default.value end
+    if type(name) ~= "string" then
+      error(format("getattribute: expected an attribute name (a string), got %s", kind_name(name)), 2)
+    end
+    local v
+    local t = by_instance[s.instance_id]
+    if t then v = t[name] end
+    if v == nil then
+      t = by_object[s.object_id]
+      if t then v = t[name] end
+      if v == nil then
+        if name == "object:name" then v = object_name(s) end
+        if v == nil then return default end
+      end
+    end
+    -- A copy: a script that changes the vector must not change what the
+    -- next point (on any thread) reads.
+    if isvec(v) then v = vec3_t(v.x, v.y, v.z) end
+    -- The default's kind is the kind the script wants; a number serves as
+    -- a grey vec3 or as text, anything else that differs is an error.
+    if default == nil or (type(default) ~= "number" and type(default) ~= "string" and not isvec(default)) then
+      return v
+    end
+    if type(v) == type(default) and isvec(v) == isvec(default) then return v end
+    if type(v) == "number" then
+      if isvec(default) then return vec3_t(v, v, v) end
+      if type(default) == "string" then return tostring(v) end
+    end
+    error(format("getattribute: attribute '%s' of this object is %s, but the default is %s", name,
+      kind_name(v), kind_name(default)), 2)
+  end
+  set_attributes = function(instances, objects, fetch_name)
+    for _, tables in ipairs({ instances, objects }) do
+      for _, t in pairs(tables) do
+        for k, v in pairs(t) do
+          if type(v) == "table" then t[k] = vec3_t(v[1], v[2], v[3]) end
+        end
+      end
+    end
+    by_instance, by_object, name_of, names = instances, objects, fetch_name, {}
+  end
+  BUILTINS.getattribute = getattribute
+end
+
 -- Scripts run in their own environments, but the real globals lose the
 -- dangerous libraries too, as a second line of defence.
 for _, k in ipairs({ "ffi", "jit", "debug", "require", "package", "io", "os", "load", "loadstring",
@@ -1958,4 +2032,5 @@ return {
     material = ffi.sizeof("luster_material"), node = ffi.sizeof("luster_node"),
     clock = ffi.sizeof("luster_clock"), cell = ffi.sizeof("luster_cell"),
     ray = ffi.sizeof("luster_ray"), hit = ffi.sizeof("luster_hit") },
+  set_attributes = set_attributes,
 }

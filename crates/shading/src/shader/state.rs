@@ -106,6 +106,7 @@ impl ThreadState {
                 load_module,
             ))
             .map_err(internal)?;
+        super::attributes::install(&lua, &api, &shared.attributes).map_err(internal)?;
         // The C declarations in the prelude must describe Rust's records.
         let sizes: Table = api.get("sizes").map_err(internal)?;
         for (k, size) in [

@@ -15,7 +15,7 @@ use luster_core::math::{Aabb, Vec2, Vec3};
 use luster_scene::description::{Description, ImageEncoding, MeshSource, Shape};
 use luster_scene::ply::read_ply;
 use luster_scene::{SceneError, Warning};
-use luster_shading::shader::ShaderImages;
+use luster_shading::shader::{ShaderImages, ShaderOptions};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -358,13 +358,14 @@ fn build_textures(desc: &Description, opts: &BuildOptions) -> Result<Textures, S
             Ok(img)
         })
         .collect::<Result<_, _>>()?;
-    let shaders = shader::compile_with_modules(
-        &desc.texture_maps,
-        opts.shader_timeout,
-        Some(shader_images(desc, &images)),
-        desc.module_search_path(),
-    )
-    .map_err(|e| SceneError::at(&desc.file, &desc.texture_maps[e.map].loc, e.message))?;
+    let options = ShaderOptions {
+        timeout: opts.shader_timeout,
+        images: Some(shader_images(desc, &images)),
+        module_dirs: desc.module_search_path(),
+        attributes: Arc::new(shader::attributes::for_objects(desc)?),
+    };
+    let shaders = shader::compile_with(&desc.texture_maps, options)
+        .map_err(|e| SceneError::at(&desc.file, &desc.texture_maps[e.map].loc, e.message))?;
     Ok(Textures::new(images, &desc.texture_maps, desc.background_texture, shaders))
 }
 

@@ -18,6 +18,8 @@
 
 use std::time::Duration;
 
+pub mod attributes;
+
 use super::{bump, Image, TexFrame, TextureMap, Textures};
 use crate::bsdf::closure::{At, Lobes};
 use crate::bsdf::lobe::{Conductor, Diffuse, Lobe};
@@ -28,7 +30,7 @@ use luster_core::math::{Vec2, Vec3};
 use luster_scene::description::{DecalMode, ImageDesc, TextureMapDesc, TextureSource};
 use luster_shading::shader::{
     Entry, ImageSampler, MaterialOutputs, SampleFilter, ShadeInput, ShadePoint, ShaderError, ShaderErrorKind,
-    ShaderImages, ShaderSet, ShaderSource,
+    ShaderImages, ShaderOptions, ShaderSet, ShaderSource,
 };
 use std::sync::Arc;
 
@@ -69,16 +71,12 @@ pub fn compile(
     timeout: Duration,
     images: Option<ShaderImages>,
 ) -> Result<Option<ShaderSet>, MapError> {
-    compile_with_modules(descs, timeout, images, Vec::new())
+    compile_with(descs, ShaderOptions { timeout, images, ..ShaderOptions::default() })
 }
 
-/// Like [`compile`], with the folders the scripts' `require` searches.
-pub fn compile_with_modules(
-    descs: &[TextureMapDesc],
-    timeout: Duration,
-    images: Option<ShaderImages>,
-    module_dirs: Vec<std::path::PathBuf>,
-) -> Result<Option<ShaderSet>, MapError> {
+/// Like [`compile`], with everything [`ShaderOptions`] holds (the folders
+/// the scripts' `require` searches, the objects' attributes).
+pub fn compile_with(descs: &[TextureMapDesc], options: ShaderOptions) -> Result<Option<ShaderSet>, MapError> {
     let mut maps = Vec::new();
     let mut sources = Vec::new();
     for (i, d) in descs.iter().enumerate() {
@@ -92,10 +90,7 @@ pub fn compile_with_modules(
     if sources.is_empty() {
         return Ok(None);
     }
-    let make = |sources: Vec<ShaderSource>| {
-        ShaderSet::with_modules(sources, timeout, images.clone(), module_dirs.clone())
-    };
-    let set = match make(sources) {
+    let set = match ShaderSet::build(sources, options) {
         Ok(set) => set,
         // The error names the script at fault by its index, which is its
         // map's (running the scripts again to find it would spend a
