@@ -32,6 +32,18 @@ end";
 
 const HEIGHT: &str = "function height(s) return 0.05 * perlin3(s.P.x * 8, s.P.y * 8, s.P.z * 8) end";
 
+/// Stripes filtered with a width written by hand (the footprint of `20 x`)…
+const STRIPES_GIVEN: &str = "function color(s)
+  local v = aastep(0.5, fract(s.P.x * 20), filterwidth(s, 20))
+  return v, v, v
+end";
+
+/// … and with the width the derivatives find (three runs a call).
+const STRIPES_AUTO: &str = "function color(s)
+  local v = aastep(0.5, fract(s.P.x * 20))
+  return v, v, v
+end";
+
 const VEC_METATYPE: &str = "
 function color(s)
   local d = normalize(s.P - vec3(0.5, 0.5, 0.5))
@@ -65,6 +77,26 @@ fn points() -> Vec<ShadeInput> {
             let f = i as f32;
             let p = [f * 0.0137 % 1.0, f * 0.0291 % 1.0, f * 0.0073 % 1.0];
             ShadeInput { p, pw: p, n: [0.0, 0.6, 0.8], uv: [p[0], p[1]], ..ShadeInput::default() }
+        })
+        .collect()
+}
+
+/// [`points`] with a pixel footprint, as the renderer gives them (the
+/// derivatives of a point without one cost a single run).
+fn points_with_footprint() -> Vec<ShadeInput> {
+    points()
+        .into_iter()
+        .map(|p| ShadeInput {
+            dpdx: [0.002, 0.0, 0.001],
+            dpdy: [0.0, 0.002, 0.0005],
+            dpwdx: [0.002, 0.0, 0.001],
+            dpwdy: [0.0, 0.002, 0.0005],
+            dpcdx: [0.002, 0.0, 0.0],
+            dpcdy: [0.0, -0.002, 0.0],
+            duvdx: [0.002, 0.0],
+            duvdy: [0.0, 0.002],
+            filterwidth: 0.002,
+            ..p
         })
         .collect()
 }
@@ -195,7 +227,8 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// Per-call CPU time of the floor, the empty shader, `height`, the bump
-/// path (`heights3`, per point) and the marble, alternating the cases
+/// path (`heights3`, per point), the marble, and stripes filtered with a
+/// width by hand and with the automatic one, alternating the cases
 /// round by round (A B C … A B C …) and quoting medians.
 fn cpu_table() {
     const N: usize = 400_000;
@@ -205,6 +238,8 @@ fn cpu_table() {
     let height = set(HEIGHT);
     let height_empty = set("function height(s) return 0.5 end");
     let marble = set(MARBLE);
+    let footprint = points_with_footprint();
+    let (stripes_given, stripes_auto) = (set(STRIPES_GIVEN), set(STRIPES_AUTO));
     let triples: Vec<[ShadeInput; 3]> =
         (0..1024).map(|k| [pts[k], pts[(k + 1) & 1023], pts[(k + 2) & 1023]]).collect();
     type Case<'a> = (&'a str, Box<dyn Fn() -> f64 + 'a>);
@@ -233,6 +268,14 @@ fn cpu_table() {
             Box::new(|| cpu_per_call(N / 4, |k| marble.color(0, black_box(&pts[k & 1023])).ok())),
         ),
         ("marble in Rust", Box::new(|| cpu_per_call(N / 4, |k| marble_rust(black_box(&pts[k & 1023]))))),
+        (
+            "stripes, aastep with a width by hand",
+            Box::new(|| cpu_per_call(N, |k| stripes_given.color(0, black_box(&footprint[k & 1023])).ok())),
+        ),
+        (
+            "stripes, aastep with the automatic width (3 runs)",
+            Box::new(|| cpu_per_call(N, |k| stripes_auto.color(0, black_box(&footprint[k & 1023])).ok())),
+        ),
     ];
     let mut times = vec![Vec::new(); cases.len()];
     for _ in 0..ROUNDS {

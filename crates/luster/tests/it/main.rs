@@ -13,6 +13,7 @@ mod cluster_camera;
 mod common;
 mod compare;
 mod denoise;
+mod derivs;
 mod display;
 mod distribution;
 mod ellipsoid;

@@ -115,6 +115,14 @@ impl Caller {
         }
     }
 
+    /// Drops the error a failed call left on the stack (a call that runs
+    /// again: `invoke.rs`).
+    pub(crate) fn drop_error(&self) {
+        // SAFETY: a failed call left its error value on top of the stack
+        // (module doc); this restores the top to `base`.
+        unsafe { lua::lua_settop(self.l, self.base) }
+    }
+
     /// The error a failed call left on the stack, which it pops.
     #[cold]
     pub(crate) fn pop_error(&self, lua: &Lua, status: c_int) -> mlua::Error {

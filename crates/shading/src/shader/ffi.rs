@@ -96,6 +96,12 @@ pub(crate) struct Shade {
     pub pixel_x: i32,
     pub pixel_y: i32,
     pub pad: i32,
+    pub dpwdx: Vec3,
+    pub dpwdy: Vec3,
+    pub dpcdx: Vec3,
+    pub dpcdy: Vec3,
+    pub duvdx: Vec2,
+    pub duvdy: Vec2,
 }
 
 /// Where an entry wrapper writes its result (`luster_out`); a height uses `r`.
@@ -180,6 +186,17 @@ pub(crate) struct Clock {
     pub limit: f64,
     pub depth: i32,
     pub rays: i32,
+}
+
+/// The derivatives' flag (`luster_derivs`): `redo` is set when an entry
+/// function asked for a derivative for the first time, in a call that
+/// then ran it once only; Rust starts that call again (`invoke.rs`).
+/// `offset` is set while an offset run is under way (Lua's own).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Derivs {
+    pub redo: i32,
+    pub offset: i32,
 }
 
 /// The Voronoi scratch record (`luster_cell`).
@@ -517,21 +534,26 @@ pub(crate) struct IoBlock {
     out: *mut Out,
     material: *mut MaterialOut,
     clock: *mut Clock,
+    derivs: *mut Derivs,
+}
+
+/// The addresses of the records the prelude allocated, as it reports them.
+pub(crate) struct Addresses {
+    pub shade: usize,
+    pub shade_b: usize,
+    pub shade_c: usize,
+    pub out: usize,
+    pub material: usize,
+    pub clock: usize,
+    pub derivs: usize,
 }
 
 impl IoBlock {
     /// Takes the addresses the prelude reported. They are checked for null
     /// and alignment; the prelude allocated them with `ffi.new` of the
     /// matching C types.
-    pub(crate) fn new(
-        shade: usize,
-        shade_b: usize,
-        shade_c: usize,
-        out: usize,
-        material: usize,
-        clock: usize,
-        limit: f64,
-    ) -> Option<IoBlock> {
+    pub(crate) fn new(a: Addresses, limit: f64) -> Option<IoBlock> {
+        let Addresses { shade, shade_b, shade_c, out, material, clock, derivs } = a;
         fn ok<T>(a: usize) -> bool {
             a != 0 && a % std::mem::align_of::<T>() == 0
         }
@@ -540,7 +562,8 @@ impl IoBlock {
             && ok::<Shade>(shade_c)
             && ok::<Out>(out)
             && ok::<MaterialOut>(material)
-            && ok::<Clock>(clock))
+            && ok::<Clock>(clock)
+            && ok::<Derivs>(derivs))
         {
             return None;
         }
@@ -550,6 +573,7 @@ impl IoBlock {
             out: out as *mut Out,
             material: material as *mut MaterialOut,
             clock: clock as *mut Clock,
+            derivs: derivs as *mut Derivs,
         };
         // SAFETY: see the module doc; no Lua code runs during this write.
         unsafe { (*block.clock).limit = limit }
@@ -581,6 +605,38 @@ impl IoBlock {
         (*self.clock).start = epoch_now();
         (*self.clock).depth = 0;
         (*self.clock).rays = 0;
+    }
+
+    /// Whether the last call asked to be run again (see [`Derivs`]).
+    #[inline(always)]
+    pub(crate) fn redo(&self) -> bool {
+        // SAFETY: see the module doc; the Lua call has returned.
+        unsafe { (*self.derivs).redo != 0 }
+    }
+
+    /// [`IoBlock::redo`], clearing the flag.
+    pub(crate) fn take_redo(&self) -> bool {
+        // SAFETY: see the module doc; no Lua code runs.
+        unsafe {
+            let r = (*self.derivs).redo != 0;
+            (*self.derivs).redo = 0;
+            r
+        }
+    }
+
+    /// Writes the shading points again for a call that runs again
+    /// ([`IoBlock::redo`]): the first `points` of them (1, or 3 for a
+    /// bump), since the script may have changed them. The clock keeps its
+    /// start, so the time limit covers both runs.
+    pub(crate) fn refill(&self, points: usize, mut fill: impl FnMut(usize, &mut Shade)) {
+        // SAFETY: as in `begin3`.
+        unsafe {
+            for (k, &s) in self.shade3.iter().enumerate().take(points) {
+                fill(k, &mut *s);
+            }
+            (*self.out).bad = 0;
+            (*self.clock).depth = 0;
+        }
     }
 
     /// Writes the shading point and arms the clock for one `DecalMode

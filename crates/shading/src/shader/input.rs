@@ -43,6 +43,21 @@ pub struct ShadeInput {
     pub depth: u32,
     /// The pixel being shaded (`s.pixel_x`, `s.pixel_y`).
     pub pixel: [u32; 2],
+    /// World-space change of the point to the next pixel right and down
+    /// (`s.dPwdx`, `s.dPwdy`).
+    pub dpwdx: [f32; 3],
+    /// See `dpwdx`.
+    pub dpwdy: [f32; 3],
+    /// Camera-space change of the point to the next pixel right and down
+    /// (`s.dPcdx`, `s.dPcdy`).
+    pub dpcdx: [f32; 3],
+    /// See `dpcdx`.
+    pub dpcdy: [f32; 3],
+    /// Change of the texture coordinates to the next pixel right and down
+    /// (`s.duvdx`, `s.duvdy`).
+    pub duvdx: [f32; 2],
+    /// See `duvdx`.
+    pub duvdy: [f32; 2],
 }
 
 /// Something a [`ShadeInput`] can be made from where the shading point is

@@ -7,7 +7,8 @@ use std::os::raw::c_int;
 
 use luster_core::text::shown;
 
-use super::compile::Compiled;
+use super::call::Slot;
+use super::compile::{Compiled, WRAPPERS};
 use super::error::{ShaderError, ShaderErrorKind};
 use super::ffi;
 use super::shade::{describe, fill_point, fill_shade, object_random};
@@ -49,7 +50,7 @@ impl ThreadState {
         id: usize,
         entry: Entry,
         instance_id: u32,
-        fill: impl FnOnce(&mut ffi::Shade, f64),
+        fill: impl Fn(&mut ffi::Shade, f64),
         rgb: &mut [f64; 3],
     ) -> u32 {
         let Some(f) = self.shaders.get(id).and_then(|s| s.entries[entry as usize]) else {
@@ -58,11 +59,48 @@ impl ThreadState {
         let random = self.random(instance_id);
         self.io.begin(|s| fill(s, random));
         let status = self.caller.call(f);
+        if status == mlua::ffi::LUA_OK
+            && !self.io.timed_out()
+            && !self.io.redo()
+            && super::debug_pixel().is_none()
+        {
+            store_channels(rgb, self.io.channels());
+            return 0;
+        }
+        let status = self.again(f, status, 1, |_, s| fill(s, random));
         if status == mlua::ffi::LUA_OK && !self.io.timed_out() && super::debug_pixel().is_none() {
             store_channels(rgb, self.io.channels());
             return 0;
         }
         ran(status)
+    }
+
+    /// Runs the wrapper at `f` again while the last run asked for it: an
+    /// entry function took its first derivative, in a run that computed
+    /// none (`prelude.lua`, "Derivatives"). `fill` writes the `points`
+    /// shading points again; the time limit keeps its start. The status of
+    /// the last run. Each run turns one more entry function to three runs
+    /// a call, so a call runs at most once per function it calls, plus one.
+    #[cold]
+    #[inline(never)]
+    fn again(
+        &self,
+        f: Slot,
+        mut status: c_int,
+        points: usize,
+        fill: impl Fn(usize, &mut ffi::Shade),
+    ) -> c_int {
+        for _ in 0..=WRAPPERS {
+            if !self.io.take_redo() {
+                break;
+            }
+            if status != mlua::ffi::LUA_OK {
+                self.caller.drop_error();
+            }
+            self.io.refill(points, &fill);
+            status = self.caller.call(f);
+        }
+        status
     }
 
     /// What a code from [`ThreadState::call_fast`] amounts to.
@@ -186,8 +224,12 @@ impl ThreadState {
         let Some(f) = self.shaders.get(id).and_then(|s| s.material) else {
             return Err(self.no_entry(id, "material"));
         };
-        self.io.begin_material(|s| fill_shade(self.avx, s, input, self.random(input.instance_id)));
-        let status = self.caller.call(f);
+        let random = self.random(input.instance_id);
+        self.io.begin_material(|s| fill_shade(self.avx, s, input, random));
+        let mut status = self.caller.call(f);
+        if self.io.redo() {
+            status = self.again(f, status, 1, |_, s| fill_shade(self.avx, s, input, random));
+        }
         let shader = &self.shaders[id];
         let defines = self.entries(id);
         let result = self.outcome(shader, status).and_then(|()| {
@@ -230,7 +272,10 @@ impl ThreadState {
         };
         let random = inputs.map(|i| self.random(i.instance_id));
         self.io.begin3(|k, s| fill_shade(self.avx, s, &inputs[k], random[k]));
-        let status = self.caller.call(f);
+        let mut status = self.caller.call(f);
+        if self.io.redo() {
+            status = self.again(f, status, 3, |k, s| fill_shade(self.avx, s, &inputs[k], random[k]));
+        }
         if status == mlua::ffi::LUA_OK && !self.io.timed_out() {
             store_channels(h, self.io.channels());
             return 0;

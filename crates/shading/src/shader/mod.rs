@@ -80,6 +80,8 @@ mod tests_author;
 #[cfg(test)]
 mod tests_closure;
 #[cfg(test)]
+mod tests_derivs;
+#[cfg(test)]
 mod tests_limits;
 #[cfg(test)]
 mod tests_modules;

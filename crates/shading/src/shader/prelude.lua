@@ -23,6 +23,8 @@ typedef struct {
   luster_vec2 uv;
   double time, filterwidth, random;
   int32_t object_id, instance_id, depth, pixel_x, pixel_y, __luster_pad;
+  luster_vec3 dPwdx, dPwdy, dPcdx, dPcdy;
+  luster_vec2 duvdx, duvdy;
 } luster_shade;
 typedef struct { double r, g, b; int32_t bad; } luster_out;
 typedef struct { int32_t kind, a, b, thin; double c[3][3]; double x[3]; } luster_node;
@@ -37,6 +39,7 @@ typedef struct { double start, limit; int32_t depth, rays; } luster_clock;
 typedef struct { double f1, f2, px, py, pz, id; } luster_cell;
 typedef struct { luster_vec3 o, d; double maxdist, time; luster_vec3 ng; } luster_ray;
 typedef struct { double t; luster_vec3 P, N, Ng; int32_t object_id, instance_id; } luster_hit;
+typedef struct { int32_t redo, offset; } luster_derivs;
 typedef struct {
   double (*perlin1)(double);
   double (*perlin2)(double, double);
@@ -139,7 +142,7 @@ setmetatable(vec3_methods, {
   end,
 })
 local SHADE_FIELDS = "P, Pw, Pc, N, Ng, I, V, dPdu, dPdv, dPdx, dPdy, uv, time, filterwidth, random, "
-  .. "object_id, instance_id, depth, pixel_x, pixel_y"
+  .. "object_id, instance_id, depth, pixel_x, pixel_y, dPwdx, dPwdy, dPcdx, dPcdy, duvdx, duvdy"
 local function no_field(what, fields)
   return function(_, k)
     error(format("%s has no field '%s' (its fields: %s)", what, tostring(k), fields), 2)
@@ -1228,6 +1231,9 @@ local function declaration_of(names, decl, kinds)
 end
 
 local require_module
+-- The derivatives' record (see the Derivatives section): `offset` is set
+-- during an offset run, where print stays quiet, so a call prints once.
+local derivs = ffi.new("luster_derivs")
 local function make_env(shader_name, params)
   local env = {}
   env.require = require_module
@@ -1244,6 +1250,7 @@ local function make_env(shader_name, params)
   env.coroutine = copy(coroutine)
   env.coroutine.resume, env.coroutine.wrap = safe_resume, safe_wrap
   env.print = function(...)
+    if derivs.offset ~= 0 then return end
     local n = select("#", ...)
     local parts = { ... }
     for i = 1, n do parts[i] = tostring(parts[i]) end
@@ -1355,6 +1362,184 @@ require_module = function(name)
 end
 
 ---------------------------------------------------------------------------
+-- Derivatives (docs/derivatives.md): Dx(v), Dy(v) and filterwidth(v) of any
+-- number or vec3 an entry function computes. A function that asks for one
+-- runs three times per call: at the point moved one pixel right (P + dPdx,
+-- Pw + dPwdx, Pc + dPcdx, uv + duvdx; everything else unchanged), one pixel
+-- down, and at the point itself. The two offset runs record the values
+-- handed to the derivative functions, in call order (a tape); in the main
+-- run the k-th call returns the k-th taped value minus its own. Only the
+-- main run's result counts. Until a function first asks, it runs once per
+-- call; the call in which it first asks raises REDO, and Rust starts that
+-- call again (`derivs.redo`), now in triple mode, so that a point's result
+-- never depends on which calls came before it. A script that catches REDO
+-- with pcall is redone all the same: Rust reads the flag, not the error.
+---------------------------------------------------------------------------
+local derivs_wrap
+-- A function of its own: a function may have only 200 locals.
+;(function()
+local D_SINGLE, D_RECORD, D_MAIN = 0, 1, 2
+local dmode = D_SINGLE
+-- The wrapped entry function running in single mode (its triple flag).
+local dcurrent = nil
+local REDO = "luster: derivatives need the call again"
+-- A cap on the derivative calls of one run, so that a loop cannot grow the
+-- tape without bound.
+local MAX_TAPE = 65536
+-- Two tapes (the x and the y offset), each as four arrays: kind (1 a number,
+-- 3 a vec3) and the components; na, nb: their lengths in this call.
+local tka, ta1, ta2, ta3 = {}, {}, {}, {}
+local tkb, tb1, tb2, tb3 = {}, {}, {}, {}
+local na, nb = 0, 0
+-- The tape being recorded, its length, and the main run's count.
+local rk, r1, r2, r3 = tka, ta1, ta2, ta3
+local nrec, kmain = 0, 0
+
+local function need_triple(fname, level)
+  local st = dcurrent
+  if st == nil then
+    error(format("%s works only while an entry function such as color(s) runs", fname), level + 1)
+  end
+  st.triple = true
+  derivs.redo = 1
+  error(REDO, 0)
+end
+-- A difference that is not finite (the value is undefined at an offset
+-- point) counts as no change.
+local function fin(d) if d - d == 0 then return d end return 0 end
+-- The derivative call of `fname` with value v, whose caller's caller is
+-- the user's code at `level` from here: v's kind and its change along x
+-- and along y (all 0 in an offset run).
+local function delta(fname, v, level)
+  local kind, a, b, c
+  if type(v) == "number" then
+    kind, a, b, c = 1, v, 0, 0
+  elseif isvec(v) then
+    kind, a, b, c = 3, v.x, v.y, v.z
+  else
+    error(format("%s: expected a number or a vec3, got a %s", fname, typename(v)), level)
+  end
+  local m = dmode
+  if m == D_MAIN then
+    local k = kmain + 1
+    kmain = k
+    local x1, x2, x3, y1, y2, y3 = 0, 0, 0, 0, 0, 0
+    -- A tape that is shorter, or holds another kind here, took another
+    -- branch: no derivative.
+    if k <= na and tka[k] == kind then x1, x2, x3 = fin(ta1[k] - a), fin(ta2[k] - b), fin(ta3[k] - c) end
+    if k <= nb and tkb[k] == kind then y1, y2, y3 = fin(tb1[k] - a), fin(tb2[k] - b), fin(tb3[k] - c) end
+    return kind, x1, x2, x3, y1, y2, y3
+  elseif m == D_RECORD then
+    local k = nrec + 1
+    if k > MAX_TAPE then
+      error(format("%s: more than %d derivative calls in one call of the shader", fname, MAX_TAPE), level)
+    end
+    nrec = k
+    rk[k], r1[k], r2[k], r3[k] = kind, a, b, c
+    return kind, 0, 0, 0, 0, 0, 0
+  end
+  need_triple(fname, level)
+end
+
+-- Dx(v), Dy(v): the change of v to the next pixel right (down), a number
+-- or a vec3 like v.
+local function Dx(v)
+  local kind, x1, x2, x3 = delta("Dx", v, 3)
+  if kind == 1 then return x1 end
+  return vec3_t(x1, x2, x3)
+end
+local function Dy(v)
+  local kind, _, _, _, y1, y2, y3 = delta("Dy", v, 3)
+  if kind == 1 then return y1 end
+  return vec3_t(y1, y2, y3)
+end
+local function width(x, y) return sqrt(x * x + y * y) end
+-- filterwidth(v): OSL's, sqrt(Dx(v)^2 + Dy(v)^2), per component of a vec3.
+-- filterwidth(s, [scale]) of the shading point keeps its meaning.
+local function filterwidth_any(v, scale)
+  if type(v) == "cdata" and ffi.istype(shade_t, v) then return filterwidth(v, scale) end
+  if scale ~= nil then
+    error("filterwidth(v) takes one value (filterwidth(s, scale) takes the shading point s)", 2)
+  end
+  local kind, x1, x2, x3, y1, y2, y3 = delta("filterwidth", v, 3)
+  if kind == 1 then return width(x1, y1) end
+  return vec3_t(width(x1, y1), width(x2, y2), width(x3, y3))
+end
+-- aastep(edge, x, [fw]): without fw, the width is filterwidth(x - edge) (an
+-- edge that varies too is filtered right); a given fw wins, 0 is the hard
+-- step.
+local function aastep_auto(edge, x, fw)
+  if fw == nil then
+    if type(x) ~= "number" or type(edge) ~= "number" then
+      error(format("aastep: expected numbers for edge and x, got a %s and a %s", typename(edge),
+        typename(x)), 2)
+    end
+    local _, x1, _, _, y1 = delta("aastep", x - edge, 3)
+    fw = width(x1, y1)
+  end
+  return aastep(edge, x, fw)
+end
+BUILTINS.Dx, BUILTINS.Dy = Dx, Dy
+BUILTINS.filterwidth, BUILTINS.aastep = filterwidth_any, aastep_auto
+
+-- The offset points of one call (offset runs never nest: entry functions
+-- are wrapped only where Rust calls them).
+local sx, sy = ffi.new("luster_shade"), ffi.new("luster_shade")
+local SHADE_BYTES = ffi.sizeof("luster_shade")
+local function moved(dst, s, dP, dPw, dPc, duv)
+  ffi.copy(dst, s, SHADE_BYTES)
+  dst.P.x, dst.P.y, dst.P.z = s.P.x + dP.x, s.P.y + dP.y, s.P.z + dP.z
+  dst.Pw.x, dst.Pw.y, dst.Pw.z = s.Pw.x + dPw.x, s.Pw.y + dPw.y, s.Pw.z + dPw.z
+  dst.Pc.x, dst.Pc.y, dst.Pc.z = s.Pc.x + dPc.x, s.Pc.y + dPc.y, s.Pc.z + dPc.z
+  dst.uv.u, dst.uv.v = s.uv.u + duv.u, s.uv.v + duv.v
+end
+local function zero3(v) return v.x == 0 and v.y == 0 and v.z == 0 end
+-- A point with no footprint (a volume, a baked grid) has no derivatives:
+-- its offset runs would see the point itself.
+local function still(s)
+  return zero3(s.dPdx) and zero3(s.dPdy) and zero3(s.dPwdx) and zero3(s.dPwdy) and zero3(s.dPcdx)
+    and zero3(s.dPcdy) and s.duvdx.u == 0 and s.duvdx.v == 0 and s.duvdy.u == 0 and s.duvdy.v == 0
+end
+-- One offset run: its result is dropped, and so is an error it raises (the
+-- main run reports what is wrong at the point itself; a timeout stops the
+-- main run too). The tape's length.
+local function offset_pass(f, p, fresh)
+  if fresh then fresh() end
+  nrec, dmode, derivs.offset = 0, D_RECORD, 1
+  pcall(f, p)
+  derivs.offset = 0
+  return nrec
+end
+local function triple(f, s, fresh)
+  if still(s) then
+    na, nb = 0, 0
+  else
+    moved(sx, s, s.dPdx, s.dPwdx, s.dPcdx, s.duvdx)
+    moved(sy, s, s.dPdy, s.dPwdy, s.dPcdy, s.duvdy)
+    rk, r1, r2, r3 = tka, ta1, ta2, ta3
+    na = offset_pass(f, sx, fresh)
+    rk, r1, r2, r3 = tkb, tb1, tb2, tb3
+    nb = offset_pass(f, sy, fresh)
+  end
+  if fresh then fresh() end
+  dmode, kmain = D_MAIN, 0
+  return f(s)
+end
+-- An entry function as the wrappers below call it: once per call until it
+-- asks for a derivative, then three times. `fresh` (for material(s))
+-- clears what a run leaves behind before the next.
+derivs_wrap = function(f, fresh)
+  if f == nil then return nil end
+  local st = { triple = false }
+  return function(s)
+    if st.triple then return triple(f, s, fresh) end
+    dmode, dcurrent = D_SINGLE, st
+    return f(s)
+  end
+end
+end)()
+
+---------------------------------------------------------------------------
 -- Entry wrappers: Rust writes the shading point into `shade`, calls the
 -- wrapper with no arguments, and reads `out`. Results are checked here, where
 -- their Lua types are still known.
@@ -1426,13 +1611,14 @@ end
 local function make_height3(env, shader_name)
   local f = env.height
   if type(f) ~= "function" then return nil end
-  return height3_entry(f, shader_name)
+  return height3_entry(derivs_wrap(f), shader_name)
 end
 local function make_entry(env, entry, shader_name)
   local f = env[entry]
   -- A built-in of the same name (the emission{} constructor) is no entry
   -- point, and material(s) is called through make_material alone.
   if type(f) ~= "function" or f == BUILTINS[entry] or entry == "material" then return nil end
+  f = derivs_wrap(f)
   if entry == "height" or entry == "density" or entry == "roughness" or entry == "metalness" then
     return scalar_entry(f, shader_name, entry)
   end
@@ -1869,6 +2055,13 @@ local function closure_entry(f, shader_name)
   end
 end
 closures.entry = closure_entry
+-- A fresh node list for each run of a material(s) that takes derivatives:
+-- the offset runs' nodes are dropped, and their closures are stale.
+closures.fresh = function()
+  gen = gen + 1
+  material.closure_len = 0
+  building = true
+end
 end)()
 
 -- DecalMode material: every material output the script defines, in one call
@@ -1893,11 +2086,16 @@ local function material_scalar(f, shader_name, entry)
 end
 local function make_material(env, shader_name)
   -- A script that defines material(s) gives its closure alone.
-  if type(env.material) == "function" then return closures.entry(env.material, shader_name) end
+  if type(env.material) == "function" then
+    return closures.entry(derivs_wrap(env.material, closures.fresh), shader_name)
+  end
   local color, specular, emission, reflect = env.color, env.specular, env.emission, env.reflect
   local roughness, metalness = env.roughness, env.metalness
   -- emission is also the closure constructor, which is no output.
-  local function fn(f) if type(f) == "function" and f ~= closures.emission then return f end return nil end
+  local function fn(f)
+    if type(f) == "function" and f ~= closures.emission then return derivs_wrap(f) end
+    return nil
+  end
   color, specular, emission, reflect = fn(color), fn(specular), fn(emission), fn(reflect)
   roughness, metalness = fn(roughness), fn(metalness)
   if not (color or specular or emission or reflect or roughness or metalness) then return nil end
@@ -2031,6 +2229,8 @@ return {
   sizes = { shade = ffi.sizeof("luster_shade"), out = ffi.sizeof("luster_out"),
     material = ffi.sizeof("luster_material"), node = ffi.sizeof("luster_node"),
     clock = ffi.sizeof("luster_clock"), cell = ffi.sizeof("luster_cell"),
-    ray = ffi.sizeof("luster_ray"), hit = ffi.sizeof("luster_hit") },
+    ray = ffi.sizeof("luster_ray"), hit = ffi.sizeof("luster_hit"),
+    derivs = ffi.sizeof("luster_derivs") },
   set_attributes = set_attributes,
+  derivs = address(derivs),
 }

@@ -5,7 +5,7 @@ use super::ffi::{self, Shade};
 use super::{ShadeInput, ShadePoint};
 
 /// Writes one shading point into the record the prelude reads, with AVX
-/// where the CPU has it (`avx`, from [`has_avx`]): the record's 43 doubles
+/// where the CPU has it (`avx`, from [`has_avx`]): the record's 59 doubles
 /// are converted from floats four at a time, in half the stores of SSE2's
 /// two at a time. Same values: a float converts to a double exactly either
 /// way.
@@ -98,6 +98,12 @@ fn write_shade(s: &mut Shade, i: &ShadeInput, random_value: f64) {
         pixel_x,
         pixel_y,
         pad,
+        dpwdx,
+        dpwdy,
+        dpcdx,
+        dpcdy,
+        duvdx,
+        duvdy,
     } = s;
     *p = v(i.p);
     *pw = v(i.pw);
@@ -120,6 +126,12 @@ fn write_shade(s: &mut Shade, i: &ShadeInput, random_value: f64) {
     *pixel_x = int(i.pixel[0]);
     *pixel_y = int(i.pixel[1]);
     *pad = 0;
+    *dpwdx = v(i.dpwdx);
+    *dpwdy = v(i.dpwdy);
+    *dpcdx = v(i.dpcdx);
+    *dpcdy = v(i.dpcdy);
+    *duvdx = ffi::Vec2 { u: i.duvdx[0].into(), v: i.duvdx[1].into() };
+    *duvdy = ffi::Vec2 { u: i.duvdy[0].into(), v: i.duvdy[1].into() };
 }
 
 /// The shading point as `--debug-pixel` prints it.
@@ -127,7 +139,8 @@ pub(super) fn describe(i: &ShadeInput) -> String {
     let v = |a: [f32; 3]| format!("({}, {}, {})", a[0], a[1], a[2]);
     format!(
         "{{ P = {}, Pw = {}, Pc = {}, N = {}, Ng = {}, I = {}, uv = ({}, {}), dPdu = {}, dPdv = {}, \
-         dPdx = {}, dPdy = {}, filterwidth = {}, object_id = {}, instance_id = {}, depth = {}, time = {} }}",
+         dPdx = {}, dPdy = {}, dPwdx = {}, dPwdy = {}, dPcdx = {}, dPcdy = {}, duvdx = ({}, {}), \
+         duvdy = ({}, {}), filterwidth = {}, object_id = {}, instance_id = {}, depth = {}, time = {} }}",
         v(i.p),
         v(i.pw),
         v(i.pc),
@@ -140,6 +153,14 @@ pub(super) fn describe(i: &ShadeInput) -> String {
         v(i.dpdv),
         v(i.dpdx),
         v(i.dpdy),
+        v(i.dpwdx),
+        v(i.dpwdy),
+        v(i.dpcdx),
+        v(i.dpcdy),
+        i.duvdx[0],
+        i.duvdx[1],
+        i.duvdy[0],
+        i.duvdy[1],
         i.filterwidth,
         i.object_id,
         i.instance_id,

@@ -118,6 +118,7 @@ impl ThreadState {
             ("cell", std::mem::size_of::<ffi::CellOut>()),
             ("ray", std::mem::size_of::<super::trace::RayIn>()),
             ("hit", std::mem::size_of::<super::trace::HitOut>()),
+            ("derivs", std::mem::size_of::<ffi::Derivs>()),
         ] {
             if sizes.get::<usize>(k).map_err(internal)? != size {
                 let msg = format!("shader runtime: luster_{k} differs between prelude.lua and ffi.rs");
@@ -129,16 +130,16 @@ impl ThreadState {
             let msg = "shader runtime: cannot start the thread that enforces the time limit";
             return Err(ShaderError::new(ShaderErrorKind::Internal, "(prelude)", msg));
         }
-        let io = IoBlock::new(
-            addr("shade")?,
-            addr("shade_b")?,
-            addr("shade_c")?,
-            addr("out")?,
-            addr("material")?,
-            addr("clock")?,
-            ffi::limit_periods(timeout),
-        )
-        .ok_or_else(|| {
+        let addresses = ffi::Addresses {
+            shade: addr("shade")?,
+            shade_b: addr("shade_b")?,
+            shade_c: addr("shade_c")?,
+            out: addr("out")?,
+            material: addr("material")?,
+            clock: addr("clock")?,
+            derivs: addr("derivs")?,
+        };
+        let io = IoBlock::new(addresses, ffi::limit_periods(timeout)).ok_or_else(|| {
             ShaderError::new(ShaderErrorKind::Internal, "(prelude)", "shader runtime: bad record addresses")
         })?;
 

@@ -240,6 +240,8 @@ fn input_at(f: &TexFrame, p: Vec3, uv: Vec2, n: Vec3) -> ShadeInput {
         None => v,
     };
     let (dpdx, dpdy) = (to_object(c.dpdx), to_object(c.dpdy));
+    let (duvdx, duvdy) = (uv_change(f, dpdx), uv_change(f, dpdy));
+    let camera = |v: Vec3| Vec3::new(v.dot(c.view.right), v.dot(c.view.up), v.dot(c.view.back));
     ShadeInput {
         p: p.to_array(),
         pw: pw.to_array(),
@@ -258,7 +260,28 @@ fn input_at(f: &TexFrame, p: Vec3, uv: Vec2, n: Vec3) -> ShadeInput {
         instance_id: c.instance,
         depth: c.depth,
         pixel: c.pixel,
+        dpwdx: c.dpdx.to_array(),
+        dpwdy: c.dpdy.to_array(),
+        dpcdx: camera(c.dpdx).to_array(),
+        dpcdy: camera(c.dpdy).to_array(),
+        duvdx: duvdx.to_array(),
+        duvdy: duvdy.to_array(),
     }
+}
+
+/// The change of the texture coordinates along object-space step `d` of
+/// frame `f`: the `(du, dv)` whose `du·∂p/∂u + dv·∂p/∂v` comes closest to
+/// `d` (least squares, as pbrt's ray differentials do); zero where the
+/// surface has no usable parameterization.
+#[inline(always)]
+fn uv_change(f: &TexFrame, d: Vec3) -> Vec2 {
+    let (a, b, c) = (f.dpdu.dot(f.dpdu), f.dpdu.dot(f.dpdv), f.dpdv.dot(f.dpdv));
+    let det = a * c - b * b;
+    if !det.is_finite() || det.abs() <= 1e-12 * a * c {
+        return Vec2::ZERO;
+    }
+    let (pu, pv) = (f.dpdu.dot(d), f.dpdv.dot(d));
+    Vec2::new((c * pu - b * pv) / det, (a * pv - b * pu) / det)
 }
 
 /// The shading point of frame `f` with world shading normal `n`, as the

@@ -251,4 +251,46 @@ fn a_moved_point_is_the_point_input_builds_there() {
     }
 }
 
+#[test]
+fn the_footprint_reaches_the_script_in_every_space() {
+    let xf = luster_core::math::Transform::scaling(Vec3::new(2.0, 1.0, 0.5))
+        .and_then(|s| luster_core::math::Transform::rotation(30.0, Vec3::Y).map(|r| s.then(&r)))
+        .unwrap();
+    let mut f = frame();
+    // A sheared parameterization, so that du and dv mix.
+    f.dpdu = Vec3::new(2.0, 0.0, 0.0);
+    f.dpdv = Vec3::new(1.0, 3.0, 0.0);
+    f.to_world = Some(xf);
+    f.ctx.view = crate::texture::View {
+        eye: Vec3::new(0.0, 1.0, 5.0),
+        right: Vec3::new(0.6, 0.0, -0.8),
+        up: Vec3::Y,
+        back: Vec3::new(0.8, 0.0, 0.6),
+    };
+    f.ctx.ng = xf.normal_to_world(Vec3::Z).normalize();
+    f.ctx.incident = Vec3::new(0.1, -0.6, -0.8).normalize();
+    f.ctx.set_footprint(0.01);
+    let i = input(&f, f.p_object, f.uv, Vec3::Z);
+    let v = Vec3::from_array;
+    assert_eq!((v(i.dpwdx), v(i.dpwdy)), (f.ctx.dpdx, f.ctx.dpdy));
+    for (pc, pw) in [(i.dpcdx, i.dpwdx), (i.dpcdy, i.dpwdy)] {
+        // A camera-space step is the difference of two camera-space points
+        // (rounded to the points' own precision).
+        let view = &f.ctx.view;
+        let want = view.to_camera(f.p_world + v(pw)) - view.to_camera(f.p_world);
+        let ulp = f32::EPSILON * (f.p_world - view.eye).length();
+        assert!((v(pc) - want).length() <= 4.0 * ulp, "{pc:?} vs {want}");
+    }
+    for (duv, dp) in [(i.duvdx, i.dpdx), (i.duvdy, i.dpdy)] {
+        // The footprint lies in the surface, so the uv step rebuilds it.
+        let rebuilt = f.dpdu * duv[0] + f.dpdv * duv[1];
+        assert!(v(dp).length() > 0.0);
+        assert!((rebuilt - v(dp)).length() <= 1e-4 * v(dp).length(), "{rebuilt} vs {dp:?}");
+    }
+    // A degenerate parameterization gives no uv change.
+    f.dpdv = f.dpdu * 2.0;
+    let i = input(&f, f.p_object, f.uv, Vec3::Z);
+    assert_eq!((i.duvdx, i.duvdy), ([0.0; 2], [0.0; 2]));
+}
+
 const DEFAULT: Duration = luster_shading::shader::DEFAULT_TIMEOUT;
