@@ -11,3 +11,4 @@ pub mod math;
 pub mod memory;
 pub mod text;
 pub mod tonemap;
+pub mod uri;

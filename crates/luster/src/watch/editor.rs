@@ -448,37 +448,9 @@ fn shown(s: &str) -> String {
     luster_core::text::shown(s, false).into_owned()
 }
 
-/// `%XX`-decodes a URL path segment; `None` when it is not UTF-8 or an
-/// escape is malformed.
-pub fn percent_decode(s: &str) -> Option<String> {
-    let b = s.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
-    let mut i = 0;
-    while i < b.len() {
-        if b[i] == b'%' {
-            let hex = b.get(i + 1..i + 3).filter(|h| h.iter().all(u8::is_ascii_hexdigit))?;
-            out.push(u8::from_str_radix(std::str::from_utf8(hex).ok()?, 16).ok()?);
-            i += 3;
-        } else {
-            out.push(b[i]);
-            i += 1;
-        }
-    }
-    String::from_utf8(out).ok()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn url_segments_decode_and_bad_escapes_are_refused() {
-        assert_eq!(percent_decode("sh%2Fwood%20grain.lua").as_deref(), Some("sh/wood grain.lua"));
-        assert_eq!(percent_decode("%C3%A9.lua").as_deref(), Some("é.lua"));
-        for bad in ["%", "%2", "%zz", "%FF", "%+1"] {
-            assert_eq!(percent_decode(bad), None, "{bad}");
-        }
-    }
 
     #[test]
     fn the_default_slider_range_holds_the_value() {

@@ -33,9 +33,10 @@
 //! | `Host`, `Origin` | see [`request::admit`] | 421, 403 |
 
 use super::conns::Conns;
-use super::editor::{percent_decode, Editor, Refused};
+use super::editor::{Editor, Refused};
 use super::hub::Hub;
 use super::request::{self, Method, Refusal, Request, MAX_BODY, MAX_HEAD};
+use luster_core::uri::percent_decode;
 use std::io::{ErrorKind, Read, Write};
 use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
 use std::sync::Arc;

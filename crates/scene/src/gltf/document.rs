@@ -228,7 +228,7 @@ fn file_uri(path: &Path, uri: &str, json_path: &str) -> Result<PathBuf, SceneErr
     if scheme {
         return Err(at(path, json_path, "only relative file paths and data URIs are read, not URLs"));
     }
-    super::material::percent_decode(uri)
+    luster_core::uri::percent_decode(uri)
         .map(PathBuf::from)
         .ok_or_else(|| at(path, json_path, "the URI's percent-encoding is invalid"))
 }

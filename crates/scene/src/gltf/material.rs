@@ -15,7 +15,6 @@
 
 mod images;
 
-pub(crate) use images::percent_decode;
 mod params;
 
 use crate::ceng795::shader_map::read_script;

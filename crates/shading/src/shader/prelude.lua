@@ -467,7 +467,7 @@ local function filterwidth(s, scale)
   return s.filterwidth * abs(scale or 1)
 end
 -- filterwidth_xyz(s, [scale]): the footprint's extent along each object
--- axis, |dPdx| + |dPdy| per component (OSL's filterwidth of a point).
+-- axis, |dPdx| + |dPdy| per component, a box that holds the footprint.
 local function filterwidth_xyz(s, scale)
   local k, dx, dy = abs(scale or 1), s.dPdx, s.dPdy
   return vec3_t(k * (abs(dx.x) + abs(dy.x)), k * (abs(dx.y) + abs(dy.y)), k * (abs(dx.z) + abs(dy.z)))
@@ -1506,6 +1506,8 @@ end
 local function offset_pass(f, p, fresh)
   if fresh then fresh() end
   nrec, dmode, derivs.offset = 0, D_RECORD, 1
+  -- Each run may cast the whole per-call ray budget (trace()).
+  clock.rays = 0
   pcall(f, p)
   derivs.offset = 0
   return nrec
@@ -1522,7 +1524,7 @@ local function triple(f, s, fresh)
     nb = offset_pass(f, sy, fresh)
   end
   if fresh then fresh() end
-  dmode, kmain = D_MAIN, 0
+  dmode, kmain, clock.rays = D_MAIN, 0, 0
   return f(s)
 end
 -- An entry function as the wrappers below call it: once per call until it

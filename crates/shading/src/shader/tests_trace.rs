@@ -207,6 +207,35 @@ fn rays_past_the_cap_are_an_error_at_the_scripts_line() {
     assert!(e.message.starts_with("test.lua:3: bevel:"), "{e}");
 }
 
+/// Under automatic derivatives an entry runs three times (and the first
+/// call that asks is run again): each run has the whole budget, so a
+/// shader that fits the cap fits it with derivatives too.
+#[test]
+fn each_derivative_run_has_the_whole_ray_budget() {
+    let scene = Shapes { rects: vec![floor()], spheres: Vec::new() };
+    let script = |count: i32| {
+        format!(
+            "function color(s)
+               local hits = 0
+               for i = 1, {count} do
+                 if trace(s.Pw + vec3(0, 0, 1), vec3(0, 0, -1)) then hits = hits + 1 end
+               end
+               return hits, Dx(s.P.x), 0
+             end"
+        )
+    };
+    let mut p = point([0.25, 0.0, 0.0], UP);
+    (p.dpdx, p.dpwdx) = ([0.5, 0.0, 0.0], [0.5, 0.0, 0.0]);
+    let full = set_of(&script(MAX_RAYS)).unwrap();
+    for _ in 0..3 {
+        let c = with_tracer(&scene, || full.color(0, &p)).unwrap();
+        assert_eq!((c[0], c[1]), (MAX_RAYS as f32, 0.5), "{c:?}");
+    }
+    let over = set_of(&script(MAX_RAYS + 1)).unwrap();
+    let e = with_tracer(&scene, || over.color(0, &p)).unwrap_err();
+    assert!(e.message.starts_with("test.lua:4: trace:"), "{e}");
+}
+
 #[test]
 fn bad_arguments_name_the_built_in_and_the_line() {
     let cases = [

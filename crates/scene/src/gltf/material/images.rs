@@ -122,7 +122,8 @@ impl<'a> Images<'a> {
                 shown(uri, false)
             ));
         }
-        let name = percent_decode(uri).ok_or_else(|| format!("{} is not a valid URI", shown(uri, false)))?;
+        let name = luster_core::uri::percent_decode(uri)
+            .ok_or_else(|| format!("{} is not a valid URI", shown(uri, false)))?;
         Ok(self.base_dir.join(name))
     }
 
@@ -156,25 +157,6 @@ fn data_uri(uri: &str) -> Result<Arc<[u8]>, String> {
     Ok(Arc::from(bytes))
 }
 
-/// A URI's percent-escapes decoded (`%20` is a space); `None` when an escape
-/// is malformed or the result is not UTF-8.
-pub(crate) fn percent_decode(s: &str) -> Option<String> {
-    let b = s.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
-    let mut i = 0;
-    while i < b.len() {
-        if b[i] == b'%' {
-            let hex = std::str::from_utf8(b.get(i + 1..i + 3)?).ok()?;
-            out.push(u8::from_str_radix(hex, 16).ok()?);
-            i += 3;
-        } else {
-            out.push(b[i]);
-            i += 1;
-        }
-    }
-    String::from_utf8(out).ok()
-}
-
 /// The size an image's header gives, when it is a PNG or JPEG whose header decodes.
 fn header_size(path: &Path, bytes: Option<&[u8]>) -> Result<(u32, u32), String> {
     fn check<R: std::io::BufRead + std::io::Seek>(r: image::ImageReader<R>) -> Result<(u32, u32), String> {
@@ -198,15 +180,6 @@ fn header_size(path: &Path, bytes: Option<&[u8]>) -> Result<(u32, u32), String> 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn percent_escapes_decode() {
-        assert_eq!(percent_decode("my%20tex%C3%A9.png").as_deref(), Some("my texé.png"));
-        assert_eq!(percent_decode("plain.png").as_deref(), Some("plain.png"));
-        assert_eq!(percent_decode("bad%2"), None);
-        assert_eq!(percent_decode("bad%zz.png"), None);
-        assert_eq!(percent_decode("%ff.png"), None, "not UTF-8");
-    }
 
     #[test]
     fn data_uris_must_be_base64() {
