@@ -547,6 +547,10 @@ end
 -- its metatable, so it is cleaned in place; everything else a script sees
 -- is a copy made per shader, so one shader cannot change another's library.
 ---------------------------------------------------------------------------
+-- What the rest of the prelude uses from the sandbox; its helpers live in a
+-- function of their own, as the main chunk may have only 200 locals.
+local safe_sort, safe_move, safe_foreachi, safe_foreach, safe_concat, safe_resume, safe_wrap
+;(function()
 local MAX_REP = 16 * 1024 * 1024
 local rep = string.rep
 local function safe_rep(s, n, sep)
@@ -818,7 +822,7 @@ local function sift(t, i, n, lt)
   end
   rawset(t, i, v)
 end
-local function safe_sort(t, comp)
+function safe_sort(t, comp)
   if type(t) ~= "table" then
     error(format("bad argument #1 to 'sort' (table expected, got %s)", typename(t)), 2)
   end
@@ -853,7 +857,7 @@ local function table_arg(fname, k, v)
     error(format("bad argument #%d to '%s' (table expected, got %s)", k, fname, typename(v)), 3)
   end
 end
-local function safe_move(a1, f, e, t, a2)
+function safe_move(a1, f, e, t, a2)
   table_arg("move", 1, a1)
   f, e, t = int_arg("move", 2, f), int_arg("move", 3, e), int_arg("move", 4, t)
   if a2 == nil then a2 = a1 end
@@ -874,7 +878,7 @@ local function safe_move(a1, f, e, t, a2)
   end
   return a2
 end
-local function safe_foreachi(t, f)
+function safe_foreachi(t, f)
   table_arg("foreachi", 1, t)
   for i = 1, #t do
     lib_tick()
@@ -882,7 +886,7 @@ local function safe_foreachi(t, f)
     if r ~= nil then return r end
   end
 end
-local function safe_foreach(t, f)
+function safe_foreach(t, f)
   table_arg("foreach", 1, t)
   for k, v in next, t do
     lib_tick()
@@ -893,7 +897,7 @@ end
 -- table.concat converts numbers one by one in C: 2^22 items take well under
 -- a second; more is refused.
 local MAX_CONCAT = 4 * 1024 * 1024
-local function safe_concat(t, sep, i, j)
+function safe_concat(t, sep, i, j)
   if type(t) == "table" then
     local first = tonumber(i) or 1
     local last = tonumber(j) or #t
@@ -921,7 +925,7 @@ local function unnest(...)
   clock.depth = clock.depth - 1
   return ...
 end
-local function safe_resume(co, ...)
+function safe_resume(co, ...)
   -- A bad argument is LuaJIT's error, raised before anything nests.
   if type(co) ~= "thread" then return real_resume(co, ...) end
   nest(2)
@@ -931,7 +935,7 @@ local function rethrow(ok, ...)
   if not ok then error((...), 0) end
   return ...
 end
-local function safe_wrap(f)
+function safe_wrap(f)
   if type(f) ~= "function" then
     error(format("bad argument #1 to 'wrap' (function expected, got %s)", typename(f)), 2)
   end
@@ -941,6 +945,7 @@ local function safe_wrap(f)
     return rethrow(unnest(real_resume(co, ...)))
   end
 end
+end)()
 getmetatable("").__metatable = false
 
 local function copy(t, drop)
@@ -2138,7 +2143,8 @@ end
 -- over once per state (set_attributes), so a lookup is two table reads.
 ---------------------------------------------------------------------------
 local set_attributes
-do
+-- A function of its own: the main chunk is near its 200 locals.
+;(function()
   local by_instance, by_object, name_of = {}, {}, function() return nil end
   -- object:name, fetched from Rust on first use, by instance id (false: none).
   local names = {}
@@ -2202,7 +2208,7 @@ do
     by_instance, by_object, name_of, names = instances, objects, fetch_name, {}
   end
   BUILTINS.getattribute = getattribute
-end
+end)()
 
 -- Scripts run in their own environments, but the real globals lose the
 -- dangerous libraries too, as a second line of defence.
