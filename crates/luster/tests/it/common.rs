@@ -126,3 +126,35 @@ pub fn render_spp(desc: &luster::scene::Description, spp: u32, seed: u32) -> lus
     let scene = Scene::build(desc).expect("scene builds");
     render_with(&scene, 0, &RenderOptions { spp: Some(spp), seed, ..Default::default() }, &|_| {})
 }
+
+/// A black-lit plane `y = 0` seen at a grazing angle (from `(0, 1, 0)`
+/// towards `(0, gaze_y, -4)`), shaded only by the `replace_all` shader
+/// `shader` with the number parameter `param = value`: the scene the
+/// antialiasing tests render at 1 sample against a converged reference.
+pub fn grazing_plane(width: u32, height: u32, gaze_y: f32, shader: &str, param: &str, value: &str) -> String {
+    format!(
+        r#"<Scene>
+    <BackgroundColor>0 0 0</BackgroundColor>
+    <Cameras>
+        <Camera id="1" type="lookAt">
+            <Position>0 1 0</Position><GazePoint>0 {gaze_y} -4</GazePoint><Up>0 1 0</Up>
+            <FovY>50</FovY><NearDistance>1</NearDistance>
+            <ImageResolution>{width} {height}</ImageResolution><ImageName>out.png</ImageName>
+        </Camera>
+    </Cameras>
+    <Lights><AmbientLight>0 0 0</AmbientLight></Lights>
+    <Materials><Material id="1"><DiffuseReflectance>1 1 1</DiffuseReflectance></Material></Materials>
+    <Textures>
+        <TextureMap id="1" type="shader">
+            <Shader>{shader}</Shader>
+            <DecalMode>replace_all</DecalMode>
+            <Parameter name="{param}">{value}</Parameter>
+        </TextureMap>
+    </Textures>
+    <VertexData>0 0 0</VertexData>
+    <Objects>
+        <Plane id="1"><Material>1</Material><Textures>1</Textures><Point>1</Point><Normal>0 1 0</Normal></Plane>
+    </Objects>
+</Scene>"#
+    )
+}

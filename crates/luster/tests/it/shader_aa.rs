@@ -12,31 +12,7 @@ use luster::render::{try_render_with, RenderOptions, Scene};
 use std::path::Path;
 
 fn scene(fw: &str) -> String {
-    format!(
-        r#"<Scene>
-    <BackgroundColor>0 0 0</BackgroundColor>
-    <Cameras>
-        <Camera id="1" type="lookAt">
-            <Position>0 1 0</Position><GazePoint>0 0.75 -4</GazePoint><Up>0 1 0</Up>
-            <FovY>50</FovY><NearDistance>1</NearDistance>
-            <ImageResolution>128 64</ImageResolution><ImageName>out.png</ImageName>
-        </Camera>
-    </Cameras>
-    <Lights><AmbientLight>0 0 0</AmbientLight></Lights>
-    <Materials><Material id="1"><DiffuseReflectance>1 1 1</DiffuseReflectance></Material></Materials>
-    <Textures>
-        <TextureMap id="1" type="shader">
-            <Shader>checker.lua</Shader>
-            <DecalMode>replace_all</DecalMode>
-            <Parameter name="filtered">{fw}</Parameter>
-        </TextureMap>
-    </Textures>
-    <VertexData>0 0 0</VertexData>
-    <Objects>
-        <Plane id="1"><Material>1</Material><Textures>1</Textures><Point>1</Point><Normal>0 1 0</Normal></Plane>
-    </Objects>
-</Scene>"#
-    )
+    common::grazing_plane(128, 64, 0.75, "checker.lua", "filtered", fw)
 }
 
 const CHECKER: &str = "params { filtered = 1, frequency = 4 }
