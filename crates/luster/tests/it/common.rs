@@ -158,3 +158,19 @@ pub fn grazing_plane(width: u32, height: u32, gaze_y: f32, shader: &str, param: 
 </Scene>"#
     )
 }
+
+/// The 8-bit image of the scene file `path`'s first camera at `spp`
+/// samples per pixel and sampler seed `seed`.
+pub fn render_rgb8(path: &Path, spp: u32, seed: u32) -> Vec<u8> {
+    let desc = luster::scene::load(path).expect("the scene loads");
+    let s = luster::render::Scene::build(&desc).expect("the scene builds");
+    let opts = luster::render::RenderOptions { spp: Some(spp), seed, ..Default::default() };
+    luster::render::try_render_with(&s, 0, &opts, &|_| {}).expect("no shader fails").to_rgb8()
+}
+
+/// Peak signal-to-noise ratio of two 8-bit images, in dB.
+pub fn psnr(a: &[u8], b: &[u8]) -> f64 {
+    let mse =
+        a.iter().zip(b).map(|(x, y)| (f64::from(*x) - f64::from(*y)).powi(2)).sum::<f64>() / a.len() as f64;
+    10.0 * (255.0f64 * 255.0 / mse).log10()
+}

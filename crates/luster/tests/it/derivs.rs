@@ -9,8 +9,6 @@
 
 use crate::common;
 use common::folder;
-use luster::render::{try_render_with, RenderOptions, Scene};
-use std::path::Path;
 
 fn scene(auto: u32) -> String {
     common::grazing_plane(96, 48, 0.8, "stripes.lua", "auto", &auto.to_string())
@@ -36,13 +34,6 @@ end";
 
 const W: usize = 96;
 const H: usize = 48;
-
-fn render(path: &Path, spp: u32, seed: u32) -> Vec<u8> {
-    let desc = luster::scene::load(path).expect("the scene loads");
-    let s = Scene::build(&desc).expect("the scene builds");
-    let opts = RenderOptions { spp: Some(spp), seed, ..RenderOptions::default() };
-    try_render_with(&s, 0, &opts, &|_| {}).expect("no shader fails").to_rgb8()
-}
 
 /// Squared errors (on a 0–1 scale) summed per 8×8 block of pixels.
 fn block_sq_errors(a: &[u8], b: &[u8]) -> Vec<f64> {
@@ -74,14 +65,14 @@ fn automatic_widths_bring_one_sample_close_to_the_converged_image() {
     ]);
     let (auto, hard) = (dir.path().join("auto.xml"), dir.path().join("hard.xml"));
     let unwrapped = dir.path().join("unwrapped.xml");
-    let reference = render(&hard, 1024, 7);
+    let reference = common::render_rgb8(&hard, 1024, 7);
     // A second seed measures the reference's own noise (per-pixel RMSE of
     // one render: the two renders' RMSE over √2). One sample per pixel
     // sits at the pixel centre, whatever the seed.
-    let noise = rmse(&block_sq_errors(&render(&hard, 1024, 8), &reference)) / 2f64.sqrt();
-    let h = block_sq_errors(&render(&hard, 1, 0), &reference);
-    let a = block_sq_errors(&render(&auto, 1, 0), &reference);
-    let u = block_sq_errors(&render(&unwrapped, 1, 0), &reference);
+    let noise = rmse(&block_sq_errors(&common::render_rgb8(&hard, 1024, 8), &reference)) / 2f64.sqrt();
+    let h = block_sq_errors(&common::render_rgb8(&hard, 1, 0), &reference);
+    let a = block_sq_errors(&common::render_rgb8(&auto, 1, 0), &reference);
+    let u = block_sq_errors(&common::render_rgb8(&unwrapped, 1, 0), &reference);
     let (rh, ra, ru) = (rmse(&h), rmse(&a), rmse(&u));
     eprintln!(
         "stripes at a grazing angle, 1 spp against 1024 spp of the hard step (whose own noise is {noise:.4}): \
@@ -122,7 +113,7 @@ fn automatic_widths_render_the_same_on_one_and_two_threads() {
     let path = dir.path().join("auto.xml");
     let on = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| render(&path, 2, 0))
+        pool.install(|| common::render_rgb8(&path, 2, 0))
     };
     assert!(on(1) == on(2), "the image depends on the thread count");
 }

@@ -9,7 +9,7 @@
 use crate::common;
 use common::folder;
 use luster::render::{try_render_with, RenderOptions, Scene};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 fn scene(filtered: &str) -> String {
     common::grazing_plane(128, 64, 0.75, "floor.lua", "filtered", filtered)
@@ -29,25 +29,12 @@ function color(s)
   return 255 * v, 255 * v, 255 * v
 end";
 
-fn render(path: &Path, spp: Option<u32>) -> Vec<u8> {
-    let desc = luster::scene::load(path).expect("the scene loads");
-    let s = Scene::build(&desc).expect("the scene builds");
-    let opts = RenderOptions { spp, ..RenderOptions::default() };
-    try_render_with(&s, 0, &opts, &|_| {}).expect("no shader fails").to_rgb8()
-}
-
-fn psnr(a: &[u8], b: &[u8]) -> f64 {
-    let mse =
-        a.iter().zip(b).map(|(x, y)| (f64::from(*x) - f64::from(*y)).powi(2)).sum::<f64>() / a.len() as f64;
-    10.0 * (255.0f64 * 255.0 / mse).log10()
-}
-
 #[test]
 fn filtered_patterns_bring_one_sample_closer_to_the_converged_image() {
     let dir = folder(&[("filtered.xml", &scene("1")), ("plain.xml", &scene("0")), ("floor.lua", FLOOR)]);
-    let reference = render(&dir.path().join("plain.xml"), Some(256));
-    let plain = psnr(&render(&dir.path().join("plain.xml"), Some(1)), &reference);
-    let filtered = psnr(&render(&dir.path().join("filtered.xml"), Some(1)), &reference);
+    let reference = common::render_rgb8(&dir.path().join("plain.xml"), 256, 0);
+    let plain = common::psnr(&common::render_rgb8(&dir.path().join("plain.xml"), 1, 0), &reference);
+    let filtered = common::psnr(&common::render_rgb8(&dir.path().join("filtered.xml"), 1, 0), &reference);
     println!(
         "bricks and marble to the horizon, 1 spp against 256 spp: plain {plain:.2} dB, filtered {filtered:.2} dB \
          ({:+.2} dB)",

@@ -8,8 +8,6 @@
 
 use crate::common;
 use common::folder;
-use luster::render::{try_render_with, RenderOptions, Scene};
-use std::path::Path;
 
 fn scene(fw: &str) -> String {
     common::grazing_plane(128, 64, 0.75, "checker.lua", "filtered", fw)
@@ -26,25 +24,12 @@ function color(s)
   return c, c, c
 end";
 
-fn render(path: &Path, spp: u32) -> Vec<u8> {
-    let desc = luster::scene::load(path).expect("the scene loads");
-    let s = Scene::build(&desc).expect("the scene builds");
-    let opts = RenderOptions { spp: Some(spp), ..RenderOptions::default() };
-    try_render_with(&s, 0, &opts, &|_| {}).expect("no shader fails").to_rgb8()
-}
-
-fn psnr(a: &[u8], b: &[u8]) -> f64 {
-    let mse =
-        a.iter().zip(b).map(|(x, y)| (f64::from(*x) - f64::from(*y)).powi(2)).sum::<f64>() / a.len() as f64;
-    10.0 * (255.0f64 * 255.0 / mse).log10()
-}
-
 #[test]
 fn filtering_brings_one_sample_closer_to_the_converged_image() {
     let dir = folder(&[("filtered.xml", &scene("1")), ("plain.xml", &scene("0")), ("checker.lua", CHECKER)]);
-    let reference = render(&dir.path().join("plain.xml"), 256);
-    let plain = psnr(&render(&dir.path().join("plain.xml"), 1), &reference);
-    let filtered = psnr(&render(&dir.path().join("filtered.xml"), 1), &reference);
+    let reference = common::render_rgb8(&dir.path().join("plain.xml"), 256, 0);
+    let plain = common::psnr(&common::render_rgb8(&dir.path().join("plain.xml"), 1, 0), &reference);
+    let filtered = common::psnr(&common::render_rgb8(&dir.path().join("filtered.xml"), 1, 0), &reference);
     println!(
         "checkerboard to the horizon, 1 spp against 256 spp: plain {plain:.2} dB, filtered {filtered:.2} dB \
          ({:+.2} dB)",
