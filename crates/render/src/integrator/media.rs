@@ -321,7 +321,7 @@ fn point(
         inscatter += f * e;
     };
     for l in &scene.lights {
-        if let Some(ls) = l.sample(p, p, None, st.time, &mut st.sampler) {
+        if let Some(ls) = l.sample(p, None, st.time, &mut st.sampler) {
             light(ls.wi, ls.dist, ls.e, st);
         }
     }

@@ -179,7 +179,7 @@ pub(crate) fn light_reaching_inline(
     n: Vec3,
     st: &mut PathState,
 ) -> Option<(LightSample, f32, Vec3)> {
-    let ls = light.sample(origin, p, Some(n), st.time, &mut st.sampler)?;
+    let ls = light.sample(p, Some(n), st.time, &mut st.sampler)?;
     light_reaching_from(scene, light, ls, origin, p, n, st)
 }
 

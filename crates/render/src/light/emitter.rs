@@ -6,7 +6,7 @@
 //!
 //! | emitter | sampled | density of `ω` (solid angle) |
 //! |---|---|---|
-//! | `LightMesh` | a triangle by area, then a uniform point on it | `d² / (A |n · ω|)`, `A` the total area |
+//! | `LightMesh` | a triangle by area, then a uniform point on it | `d² / (A |n · ω|)`, `A` the area the point may see |
 //! | `LightSphere` | a uniform direction in the cone the sphere subtends | `1 / (2π (1 − cos θmax))`, `sin θmax = R / d_c` |
 //!
 //! Sampling the cone instead of the surface never wastes a sample on the far
@@ -14,8 +14,9 @@
 //! A mesh emits from both faces (like the course's square area lights; the
 //! course's mesh lights are closed boxes whose winding is not consistent),
 //! a sphere from its outside. Where the mesh is a convex shell (the course's
-//! boxes), a point drawn on its far side is known to be blocked by its near
-//! side without a shadow ray ([`LightMesh::hides`], `shell.rs`).
+//! boxes), its far side is blocked by its near side: points are drawn only
+//! on the faces the shading point sees, and `A` is their area
+//! ([`LightMesh::point_seen`], `shell/`).
 //!
 //! A `MotionBlur` translation moves the light with its object: a sample for
 //! a ray at shutter time `t` is drawn on the light moved by `t · motion`,
@@ -40,7 +41,8 @@ const SCAN_TRIANGLES: usize = 32;
 /// A mesh that emits `radiance` from every point of both faces, in world space.
 #[derive(Clone, Debug)]
 pub struct LightMesh {
-    /// Each triangle as a corner, two edges and its unit normal.
+    /// Each triangle as a corner, two edges and its unit normal; on a
+    /// shell, sorted by face.
     tris: Vec<[Vec3; 4]>,
     /// Each triangle's span of the running sums of the areas: the sum
     /// before it (0 for the first) and the sum up to it, read as a pair
@@ -58,9 +60,27 @@ pub struct LightMesh {
     pub radiance: Vec3,
     /// World-space translation over the shutter interval (`MotionBlur`).
     pub motion: Vec3,
-    /// Where the mesh is a convex shell, which hides its far side: then
-    /// each triangle's normal in `tris` points out.
-    shell: Option<Shell>,
+    /// Where the mesh is a convex shell, which hides its far side: its
+    /// faces, each a run of `tris`, whose normals there point out.
+    faces: Option<Faces>,
+}
+
+/// A convex light mesh's faces, for drawing points only on those a point
+/// sees.
+#[derive(Clone, Debug)]
+struct Faces {
+    shell: Shell,
+    /// Per face of `shell`: its triangles' range in `tris`, the area sum
+    /// before its first triangle and its area.
+    runs: Vec<Run>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Run {
+    first: u32,
+    end: u32,
+    before: f32,
+    area: f32,
 }
 
 impl LightMesh {
@@ -71,23 +91,29 @@ impl LightMesh {
         xf: &Transform,
         radiance: Vec3,
     ) -> Option<LightMesh> {
-        let world: Vec<[Vec3; 3]> = corners
+        let mut world: Vec<[Vec3; 3]> = corners
             .map(|c| c.map(|p| xf.point(p)))
             .filter(|[a, b, c]| {
                 let area = 0.5 * (*b - *a).cross(*c - *a).length();
                 area > 0.0 && area.is_finite()
             })
             .collect();
-        let shell = Shell::new(&world);
+        let normal = |[a, b, c]: &[Vec3; 3]| (*b - *a).cross(*c - *a).normalize();
+        // A shell's triangles in runs, one run per face.
+        let shell = Shell::new(&world).and_then(|s| {
+            let face: Vec<usize> = world.iter().map(|t| s.face_of(t[0], normal(t))).collect::<Option<_>>()?;
+            let mut order: Vec<usize> = (0..world.len()).collect();
+            order.sort_by_key(|&i| face[i]);
+            world = order.iter().map(|&i| world[i]).collect();
+            Some((s, order.iter().map(|&i| face[i]).collect::<Vec<_>>()))
+        });
         let mut tris = Vec::with_capacity(world.len());
         let mut cdf = Vec::with_capacity(world.len());
         let mut total = 0.0f32;
-        for [a, b, c] in world {
-            let (e1, e2) = (b - a, c - a);
-            let cross = e1.cross(e2);
-            total += 0.5 * cross.length();
-            let n = cross.normalize();
-            tris.push([a, e1, e2, shell.as_ref().map_or(n, |s| s.outward(a, n))]);
+        for t @ [a, b, c] in &world {
+            total += 0.5 * (*b - *a).cross(*c - *a).length();
+            let n = normal(t);
+            tris.push([*a, *b - *a, *c - *a, shell.as_ref().map_or(n, |(s, _)| s.outward(*a, n))]);
             cdf.push(total);
         }
         let scan = if cdf.len() <= SCAN_TRIANGLES {
@@ -97,8 +123,21 @@ impl LightMesh {
         } else {
             Vec::new()
         };
-        let spans = cdf.iter().scan(0.0, |lo, &hi| Some((std::mem::replace(lo, hi), hi))).collect();
-        (total > 0.0).then_some(LightMesh { tris, spans, scan, total, radiance, motion: Vec3::ZERO, shell })
+        let spans: Vec<(f32, f32)> =
+            cdf.iter().scan(0.0, |lo, &hi| Some((std::mem::replace(lo, hi), hi))).collect();
+        let faces = shell.map(|(shell, face)| {
+            let runs = (0..shell.faces())
+                .map(|k| {
+                    let first = face.partition_point(|&f| f < k);
+                    let end = face.partition_point(|&f| f <= k);
+                    let before = spans.get(first).map_or(total, |s| s.0);
+                    let after = if end > 0 { spans[end - 1].1 } else { 0.0 };
+                    Run { first: first as u32, end: end as u32, before, area: (after - before).max(0.0) }
+                })
+                .collect();
+            Faces { shell, runs }
+        });
+        (total > 0.0).then_some(LightMesh { tris, spans, scan, total, radiance, motion: Vec3::ZERO, faces })
     }
 
     /// Total area.
@@ -107,11 +146,55 @@ impl LightMesh {
         self.total
     }
 
-    /// A point drawn uniformly by area from `(u1, u2)`, and its unit normal.
+    /// The faces the point `p` (the light at rest) sees, as
+    /// [`Shell::facing`]'s mask, and their area; `None` where `p` may see
+    /// every point (a mesh that is no shell, or `p` inside it).
+    #[inline(always)]
+    fn seen(&self, p: Vec3) -> Option<(u32, f32)> {
+        let f = self.faces.as_ref()?;
+        let mask = f.shell.facing(p);
+        if mask == 0 {
+            return None;
+        }
+        let area = f.runs.iter().enumerate().filter(|(k, _)| mask >> k & 1 != 0).map(|(_, r)| r.area).sum();
+        Some((mask, area))
+    }
+
+    /// A point drawn uniformly by area from `(u1, u2)` over every triangle, and its unit normal.
     #[inline(always)]
     pub fn point(&self, (u1, u2): (f32, f32)) -> (Vec3, Vec3) {
-        let total = self.area();
-        let target = u1 * total;
+        self.point_in(u1 * self.total, u2, 0, self.tris.len())
+    }
+
+    /// A point drawn uniformly by area from `(u1, u2)` over the part of the
+    /// mesh that the point `p` (the light at rest) may see, and its unit
+    /// normal: on a convex shell, the faces `p` is outside of
+    /// ([`Shell::facing`]); on any other mesh, all of it.
+    #[inline(always)]
+    pub fn point_seen(&self, (u1, u2): (f32, f32), p: Vec3) -> (Vec3, Vec3) {
+        let (Some((mask, area)), Some(f)) = (self.seen(p), self.faces.as_ref()) else {
+            return self.point((u1, u2));
+        };
+        // Walk the seen faces' areas; the part of `u1` left in a face picks
+        // a point of its run of the sums.
+        let mut left = u1 * area;
+        let mut last = f.runs[0];
+        for (k, r) in f.runs.iter().enumerate() {
+            if mask >> k & 1 == 0 {
+                continue;
+            }
+            last = *r;
+            if left < r.area {
+                break;
+            }
+            left -= r.area;
+        }
+        self.point_in(last.before + left.min(last.area), u2, last.first as usize, last.end as usize)
+    }
+
+    /// The point of the sums at `target`, in the triangles `first..end`.
+    #[inline(always)]
+    fn point_in(&self, target: f32, u2: f32, first: usize, end: usize) -> (Vec3, Vec3) {
         // A light of a few triangles (the course's boxes have ten) is
         // searched by counting, without the binary search's unpredictable
         // branches; both find the first sum above `target`.
@@ -120,9 +203,9 @@ impl LightMesh {
         } else {
             self.spans.partition_point(|&(_, hi)| hi <= target)
         };
-        let i = i.min(self.tris.len() - 1);
+        let i = i.clamp(first, end - 1);
         let (lo, hi) = self.spans[i];
-        // The part of u1 left over inside the chosen triangle is uniform again.
+        // The part of the sums left over inside the chosen triangle is uniform again.
         let u1 = ((target - lo) / (hi - lo)).clamp(0.0, 1.0);
         let [a, e1, e2, n] = self.tris[i];
         let s = u1.sqrt();
@@ -130,29 +213,19 @@ impl LightMesh {
         (a + e1 * b1 + e2 * b2, n)
     }
 
-    /// Whether the mesh itself certainly blocks the segment from `o` to `q`,
-    /// a point from [`point`](Self::point) with its normal `n`, at shutter
-    /// `time` (`q` already moved): `q` is on the far side of a convex shell
-    /// (`Shell::hides`). A shadow ray towards it need not be traced.
-    #[inline(always)]
-    pub fn hides(&self, o: Vec3, q: Vec3, n: Vec3, time: f32) -> bool {
-        self.shell.as_ref().is_some_and(|s| {
-            let back = self.motion * time;
-            s.hides(o - back, q - back, n)
-        })
-    }
-
-    /// Solid-angle density of reaching point `q` (normal `n`) from `p`
-    /// through [`point`](Self::point).
+    /// Solid-angle density of reaching the point `q` (normal `n`) from `p`
+    /// through [`point_seen`](Self::point_seen), both where they are at
+    /// shutter `time`.
     #[inline]
-    pub fn pdf(&self, p: Vec3, q: Vec3, n: Vec3) -> f32 {
+    pub fn pdf(&self, p: Vec3, q: Vec3, n: Vec3, time: f32) -> f32 {
         let to = q - p;
         let d2 = to.length_squared();
         let cos = n.dot(to).abs() / d2.sqrt();
         if cos <= 0.0 {
             return 0.0;
         }
-        d2 / (self.area() * cos)
+        let area = self.seen(p - self.motion * time).map_or(self.total, |s| s.1);
+        d2 / (area * cos)
     }
 
     /// The world-space box of the mesh at rest, as its lower and upper
@@ -400,23 +473,19 @@ pub struct ShadedLight {
 }
 
 impl ShadedLight {
-    /// A sample towards the object from the point `p` at shutter `time`
-    /// (`origin`, `p` moved off its surface, tells whether a convex mesh
-    /// hides the point): unit direction, distance to the sampled point
-    /// (on a sphere, any first hit on the object counts as the sample), and
-    /// the density over solid angle, all measured from `p`.
+    /// A sample towards the object from the point `p` at shutter `time`:
+    /// unit direction, distance to the sampled point (on a sphere, any
+    /// first hit on the object counts as the sample), and the density over
+    /// solid angle, all measured from `p`.
     #[inline]
-    pub fn sample(&self, origin: Vec3, p: Vec3, time: f32, u: (f32, f32)) -> Option<(Vec3, f32, f32)> {
+    pub fn sample(&self, p: Vec3, time: f32, u: (f32, f32)) -> Option<(Vec3, f32, f32)> {
         match &self.shape {
             ShadedShape::Mesh(l) => {
-                let (q, nq) = l.point(u);
+                let (q, nq) = l.point_seen(u, p - l.motion * time);
                 let q = q + l.motion * time;
-                if l.hides(origin, q, nq, time) {
-                    return None;
-                }
                 let to = q - p;
                 let dist = to.length();
-                let pdf = l.pdf(p, q, nq);
+                let pdf = l.pdf(p, q, nq, time);
                 (pdf > 0.0 && pdf.is_finite() && dist > 0.0).then_some((to / dist, dist, pdf))
             }
             ShadedShape::Sphere(l) => l.sample(p - l.motion * time, u),
@@ -429,7 +498,7 @@ impl ShadedLight {
     #[inline]
     pub fn pdf(&self, from: Vec3, q: Vec3, ng: Vec3, d: Vec3, time: f32) -> f32 {
         match &self.shape {
-            ShadedShape::Mesh(l) => l.pdf(from, q, ng),
+            ShadedShape::Mesh(l) => l.pdf(from, q, ng, time),
             ShadedShape::Sphere(l) => l.pdf(from - l.motion * time, d.normalize()),
         }
     }
@@ -532,7 +601,7 @@ mod tests {
         let q = Vec3::new(0.6, 0.3, 0.0);
         let d = q - p;
         let want = d.length_squared() / (1.5 * (d.z.abs() / d.length()));
-        assert!((m.pdf(p, q, Vec3::Z) - want).abs() < 1e-4 * want);
+        assert!((m.pdf(p, q, Vec3::Z, 0.0) - want).abs() < 1e-4 * want);
     }
 
     #[test]
@@ -572,7 +641,7 @@ mod tests {
             // The estimate of the solid angle, Σ 1/pdf, against the exact one.
             let (mut sum, n) = (0.0f64, 20_000);
             for _ in 0..n {
-                let (wi, dist, pdf) = l.sample(p, p, 0.0, (rng.next(), rng.next())).expect("in view");
+                let (wi, dist, pdf) = l.sample(p, 0.0, (rng.next(), rng.next())).expect("in view");
                 let q = p + wi * dist.min(1e3);
                 let ng = match &l.shape {
                     ShadedShape::Mesh(_) => Vec3::Y,

@@ -185,9 +185,7 @@ impl Light {
     /// Light from this light at a surface point `p` (`n` the normal when
     /// there is a surface), for a ray at shutter `time` (a moving object
     /// light is sampled where it is then). The direction, distance and
-    /// density are measured from `p` itself; `origin`, `p` moved off the
-    /// surface where the shadow ray starts, only tells whether a convex
-    /// light mesh hides the point drawn on it. Area and environment lights draw one 2D sample from
+    /// density are measured from `p` itself. Area and environment lights draw one 2D sample from
     /// `sampler`; the others draw none, so adding them changes no other
     /// light's samples. `None` when no light arrives. Always inlined: a
     /// sample returned through memory would be read back in wide loads
@@ -195,13 +193,12 @@ impl Light {
     #[inline(always)]
     pub fn sample(
         &self,
-        origin: Vec3,
         p: Vec3,
         n: Option<Vec3>,
         time: f32,
         sampler: &mut PixelSampler,
     ) -> Option<LightSample> {
-        self.sample_by(origin, p, || n, time, sampler)
+        self.sample_by(p, || n, time, sampler)
     }
 
     /// [`sample`](Self::sample) at a surface point of normal `n`. The
@@ -211,20 +208,18 @@ impl Light {
     #[inline(always)]
     pub fn sample_at(
         &self,
-        origin: Vec3,
         p: Vec3,
         n: Vec3,
         time: f32,
         sampler: &mut PixelSampler,
     ) -> Option<LightSample> {
-        self.sample_by(origin, p, || Some(n), time, sampler)
+        self.sample_by(p, || Some(n), time, sampler)
     }
 
     /// [`sample`](Self::sample) with the normal given by `n`.
     #[inline(always)]
     fn sample_by(
         &self,
-        origin: Vec3,
         p: Vec3,
         n: impl FnOnce() -> Option<Vec3>,
         time: f32,
@@ -265,7 +260,7 @@ impl Light {
                 let pdf = dist * dist / (l.area * cos_light);
                 Some(LightSample { wi, dist, e: l.radiance / pdf, point_source: false, pdf })
             }
-            Light::Mesh(l) => l.sample_from(origin, p, l.point(sampler.next_2d()), time),
+            Light::Mesh(l) => l.sample_from(p, l.point_seen(sampler.next_2d(), p - l.motion * time), time),
             Light::Sphere(l) => {
                 // Moving the point back is moving the sphere forward.
                 let (wi, dist, pdf) = l.sample(p - l.motion * time, sampler.next_2d())?;
@@ -303,25 +298,16 @@ impl Light {
 }
 
 impl LightMesh {
-    /// [`Light::sample`] of this mesh for its point `q` of normal `nq`
-    /// ([`LightMesh::point`], at rest) already drawn.
+    /// [`Light::sample`] of this mesh from `p` at shutter `time`, for its
+    /// point `q` of normal `nq` ([`LightMesh::point_seen`], at rest)
+    /// already drawn.
     #[inline(always)]
-    pub fn sample_from(
-        &self,
-        origin: Vec3,
-        p: Vec3,
-        (q, nq): (Vec3, Vec3),
-        time: f32,
-    ) -> Option<LightSample> {
+    pub fn sample_from(&self, p: Vec3, (q, nq): (Vec3, Vec3), time: f32) -> Option<LightSample> {
         let q = q + self.motion * time;
-        // The mesh's far side: the shadow ray would be blocked by it.
-        if self.hides(origin, q, nq, time) {
-            return None;
-        }
         let to = q - p;
         let dist = to.length();
         let wi = to / dist;
-        let pdf = self.pdf(p, q, nq);
+        let pdf = self.pdf(p, q, nq, time);
         // `pdf <= 0 || !pdf.is_finite()` in one test (NaN fails both).
         if !(pdf > 0.0 && pdf < f32::INFINITY) {
             return None;
@@ -384,11 +370,11 @@ mod tests {
         let mut sampler = PixelSampler::new(1, 0, 0, 0, 1);
         let p = Vec3::new(0.0, -2.0, 0.0);
         let l = Light::Spot(spot(30.0, 20.0));
-        let s = l.sample(p, p, None, 0.0, &mut sampler).expect("inside the cone");
+        let s = l.sample(p, None, 0.0, &mut sampler).expect("inside the cone");
         assert!((s.e - Vec3::splat(25.0)).abs().max_element() < 1e-4);
         assert!((s.wi - Vec3::Y).length() < 1e-6 && (s.dist - 2.0).abs() < 1e-6);
         let d = Light::Directional { direction: Vec3::new(0.0, -1.0, 0.0), radiance: Vec3::splat(7.0) };
-        let s = d.sample(p * 100.0, p * 100.0, None, 0.0, &mut sampler).expect("always lit");
+        let s = d.sample(p * 100.0, None, 0.0, &mut sampler).expect("always lit");
         assert_eq!(s.e, Vec3::splat(7.0));
         assert_eq!(s.wi, Vec3::Y);
         assert!(s.dist.is_infinite());

@@ -40,7 +40,7 @@ pub(super) fn next_event_phase(
             color += shaded_sample(scene, l, x, &phase, x, depth, scale, p, st);
             continue;
         }
-        let Some(ls) = light.sample(x, x, None, st.time, &mut st.sampler) else { continue };
+        let Some(ls) = light.sample(x, None, st.time, &mut st.sampler) else { continue };
         if is_black(ls.e) {
             continue;
         }

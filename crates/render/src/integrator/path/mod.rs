@@ -405,35 +405,34 @@ struct LightAhead {
 
 impl LightAhead {
     /// The point of the first light that draws, where it is a mesh and the
-    /// light samples take every light (not one chosen by a draw of its own).
+    /// light samples take every light (not one chosen by a draw of its own),
+    /// for the surface point `x`.
     #[inline(always)]
-    fn draw(scene: &Scene, p: PathParams, st: &mut PathState) -> Option<LightAhead> {
+    fn draw(scene: &Scene, p: PathParams, x: Vec3, st: &mut PathState) -> Option<LightAhead> {
         if p.mis && !every_light(scene, p) {
             return None;
         }
         let light = scene.lights.iter().position(Light::draws)?;
         let Light::Mesh(l) = &scene.lights[light] else { return None };
-        let (q, n) = l.point(st.sampler.next_2d());
+        let (q, n) = l.point_seen(st.sampler.next_2d(), x - l.motion * st.time);
         Some(LightAhead { light, q, n })
     }
 
     /// The sample of `light`, the `i`th of the scene's, for a surface point
-    /// `p` of normal `n` (shadow rays from `origin`): from the point drawn
-    /// ahead where it is that light's, else drawn now.
-    #[allow(clippy::too_many_arguments)]
+    /// `p` of normal `n`: from the point drawn ahead where it is that
+    /// light's, else drawn now.
     #[inline(always)]
     fn sample(
         ahead: Option<LightAhead>,
         i: usize,
         light: &Light,
-        origin: Vec3,
         p: Vec3,
         n: Vec3,
         st: &mut PathState,
     ) -> Option<LightSample> {
         match (light, ahead) {
-            (Light::Mesh(l), Some(a)) if a.light == i => l.sample_from(origin, p, (a.q, a.n), st.time),
-            _ => light.sample_at(origin, p, n, st.time, &mut st.sampler),
+            (Light::Mesh(l), Some(a)) if a.light == i => l.sample_from(p, (a.q, a.n), st.time),
+            _ => light.sample_at(p, n, st.time, &mut st.sampler),
         }
     }
 }
@@ -545,7 +544,7 @@ fn shade<const V: u8>(
     // sample lights: nothing draws between here and [`next_event`], so it
     // is the value that would be drawn there (see [`LightAhead`]).
     let samples_lights = (p.next_event || p.mis) && m.traits.reflects && !inside_dielectric;
-    let ahead = if samples_lights && !past && !m.closure { LightAhead::draw(scene, p, st) } else { None };
+    let ahead = if samples_lights && !past && !m.closure { LightAhead::draw(scene, p, hit.p, st) } else { None };
 
     // Under the course's next-event estimation an object light that a
     // random bounce hits counts nothing (its samples counted it): skip the

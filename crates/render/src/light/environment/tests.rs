@@ -273,7 +273,7 @@ fn furnace_constant_environment_gives_pi_kd_l() {
             let mut sum = 0.0f64;
             for i in 0..count {
                 let mut s = PixelSampler::new(9, 1, 2, i, count);
-                if let Some(ls) = light.sample(Vec3::ZERO, Vec3::ZERO, Some(n), 0.0, &mut s) {
+                if let Some(ls) = light.sample(Vec3::ZERO, Some(n), 0.0, &mut s) {
                     let cos = ls.wi.dot(n);
                     if cos > 0.0 {
                         sum += (ls.e.x * cos) as f64;

@@ -1,29 +1,26 @@
-//! Which light samples a light mesh hides from a point by itself: the far
-//! side of a convex emitter.
+//! Which faces of a light mesh a point can see: the near side of a convex
+//! emitter.
 //!
 //! The course's mesh lights are small boxes (`LightMesh`, hw7) that emit from
-//! both faces of every triangle, since their winding is not consistent. A
-//! point drawn by area on the box's far side, seen from outside, is always
-//! behind the box's near side: its shadow ray is traced only to be blocked,
-//! and on the hw7 Cornell boxes many next-event shadow rays are such.
+//! both faces of every triangle, since their winding is not consistent. Seen
+//! from outside, a point on the box's far side is always behind its near
+//! side, so a light sample drawn there by area would be wasted: half the
+//! samples of a box seen from below, nearly all of them from a ceiling beside
+//! it. A light mesh that is a [`Shell`] draws its points only on the faces
+//! the shading point sees ([`Shell::facing`]), with the density over their
+//! area alone.
 //!
-//! A [`Shell`] is what the mesh must be for that to be certain: every
+//! A [`Shell`] is what the mesh must be for that to be exact: every
 //! triangle lies on one of a few planes with every vertex of the mesh on one
 //! side (a convex polyhedron's surface, each plane's outer side known), its
 //! edges are each shared by two triangles except those around holes, and the
 //! holes' edges all lie on one plane that is also a face of the hull (the
 //! course's boxes are open at the top, flush with the ceiling). Then from a
-//! point `o` outside the hull and inside the hole's plane, the segment to a
-//! point `q` on a face whose outer side looks away from `o` arrives at `q`
+//! point `o` outside the hull and not beyond the hole's plane, the segment to
+//! a point `q` on a face whose outer side looks away from `o` arrives at `q`
 //! from inside the hull: it entered the hull first, through a triangle and
-//! not the hole, and so is blocked. [`Shell::hides`] answers that; a mesh
-//! that is no such shell, and any point for which a test is within the
-//! tolerance, keeps its shadow ray.
-//!
-//! The answer is the one the shadow ray gives, except where the ray enters
-//! the box within the shadow epsilon of the sampled point (near an edge),
-//! which the ray lets through and the shell does not: light leaking through
-//! the box's edges, which no emitter should show.
+//! not the hole, and so is blocked. A mesh that is no such shell draws
+//! from all of its area.
 
 use luster_core::math::Vec3;
 use std::collections::HashMap;
@@ -98,26 +95,41 @@ impl Shell {
         Some(Shell { faces, hole, tol })
     }
 
+    /// The face (an index below [`faces`](Self::faces)) that the triangle
+    /// with corner `a` and unit normal `n` lies on.
+    pub fn face_of(&self, a: Vec3, n: Vec3) -> Option<usize> {
+        self.faces.iter().position(|f| f.dist(a).abs() <= self.tol && f.n.dot(n).abs() > 0.999)
+    }
+
+    /// How many faces the shell has (at most [`MAX_PLANES`]).
+    pub fn faces(&self) -> usize {
+        self.faces.len()
+    }
+
     /// `n`, the unit normal of a triangle of the shell with corner `a`,
     /// turned to point out of the hull.
     pub fn outward(&self, a: Vec3, n: Vec3) -> Vec3 {
-        let face = self.faces.iter().find(|f| f.dist(a).abs() <= self.tol && f.n.dot(n).abs() > 0.999);
-        match face {
+        match self.face_of(a, n).map(|k| self.faces[k]) {
             Some(f) if f.n.dot(n) < 0.0 => -n,
             _ => n,
         }
     }
 
-    /// Whether the segment from `o` to `q`, a point on a triangle of the
-    /// shell with outward unit normal `n` ([`outward`](Self::outward)),
-    /// certainly meets another triangle of the shell first.
+    /// The faces whose points `o` may see, as a mask (bit `k` for face
+    /// `k`): those whose outer side `o` is on. Every point of another face
+    /// is behind it, so a segment from `o` arrives there from inside the
+    /// hull, having entered it through a face (not the hole: `o` is not
+    /// beyond the hole's plane, so neither is any point of the segment).
+    /// 0 where `o` may see every face: inside the hull, or beyond the
+    /// hole's plane, where the open side shows the inside. Exact tests,
+    /// with no tolerance: a face that `o` is within rounding of is seen
+    /// edge-on, and counts nothing either way.
     #[inline]
-    pub fn hides(&self, o: Vec3, q: Vec3, n: Vec3) -> bool {
-        let tol = self.tol;
-        // Behind `q`'s face, the segment arrives at `q` from inside the hull.
-        n.dot(o - q) < -tol
-            && self.faces.iter().any(|f| f.dist(o) > tol)
-            && self.hole.is_none_or(|p| p.dist(o) < -tol)
+    pub fn facing(&self, o: Vec3) -> u32 {
+        if self.hole.is_some_and(|h| h.dist(o) > 0.0) {
+            return 0;
+        }
+        self.faces.iter().enumerate().fold(0, |m, (k, f)| m | (u32::from(f.dist(o) > 0.0) << k))
     }
 }
 

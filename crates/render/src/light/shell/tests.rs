@@ -1,6 +1,6 @@
-//! Tests of the convex-shell test of light meshes against the mesh's own
-//! shadow rays: the course's open box, closed boxes, meshes that are no
-//! shell, and a moving light.
+//! Tests of the faces a light mesh's points are drawn on, against the
+//! mesh's own shadow rays: the course's open box, closed boxes, meshes that
+//! are no shell, a moving light, and the irradiance they give.
 
 use super::*;
 use crate::accel::MeshAccel;
@@ -32,15 +32,21 @@ fn course_box() -> Vec<[Vec3; 3]> {
     boxed(Vec3::new(-0.25, -0.25, 1.16), Vec3::new(0.25, 0.25, 1.28), &[0, 1, 2, 3, 4])
 }
 
-/// Draws `(o, q, n, hidden)` for points `o` in `room` and samples of the
-/// light, and checks every hidden one against the mesh's own shadow ray:
-/// the segment is blocked before `q`. Returns how many were hidden and how
-/// many faced away from `o`.
-fn check_against_rays(tris: &[[Vec3; 3]], room: (Vec3, Vec3), n: usize) -> (usize, usize) {
+/// The mesh of `tris` as a light and a tree of its triangles.
+fn light_and_accel(tris: &[[Vec3; 3]]) -> (LightMesh, MeshAccel) {
     let light = LightMesh::new(tris.iter().copied(), &Transform::IDENTITY, Vec3::ONE).expect("area");
     let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
     let idx: Vec<[u32; 3]> = (0..tris.len() as u32).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
-    let accel = MeshAccel::build(&positions, &idx);
+    (light, MeshAccel::build(&positions, &idx))
+}
+
+/// Draws points `o` in `room` and points `q` on the light by area, and
+/// checks every `q` on a face that [`Shell::facing`] leaves out against the
+/// mesh's own shadow ray: the segment is blocked before `q`. Returns how
+/// many were left out and how many faced away from `o`.
+fn check_against_rays(tris: &[[Vec3; 3]], room: (Vec3, Vec3), n: usize) -> (usize, usize) {
+    let (light, accel) = light_and_accel(tris);
+    let shell = Shell::new(tris);
     let mut rng = Rng(7);
     let (mut hidden, mut away) = (0, 0);
     for _ in 0..n {
@@ -54,13 +60,18 @@ fn check_against_rays(tris: &[[Vec3; 3]], room: (Vec3, Vec3), n: usize) -> (usiz
         }
         let facing_away = nq.dot(o - q) < 0.0;
         away += usize::from(facing_away);
-        if light.hides(o, q, nq, 0.0) {
+        let left_out = shell.as_ref().is_some_and(|s| {
+            let mask = s.facing(o);
+            let face = s.face_of(q, nq).expect("a point of the shell is on a face");
+            mask != 0 && mask >> face & 1 == 0
+        });
+        if left_out {
             hidden += 1;
-            assert!(facing_away, "o {o} q {q}: hidden though facing o");
+            assert!(facing_away, "o {o} q {q}: left out though facing o");
             let ray = Ray::new(o, to / dist);
             assert!(
                 accel.occluded(&ray, 1e-6, dist * (1.0 - 1e-6)),
-                "o {o} q {q}: hidden but the ray passes"
+                "o {o} q {q}: left out but the ray passes"
             );
         }
     }
@@ -143,15 +154,92 @@ fn a_mesh_without_a_shell_hides_nothing() {
 }
 
 #[test]
-fn a_moving_light_hides_where_it_has_moved() {
+fn a_moving_light_is_seen_where_it_has_moved() {
     let tris = boxed(Vec3::splat(-1.0), Vec3::splat(1.0), &[0, 1, 2, 3, 4, 5]);
     let mut light = LightMesh::new(tris.into_iter(), &Transform::IDENTITY, Vec3::ONE).expect("area");
     light.motion = Vec3::new(10.0, 0.0, 0.0);
-    // The +x face's point seen from x = 5: at time 0 the box is at rest and
-    // the face looks at the point; at time 1 the box has moved past it, so
-    // the same face (moved) is its far side.
-    let (q, n) = (Vec3::new(1.0, 0.2, 0.3), Vec3::X);
-    let o = Vec3::new(5.0, 0.0, 0.0);
-    assert!(!light.hides(o, q, n, 0.0));
-    assert!(light.hides(o, q + light.motion, n, 1.0));
+    // Seen from x = 5 (y, z inside the box's range), the box at rest shows
+    // its +x face only; at time 1 it has moved past the point and shows its
+    // −x face only.
+    let o = Vec3::new(5.0, 0.2, 0.3);
+    let mut rng = Rng(3);
+    for (time, want) in [(0.0, Vec3::X), (1.0, -Vec3::X)] {
+        for _ in 0..200 {
+            let (_, n) = light.point_seen((rng.next(), rng.next()), o - light.motion * time);
+            assert_eq!(n, want, "time {time}");
+        }
+    }
+}
+
+/// The irradiance a point receives from a light of radiance 1, two ways:
+/// points drawn on what it sees, each weighed by its density, and points
+/// drawn by area over the whole mesh with the mesh's own shadow ray. The
+/// two agree within noise (a z-test on the difference of the means).
+fn irradiance_both_ways(tris: &[[Vec3; 3]], o: Vec3, n: Vec3, samples: usize) -> (f64, f64) {
+    let (light, accel) = light_and_accel(tris);
+    let mut rng = Rng(11);
+    let (mut a, mut a2, mut b, mut b2) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for _ in 0..samples {
+        let (q, nq) = light.point_seen((rng.next(), rng.next()), o);
+        let to = q - o;
+        let pdf = light.pdf(o, q, nq, 0.0);
+        let x = if pdf > 0.0 { f64::from(n.dot(to.normalize()).max(0.0) / pdf) } else { 0.0 };
+        (a, a2) = (a + x, a2 + x * x);
+        // By area, with visibility traced.
+        let (q, nq) = light.point((rng.next(), rng.next()));
+        let to = q - o;
+        let (d2, dist) = (to.length_squared(), to.length());
+        let cos_l = nq.dot(to).abs() / dist;
+        let open = !accel.occluded(&Ray::new(o, to / dist), 1e-6, dist * (1.0 - 1e-5));
+        let y = if open { f64::from(n.dot(to / dist).max(0.0) * cos_l * light.area() / d2) } else { 0.0 };
+        (b, b2) = (b + y, b2 + y * y);
+    }
+    let m = samples as f64;
+    let (ma, mb) = (a / m, b / m);
+    let var = (a2 / m - ma * ma) / m + (b2 / m - mb * mb) / m;
+    let z = (ma - mb) / var.sqrt().max(1e-12);
+    assert!(z.abs() < 4.0, "o {o}: seen {ma} against traced {mb} (z {z:.2})");
+    (ma, mb)
+}
+
+#[test]
+fn drawing_only_the_seen_faces_keeps_the_irradiance() {
+    let closed = boxed(Vec3::new(-0.5, -0.3, -0.1), Vec3::new(0.5, 0.3, 0.1), &[0, 1, 2, 3, 4, 5]);
+    let course = course_box();
+    let cases = [
+        // Below the closed box, beside it, near a corner, above it, at an
+        // angle to two faces, inside it.
+        (&closed, Vec3::new(0.1, 0.0, -1.0), Vec3::Z),
+        (&closed, Vec3::new(1.0, 0.0, 0.0), -Vec3::X),
+        (&closed, Vec3::new(0.6, 0.4, -0.15), Vec3::new(-1.0, -1.0, 1.0).normalize()),
+        (&closed, Vec3::new(0.0, 0.2, 2.0), -Vec3::Z),
+        (&closed, Vec3::new(0.0, 0.0, 0.0), Vec3::Y),
+        // The course's box open at the top: below it, on the ceiling beside
+        // it (the hole's plane), and above the ceiling looking in.
+        (&course, Vec3::new(0.1, -0.2, 0.5), Vec3::Z),
+        (&course, Vec3::new(0.4, 0.1, 1.28), Vec3::new(-1.0, 0.0, -1.0).normalize()),
+        (&course, Vec3::new(0.0, 0.1, 1.6), -Vec3::Z),
+    ];
+    for (tris, o, n) in cases {
+        let (seen, traced) = irradiance_both_ways(tris, o, n, 40_000);
+        assert!(seen > 0.0 && traced > 0.0, "o {o}: no light");
+    }
+}
+
+#[test]
+fn seen_faces_draw_nothing_that_is_hidden() {
+    // Points drawn for a point below the closed box are never behind it.
+    let tris = boxed(Vec3::splat(-1.0), Vec3::splat(1.0), &[0, 1, 2, 3, 4, 5]);
+    let (light, accel) = light_and_accel(&tris);
+    let mut rng = Rng(5);
+    for _ in 0..5_000 {
+        let o = Vec3::new(rng.next() * 8.0 - 4.0, rng.next() * 8.0 - 4.0, rng.next() * 8.0 - 4.0);
+        if o.abs().max_element() <= 1.0 {
+            continue;
+        }
+        let (q, _) = light.point_seen((rng.next(), rng.next()), o);
+        let to = q - o;
+        let dist = to.length();
+        assert!(!accel.occluded(&Ray::new(o, to / dist), 1e-6, dist * (1.0 - 1e-4)), "o {o} q {q}");
+    }
 }

@@ -72,7 +72,7 @@ fn next_event_any(
         }
         // A point drawn ahead is taken only where every light is sampled
         // (`lights` is then all of them).
-        let reaching = LightAhead::sample(ahead, i, light, origin, hit.p, at.n, st)
+        let reaching = LightAhead::sample(ahead, i, light, hit.p, at.n, st)
             .and_then(|ls| light_reaching_from(scene, light, ls, origin, hit.p, at.n, st));
         let Some((ls, cos, tr)) = reaching else {
             continue;
@@ -136,7 +136,7 @@ pub(super) fn next_event_closure(
             color += shaded_sample(scene, l, hit.p, &surface(at, p), front, depth, scale, p, st);
             continue;
         }
-        let Some(ls) = light.sample_at(hit.p, hit.p, at.n, st.time, &mut st.sampler) else {
+        let Some(ls) = light.sample_at(hit.p, at.n, st.time, &mut st.sampler) else {
             continue;
         };
         let side = ng.dot(ls.wi);
@@ -191,7 +191,7 @@ fn next_event_diffuse<const MIS: bool>(
         }
         // [`light_reaching_inline`] without media: the shadow ray passes or
         // not. The first light's point may have been drawn ahead.
-        let Some(ls) = LightAhead::sample(ahead, i, light, origin, hit.p, at.n, st) else {
+        let Some(ls) = LightAhead::sample(ahead, i, light, hit.p, at.n, st) else {
             continue;
         };
         let cos = at.n.dot(ls.wi);
@@ -246,7 +246,7 @@ pub(super) fn shaded_sample(
     st: &mut PathState,
 ) -> Vec3 {
     let u = st.sampler.next_2d();
-    let Some((wi, dist, pdf)) = l.sample(origin, x, st.time, u) else { return Vec3::ZERO };
+    let Some((wi, dist, pdf)) = l.sample(x, st.time, u) else { return Vec3::ZERO };
     let Some((f, bsdf_pdf)) = f(wi) else { return Vec3::ZERO };
     // Aimed at the sampled point from the offset origin.
     let (r, dist) = aimed(origin, x + wi * dist);
@@ -317,7 +317,7 @@ pub(super) fn hittable(light: &Light) -> bool {
 /// shutter `time` that hit it at `hit`.
 fn light_pdf(light: &Light, from: Vec3, hit: &Hit, d: Vec3, time: f32) -> f32 {
     match light {
-        Light::Mesh(l) => l.pdf(from, hit.p, hit.ng),
+        Light::Mesh(l) => l.pdf(from, hit.p, hit.ng, time),
         Light::Sphere(l) => l.pdf(from - l.motion * time, d.normalize()),
         Light::Shaded(l) => l.pdf(from, hit.p, hit.ng, d, time),
         _ => 0.0,

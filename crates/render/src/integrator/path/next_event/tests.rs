@@ -70,7 +70,7 @@ fn the_constant_brdf_light_samples_are_the_general_ones() {
             let origin = hit.p + ng * scene.offset(hit.p, ray.o);
             // The light box's point drawn ahead (as `shade` does), or in turn.
             let (mut fast, mut general, mut any) = (st.clone(), st.clone(), st);
-            let ahead = LightAhead::draw(&scene, p, &mut fast);
+            let ahead = LightAhead::draw(&scene, p, hit.p, &mut fast);
             assert!(ahead.is_some(), "ray {k}: the light box is the first light that draws");
             let a = if mis {
                 next_event_diffuse::<true>(&scene, &hit, &at, origin, 1, p, ahead, &mut fast)
@@ -78,7 +78,7 @@ fn the_constant_brdf_light_samples_are_the_general_ones() {
                 next_event_diffuse::<false>(&scene, &hit, &at, origin, 1, p, ahead, &mut fast)
             };
             let b = next_event_any(&scene, &hit, &at, origin, 1, p, None, &mut general);
-            let ahead = LightAhead::draw(&scene, p, &mut any);
+            let ahead = LightAhead::draw(&scene, p, hit.p, &mut any);
             let c = next_event_any(&scene, &hit, &at, origin, 1, p, ahead, &mut any);
             assert_eq!(bits(b), bits(c), "ray {k}, MIS {mis}: drawn ahead");
             assert_eq!(any.sampler.calls(), general.sampler.calls(), "ray {k}: draws");
