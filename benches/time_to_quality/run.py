@@ -81,6 +81,13 @@ class Bench:
         self.luster = os.path.abspath(os.environ.get("LUSTER", "target/release/luster"))
         if not os.access(self.luster, os.X_OK):
             sys.exit(f"no luster binary at {self.luster!r}: set LUSTER (cargo build --release)")
+        self.luster_oidn = None
+        if a.denoise:
+            self.luster_oidn = os.path.abspath(os.environ.get("LUSTER_OIDN", self.luster))
+            p = subprocess.run([self.luster_oidn, "render", "--help"], capture_output=True, text=True)
+            if not os.access(self.luster_oidn, os.X_OK) or "--denoise" not in p.stdout:
+                sys.exit(f"--denoise needs a luster built with OIDN at {self.luster_oidn!r}: set LUSTER_OIDN "
+                         "(tools/oidn_test.sh, then cargo build --release --features oidn)")
         self.env = dict(os.environ)
         self.env.setdefault("DRJIT_LIBLLVM_PATH", "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1")
         self.variant = self.mitsuba_variant()
@@ -100,15 +107,18 @@ class Bench:
     def command(self, config, scene, spp, seed, res, out, cap, threads=2):
         """The command line of one render; cap: seconds after which it stops taking samples (0: none)."""
         work = self.scene_dir(scene, res)
-        if config == "luster":
+        if config.startswith("luster"):
             xml_dir = os.path.join(os.path.dirname(out), "xml")
             os.makedirs(xml_dir, exist_ok=True)
             # the scene file sits beside its shaders and map, named after the image
             xml = scenes.luster_xml(scenes.get(scene), spp, res, os.path.basename(out), work)
             mine = os.path.join(work, os.path.basename(out)[:-4] + ".xml")
             os.replace(xml, mine)
-            cmd = [self.luster, "render", "-q", "-t", str(threads), "--seed", str(seed), "--spp", str(spp),
+            exe = self.luster_oidn if config == "luster_denoise" else self.luster
+            cmd = [exe, "render", "-q", "-t", str(threads), "--seed", str(seed), "--spp", str(spp),
                    "-o", os.path.dirname(out), mine]
+            if config == "luster_denoise":
+                cmd += ["--denoise"]
             if cap:
                 cmd += ["--time", str(cap)]
             return cmd
@@ -120,7 +130,8 @@ class Bench:
         if config.startswith("cycles"):
             ref = config.endswith("_ref")
             return base + ["cycles", scene] + opts + ["--light-tree", "0" if "nolt" in config else "1",
-                                                      "--adaptive", "0" if ref else "1"]
+                                                      "--adaptive", "0" if ref else "1",
+                                                      "--denoise", "1" if config == "cycles_denoise" else "0"]
         if config.startswith("mitsuba"):
             return base + ["mitsuba", scene] + opts + ["--variant", self.variant]
         raise ValueError(config)
@@ -167,7 +178,7 @@ def crossing(points, thr):
 
 # ------------------------------------------------------------------ the steps
 
-def families(scene, renderers):
+def families(scene, renderers, denoise=False):
     """Series configurations of a scene, each with the reference family it is measured against."""
     out = []
     for r in renderers:
@@ -175,9 +186,27 @@ def families(scene, renderers):
             out.append(("cycles", "cycles"))
             if scene == "manylights":
                 out.append(("cycles_nolt", "cycles"))
+            if denoise:
+                out.append(("cycles_denoise", "cycles"))
+        elif r == "luster":
+            out.append(("luster", "luster"))
+            if denoise:
+                out.append(("luster_denoise", "luster"))
         else:
             out.append((r, r))
     return out
+
+
+def best_ratio(table, scene, cfgs, i, denoised):
+    """luster's fastest configuration against the fastest other, among the denoised ones or the others."""
+    def pick(mine):
+        c = [(table[(scene, k)][i][0], k) for k in cfgs
+             if k.startswith("luster") == mine and k.endswith("_denoise") == denoised and table[(scene, k)][i][0]]
+        return min(c) if c else None
+    lu, other = pick(True), pick(False)
+    if not (lu and other):
+        return "–"
+    return f"{lu[0] / other[0]:.2f} ({lu[1]} / {other[1]})"
 
 
 def references(b, scene, res, renderers, ref_spp, cap):
@@ -301,6 +330,8 @@ def main():
     ap.add_argument("--ref-cap", type=float, help="the same for a reference render")
     ap.add_argument("--check-only", action="store_true", help="references and agreement only")
     ap.add_argument("--no-threads", action="store_true", help="skip luster's 2-threads-against-1 check")
+    ap.add_argument("--denoise", action="store_true",
+                    help="also luster and Cycles with Open Image Denoise (LUSTER_OIDN: a luster built with OIDN)")
     a = ap.parse_args()
     mode = QUICK if a.quick else FULL
     for k, v in mode.items():
@@ -317,7 +348,7 @@ def main():
 
     print("\n## warm-up (not recorded)", flush=True)
     for scene in a.scenes:
-        for cfg, _ in families(scene, a.renderers):
+        for cfg, _ in families(scene, a.renderers, a.denoise):
             b.render(cfg, scene, 1, 0, a.res, os.path.join(a.work, "runs", "warmup", f"{scene}_{cfg}.exr"), 0)
 
     print("\n## references", flush=True)
@@ -347,7 +378,7 @@ def main():
     recs = []
     with open(os.path.join(a.work, "series.jsonl"), "w") as log:
         for scene in a.scenes:
-            recs += series(b, scene, a.res, families(scene, a.renderers), a.spp, a.rounds, a.cap, refs[scene], log)
+            recs += series(b, scene, a.res, families(scene, a.renderers, a.denoise), a.spp, a.rounds, a.cap, refs[scene], log)
     summ = summarise(recs)
 
     print("\n## points (medians over rounds)\n")
@@ -359,25 +390,23 @@ def main():
 
     print(f"\n## CPU seconds to reach a relative RMSE ({a.res}x{a.res}, 2 threads each)\n")
     hdr = " | ".join(f"CPU s to {100 * t:g}%" for t in THRESHOLDS)
-    print(f"| scene | renderer | {hdr} | luster / best other, {' / '.join(f'{100 * t:g}%' for t in THRESHOLDS)} |")
-    print("|---|---|" + "---|" * len(THRESHOLDS) + "---|")
+    print(f"| scene | renderer | {hdr} |")
+    print("|---|---|" + "---|" * len(THRESHOLDS))
     table = {}
     for (scene, cfg), pts in summ.items():
         table[(scene, cfg)] = [crossing(sorted((p[0], p[2]) for p in pts), t) for t in THRESHOLDS]
     for scene in a.scenes:
-        cfgs = [c for c, _ in families(scene, a.renderers)]
-        ratios = []
-        for i in range(len(THRESHOLDS)):
-            lu = table.get((scene, "luster"), [(None, "")] * len(THRESHOLDS))[i][0]
-            others = [(table[(scene, c)][i][0], c) for c in cfgs if c != "luster" and table[(scene, c)][i][0]]
-            if lu and others:
-                best, who = min(others)
-                ratios.append(f"{lu / best:.2f} ({who})")
-            else:
-                ratios.append("–")
-        for c in cfgs:
-            cells = " | ".join(fmt(x, m) for x, m in table[(scene, c)])
-            print(f"| {scene} | {c} | {cells} | {' / '.join(ratios) if c == 'luster' else ''} |")
+        for c, _ in families(scene, a.renderers, a.denoise):
+            print(f"| {scene} | {c} | {' | '.join(fmt(x, m) for x, m in table[(scene, c)])} |")
+    print("\n## luster's fastest against the fastest other renderer (CPU time to the same error)\n")
+    kinds = [False, True] if a.denoise else [False]
+    print("| scene | " + " | ".join(f"{'denoised' if d else 'noisy'}, {100 * t:g}%" for d in kinds for t in THRESHOLDS)
+          + " |")
+    print("|---|" + "---|" * (len(kinds) * len(THRESHOLDS)))
+    for scene in a.scenes:
+        cfgs = [c for c, _ in families(scene, a.renderers, a.denoise)]
+        cells = [best_ratio(table, scene, cfgs, i, d) for d in kinds for i in range(len(THRESHOLDS))]
+        print(f"| {scene} | {' | '.join(cells)} |")
     print("\n'~' extrapolated past the last render (error² ∝ 1/time); '<' reached at the first render already.")
     json.dump({f"{s}/{c}": {"points": summ[(s, c)], "cross": {str(t): v for t, v in zip(THRESHOLDS, table[(s, c)])}}
                for (s, c) in summ}, open(os.path.join(a.work, "ttq.json"), "w"), indent=1)

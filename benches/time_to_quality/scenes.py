@@ -42,7 +42,7 @@ How the renderers were aligned:
 
   python scenes.py write OUTDIR [--res R] [--spp N]     luster XML of every scene
   python scenes.py render cycles|mitsuba SCENE --spp N --out IMG.exr [--res R]
-        [--seed S] [--threads T] [--light-tree 1|0] [--adaptive 1|0]
+        [--seed S] [--threads T] [--light-tree 1|0] [--adaptive 1|0] [--denoise 1|0]
         [--variant llvm_ad_rgb|scalar_rgb] [--time-limit SECONDS] [--work DIR]
 The render command prints one line 'RESULT {json}' with the render call's own
 wall and CPU seconds and the samples per pixel it took.
@@ -434,7 +434,12 @@ def render_cycles(scene, a):
     cy.device = "CPU"
     cy.samples = a.spp
     cy.use_adaptive_sampling = bool(a.adaptive)
-    cy.use_denoising = False
+    cy.use_denoising = bool(a.denoise)
+    if a.denoise:  # Open Image Denoise on the CPU with albedo and normal, Blender's defaults for a final render
+        cy.denoiser = "OPENIMAGEDENOISE"
+        cy.denoising_input_passes = "RGB_ALBEDO_NORMAL"
+        cy.denoising_prefilter = "ACCURATE"
+        cy.denoising_use_gpu = False
     depth = scene["depth"]
     for k in ("max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces",
               "transparent_max_bounces"):
@@ -610,6 +615,7 @@ def main():
     r.add_argument("--threads", type=int, default=2)
     r.add_argument("--light-tree", type=int, default=1)
     r.add_argument("--adaptive", type=int, default=0)
+    r.add_argument("--denoise", type=int, default=0, help="Cycles: Open Image Denoise on the final image")
     r.add_argument("--variant", default="llvm_ad_rgb")
     r.add_argument("--time-limit", type=float, default=0.0, help="stop after about this many seconds (0: none)")
     r.add_argument("--work", default=None, help="folder for meshes and the environment (default: the image's)")

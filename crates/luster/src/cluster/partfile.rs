@@ -39,7 +39,7 @@ use super::{ClusterError, MAX_IMAGES, MAX_PARTS};
 use luster_core::math::Vec3;
 use luster_core::tonemap::{Display, Gamma, Operator, Tonemap};
 use luster_render::film::aov::Passes;
-use luster_render::render::TILE;
+use luster_render::render::tile_size;
 use luster_scene::ceng795::camera::{MAX_PIXELS, MAX_SIDE};
 use std::io::Read;
 use std::path::Path;
@@ -117,14 +117,15 @@ pub enum Pixels {
 /// Tiles of a `w`×`h` image (numbered row by row, as
 /// [`luster_render::render::tile_origins`] lists them).
 pub fn tile_count(w: u32, h: u32) -> u64 {
-    u64::from(w.div_ceil(TILE)) * u64::from(h.div_ceil(TILE))
+    let t = tile_size(w, h);
+    u64::from(w.div_ceil(t)) * u64::from(h.div_ceil(t))
 }
 
 /// The pixel rectangle `(x0, y0, x1, y1)` of tile `i` of a `w`×`h` image.
 pub fn tile_rect(i: u32, w: u32, h: u32) -> (u32, u32, u32, u32) {
-    let cols = w.div_ceil(TILE).max(1);
-    let (x0, y0) = ((i % cols) * TILE, (i / cols) * TILE);
-    (x0, y0, (x0 + TILE).min(w), (y0 + TILE).min(h))
+    let t = tile_size(w, h);
+    let cols = w.div_ceil(t).max(1);
+    luster_render::render::tile_rect(w, h, ((i % cols) * t, (i / cols) * t))
 }
 
 /// Pixels in the listed tiles of a `w`×`h` image.
@@ -147,7 +148,15 @@ impl PartFile {
         u(&mut b, VERSION);
         u(&mut b, u32::from(self.finished));
         b.extend_from_slice(&self.job);
-        for v in [self.n, self.k, self.images, self.image, self.width, self.height, TILE] {
+        for v in [
+            self.n,
+            self.k,
+            self.images,
+            self.image,
+            self.width,
+            self.height,
+            tile_size(self.width, self.height),
+        ] {
             u(&mut b, v);
         }
         u(&mut b, self.image_name.len() as u32);
@@ -347,7 +356,7 @@ fn fields<R: Read>(r: &mut Reader<R>, pixels: Pixels) -> Result<PartFile, Fail> 
     // claim, so a forged one cannot make the reader or a merge build a huge
     // tile list or count to 2^32.
     let too_big = width > MAX_SIDE || height > MAX_SIDE || u64::from(width) * u64::from(height) > MAX_PIXELS;
-    if tile != TILE
+    if tile != tile_size(width, height)
         || n == 0
         || n > MAX_PARTS
         || k == 0
@@ -499,8 +508,8 @@ mod tests {
     use super::*;
 
     fn sample() -> PartFile {
-        let (width, height) = (40, 20);
-        let tiles = vec![0, 2, 5];
+        let (width, height) = (36, 20);
+        let tiles = vec![0, 4, 14];
         let p = pixels_in(&tiles, width, height);
         PartFile {
             finished: true,
@@ -524,8 +533,9 @@ mod tests {
     #[test]
     fn round_trips_and_edge_tiles_are_cut() {
         let f = sample();
-        // Tiles 0 and 2 are 16×16 and 8×16 (the right edge); tile 5 is 8×4.
-        assert_eq!(f.pixels.len(), 256 + 128 + 32);
+        // A small image's tiles are 8×8: tile 0 is whole, tile 4 is 4×8
+        // (the right edge), tile 14 is 4×4 (the corner).
+        assert_eq!(f.pixels.len(), 64 + 32 + 16);
         assert_eq!(PartFile::decode(&f.encode(), Path::new("x")).unwrap(), f);
     }
 
@@ -545,13 +555,14 @@ mod tests {
 
     #[test]
     fn tiles_are_numbered_as_the_renderer_numbers_them() {
-        for (w, h) in [(1, 1), (16, 16), (17, 5), (40, 20), (33, 70)] {
+        for (w, h) in [(1, 1), (16, 16), (17, 5), (40, 20), (33, 70), (256, 256), (300, 257)] {
             let origins = luster_render::render::tile_origins(w, h);
             assert_eq!(tile_count(w, h), origins.len() as u64);
             for (i, &(x0, y0)) in origins.iter().enumerate() {
                 let (a, b, x1, y1) = tile_rect(i as u32, w, h);
                 assert_eq!((a, b), (x0, y0));
-                assert_eq!((x1, y1), ((x0 + TILE).min(w), (y0 + TILE).min(h)));
+                let t = tile_size(w, h);
+                assert_eq!((x1, y1), ((x0 + t).min(w), (y0 + t).min(h)));
             }
         }
     }

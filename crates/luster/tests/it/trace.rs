@@ -190,9 +190,10 @@ fn occlusion_is_the_same_on_one_and_two_threads_and_in_parts() {
     for first in 0..2 {
         let sel = TileSelection { first, step: 2, end: tiles.len() as u32 };
         let part = pool(2).install(|| corner(0.0, &RenderOptions { tiles: Some(sel), ..opts }));
-        for (i, &(x0, y0)) in tiles.iter().enumerate().filter(|&(i, _)| sel.contains(i as u32)) {
-            for y in y0..(y0 + luster::render::TILE).min(H) {
-                for x in x0..(x0 + luster::render::TILE).min(W) {
+        for (i, &o) in tiles.iter().enumerate().filter(|&(i, _)| sel.contains(i as u32)) {
+            let (x0, y0, x1, y1) = luster::render::tile_rect(W, H, o);
+            for y in y0..y1 {
+                for x in x0..x1 {
                     let k = (y * W + x) as usize;
                     assert_eq!(part.pixels[k], one.pixels[k], "tile {i}, pixel ({x}, {y})");
                 }

@@ -13,44 +13,72 @@ use luster_core::math::Vec2;
 /// A piecewise-constant density on `[0, 1)` with `n` equal cells.
 #[derive(Clone, Debug)]
 pub struct Distribution1D {
-    func: Vec<f32>,
     /// `cdf[i]` is the probability of cells `0..i`; `cdf[n] = 1`.
     cdf: Vec<f32>,
     /// `∫f` over `[0, 1)` (before the uniform fallback).
     integral: f32,
 }
 
+/// The CDF of non-negative, finite cell values (at least one cell; `n + 1`
+/// entries) and `∫f` over `[0, 1)`; uniform for a function that is zero
+/// everywhere.
+fn cdf_of(func: &[f32]) -> (Vec<f32>, f32) {
+    let n = func.len().max(1);
+    // Sums in f64: a 4k-wide row of HDR values loses precision in f32.
+    let mut running = vec![0.0f64; n + 1];
+    for i in 0..n {
+        running[i + 1] = running[i] + f64::from(func.get(i).copied().unwrap_or(0.0).max(0.0)) / n as f64;
+    }
+    let total = running[n];
+    let cdf = if total > 0.0 {
+        running.iter().map(|c| (c / total) as f32).collect()
+    } else {
+        (0..=n).map(|i| i as f32 / n as f32).collect()
+    };
+    (cdf, total as f32)
+}
+
+/// Density at cell `i` of `cdf`: the CDF's own step, so sampling and pdf
+/// agree after normalization.
+#[inline]
+fn cell_pdf(cdf: &[f32], i: usize) -> f32 {
+    (cdf[i + 1] - cdf[i]) * (cdf.len() - 1) as f32
+}
+
+/// Draws `x` in `[0, 1)` from `cdf` for uniform `u`; returns `(x, pdf(x), cell)`.
+#[inline]
+fn sample_cdf(cdf: &[f32], u: f32) -> (f32, f32, usize) {
+    let n = cdf.len() - 1;
+    // The last cell whose cdf start is ≤ u, skipping empty cells.
+    let i = cdf[1..n].partition_point(|&c| c <= u).min(n - 1);
+    let (lo, hi) = (cdf[i], cdf[i + 1]);
+    let t = if hi > lo { ((u - lo) / (hi - lo)).clamp(0.0, 1.0) } else { 0.5 };
+    let x = ((i as f32 + t) / n as f32).min(1.0 - f32::EPSILON / 2.0);
+    (x, cell_pdf(cdf, i), i)
+}
+
+/// Density of `cdf` at `x` in `[0, 1)`.
+#[inline]
+fn pdf_cdf(cdf: &[f32], x: f32) -> f32 {
+    let n = cdf.len() - 1;
+    cell_pdf(cdf, ((x * n as f32) as usize).min(n - 1))
+}
+
 impl Distribution1D {
     /// From non-negative, finite cell values (at least one cell).
     pub fn new(func: &[f32]) -> Distribution1D {
-        let n = func.len().max(1);
-        let mut func: Vec<f32> = func.iter().map(|f| f.max(0.0)).collect();
-        if func.is_empty() {
-            func.push(0.0);
-        }
-        // Sums in f64: a 4k-wide row of HDR values loses precision in f32.
-        let mut running = vec![0.0f64; n + 1];
-        for i in 0..n {
-            running[i + 1] = running[i] + func[i] as f64 / n as f64;
-        }
-        let total = running[n];
-        let cdf = if total > 0.0 {
-            running.iter().map(|c| (c / total) as f32).collect()
-        } else {
-            func.iter_mut().for_each(|f| *f = 1.0);
-            (0..=n).map(|i| i as f32 / n as f32).collect()
-        };
-        Distribution1D { func, cdf, integral: total as f32 }
+        let (cdf, integral) = cdf_of(func);
+        Distribution1D { cdf, integral }
     }
 
     /// Number of cells.
     pub fn len(&self) -> usize {
-        self.func.len()
+        self.cdf.len() - 1
     }
 
     /// Whether there are no cells (never: at least one is made).
     pub fn is_empty(&self) -> bool {
-        self.func.is_empty()
+        self.len() == 0
     }
 
     /// `∫f` over `[0, 1)`; zero for a function that is zero everywhere.
@@ -58,29 +86,14 @@ impl Distribution1D {
         self.integral
     }
 
-    /// Density at cell `i`.
-    #[inline]
-    fn cell_pdf(&self, i: usize) -> f32 {
-        // The CDF's own step, so sampling and pdf agree after normalization.
-        (self.cdf[i + 1] - self.cdf[i]) * self.func.len() as f32
-    }
-
     /// Draws `x` in `[0, 1)` for uniform `u`; returns `(x, pdf(x), cell)`.
     pub fn sample(&self, u: f32) -> (f32, f32, usize) {
-        let n = self.func.len();
-        // The last cell whose cdf start is ≤ u, skipping empty cells.
-        let i = self.cdf[1..n].partition_point(|&c| c <= u).min(n - 1);
-        let (lo, hi) = (self.cdf[i], self.cdf[i + 1]);
-        let t = if hi > lo { ((u - lo) / (hi - lo)).clamp(0.0, 1.0) } else { 0.5 };
-        let x = ((i as f32 + t) / n as f32).min(1.0 - f32::EPSILON / 2.0);
-        (x, self.cell_pdf(i), i)
+        sample_cdf(&self.cdf, u)
     }
 
     /// Density at `x` in `[0, 1)`.
     pub fn pdf(&self, x: f32) -> f32 {
-        let n = self.func.len();
-        let i = ((x * n as f32) as usize).min(n - 1);
-        self.cell_pdf(i)
+        pdf_cdf(&self.cdf, x)
     }
 }
 
@@ -88,31 +101,47 @@ impl Distribution1D {
 /// rows along `v`.
 #[derive(Clone, Debug)]
 pub struct Distribution2D {
-    rows: Vec<Distribution1D>,
+    /// Every row's CDF (`width + 1` entries each), one after another: a
+    /// draw finds its row's by arithmetic, not through a pointer of its own
+    /// (one cache miss fewer on a large map).
+    rows: Vec<f32>,
+    width: usize,
     marginal: Distribution1D,
 }
 
 impl Distribution2D {
     /// From row-major non-negative cell values.
     pub fn new(func: &[f32], width: usize, height: usize) -> Distribution2D {
-        let rows: Vec<Distribution1D> =
-            (0..height).map(|y| Distribution1D::new(&func[y * width..(y + 1) * width])).collect();
-        let marginal = Distribution1D::new(&rows.iter().map(Distribution1D::integral).collect::<Vec<_>>());
-        Distribution2D { rows, marginal }
+        let (width, height) = (width.max(1), height.max(1));
+        let mut rows = Vec::with_capacity(height * (width + 1));
+        let mut integrals = Vec::with_capacity(height);
+        for y in 0..height {
+            let (cdf, integral) = cdf_of(func.get(y * width..(y + 1) * width).unwrap_or(&[]));
+            rows.extend_from_slice(&cdf);
+            integrals.push(integral);
+        }
+        Distribution2D { rows, width, marginal: Distribution1D::new(&integrals) }
+    }
+
+    /// The CDF of row `y`.
+    #[inline]
+    fn row(&self, y: usize) -> &[f32] {
+        let len = self.width + 1;
+        &self.rows[y * len..(y + 1) * len]
     }
 
     /// Draws `(u, v)` for uniform `(u0, u1)`; returns the point and its density.
     pub fn sample(&self, (u0, u1): (f32, f32)) -> (Vec2, f32) {
         let (v, pv, row) = self.marginal.sample(u1);
-        let (u, pu, _) = self.rows[row].sample(u0);
+        let (u, pu, _) = sample_cdf(self.row(row), u0);
         (Vec2::new(u, v), pu * pv)
     }
 
     /// Density at `uv`.
     pub fn pdf(&self, uv: Vec2) -> f32 {
-        let h = self.rows.len();
+        let h = self.marginal.len();
         let row = ((uv.y * h as f32) as usize).min(h - 1);
-        self.marginal.pdf(uv.y) * self.rows[row].pdf(uv.x)
+        self.marginal.pdf(uv.y) * pdf_cdf(self.row(row), uv.x)
     }
 }
 

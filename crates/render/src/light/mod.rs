@@ -206,13 +206,7 @@ impl Light {
     /// the caller, it would be stored to memory before every light's match
     /// (the environment's sampler takes it by reference).
     #[inline(always)]
-    pub fn sample_at(
-        &self,
-        p: Vec3,
-        n: Vec3,
-        time: f32,
-        sampler: &mut PixelSampler,
-    ) -> Option<LightSample> {
+    pub fn sample_at(&self, p: Vec3, n: Vec3, time: f32, sampler: &mut PixelSampler) -> Option<LightSample> {
         self.sample_by(p, || Some(n), time, sampler)
     }
 
@@ -268,8 +262,7 @@ impl Light {
             }
             Light::Environment(env) => {
                 let n = n();
-                let (wi, e) = env.sample(n, sampler.next_2d())?;
-                let pdf = env.sampling_pdf(n, wi);
+                let (wi, e, pdf) = env.sample(n, sampler.next_2d())?;
                 Some(LightSample { wi, dist: f32::INFINITY, e, point_source: false, pdf })
             }
             Light::Shaded(_) => None,

@@ -84,9 +84,10 @@ pub struct Node {
 }
 
 /// A closure: its nodes and which is the root.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug)]
 pub struct Closure {
-    /// The nodes, children before parents; `nodes[..len]` are used.
+    /// The nodes, children before parents; `nodes[..len]` are used, the
+    /// others may hold anything.
     pub nodes: [Node; MAX_NODES],
     /// How many nodes are used.
     pub len: u8,
@@ -97,6 +98,15 @@ pub struct Closure {
 impl Default for Closure {
     fn default() -> Closure {
         Closure { nodes: [Node::default(); MAX_NODES], len: 0, root: 0 }
+    }
+}
+
+/// Two closures are equal when their nodes in use and their roots are
+/// (the nodes past the count are never read, and may hold anything).
+impl PartialEq for Closure {
+    fn eq(&self, o: &Closure) -> bool {
+        let n = usize::from(self.len);
+        (self.len, self.root) == (o.len, o.root) && self.nodes[..n] == o.nodes[..n]
     }
 }
 

@@ -147,19 +147,30 @@ pub(crate) struct MaterialOut {
     pub nodes: [NodeOut; MAX_NODES],
 }
 
-/// The closure in `m`, or `None` when the record is not one the prelude's
-/// constructors write (an unknown kind, a child not below its parent): the
-/// renderer relies on both.
-fn closure_of(m: &MaterialOut) -> Option<Closure> {
-    let len = usize::try_from(m.closure_len).ok().filter(|n| (1..=MAX_NODES).contains(n))?;
-    let root = usize::try_from(m.closure_root).ok().filter(|&r| r < len)?;
-    let mut c = Closure { len: len as u8, root: root as u8, ..Closure::default() };
+/// The closure in `m`, written into `c` (only the nodes in use: those past
+/// its count are never read); `false` when the record is not one the
+/// prelude's constructors write (an unknown kind, a child not below its
+/// parent): the renderer relies on both.
+fn closure_of(m: &MaterialOut, c: &mut Closure) -> bool {
+    let Some(len) = usize::try_from(m.closure_len).ok().filter(|n| (1..=MAX_NODES).contains(n)) else {
+        return false;
+    };
+    let Some(root) = usize::try_from(m.closure_root).ok().filter(|&r| r < len) else { return false };
+    (c.len, c.root) = (len as u8, root as u8);
     for (i, (dst, src)) in c.nodes.iter_mut().zip(&m.nodes[..len]).enumerate() {
-        let kind = *usize::try_from(src.kind).ok().and_then(|k| NodeKind::ALL.get(k))?;
+        let Some(&kind) = usize::try_from(src.kind).ok().and_then(|k| NodeKind::ALL.get(k)) else {
+            return false;
+        };
         let child = |k: i32| usize::try_from(k).ok().filter(|&k| k < i).map(|k| k as u8);
         let (a, b) = match kind {
-            NodeKind::Add | NodeKind::Layer => (child(src.a)?, child(src.b)?),
-            NodeKind::Scale => (child(src.a)?, 0),
+            NodeKind::Add | NodeKind::Layer => match (child(src.a), child(src.b)) {
+                (Some(a), Some(b)) => (a, b),
+                _ => return false,
+            },
+            NodeKind::Scale => match child(src.a) {
+                Some(a) => (a, 0),
+                None => return false,
+            },
             _ => (0, 0),
         };
         *dst = Node {
@@ -171,7 +182,7 @@ fn closure_of(m: &MaterialOut) -> Option<Closure> {
             x: src.x.map(|v| v as f32),
         };
     }
-    Some(c)
+    true
 }
 
 /// The per-call deadline (`luster_clock`), in periods of the watchdog's
@@ -648,28 +659,37 @@ impl IoBlock {
         self.begin(fill);
     }
 
-    /// What the material wrapper wrote, as [`MaterialOutputs`]: the outputs
-    /// for which `defines` is true, or the closure alone when it defines
-    /// `material`. Reads only the nodes in use, not the whole record.
-    /// `None` when the closure is malformed (see [`closure_of`]).
-    pub(crate) fn material_outputs(&self, defines: impl Fn(Entry) -> bool) -> Option<MaterialOutputs> {
+    /// What the material wrapper wrote, as [`MaterialOutputs`], into `out`:
+    /// the outputs for which `defines` is true, or the closure alone when it
+    /// defines `material`. Reads only the nodes in use, not the whole
+    /// record, and writes the closure in place (it is large, and most
+    /// closures use a few of its nodes). `false` when the closure is
+    /// malformed (see [`closure_of`]).
+    pub(crate) fn material_outputs(
+        &self,
+        defines: impl Fn(Entry) -> bool,
+        out: &mut MaterialOutputs,
+    ) -> bool {
         // SAFETY: see the module doc; the Lua call has returned, and nothing
         // writes the record while this reference lives.
         let m = unsafe { &*self.material };
         if defines(Entry::Material) {
-            return Some(MaterialOutputs { closure: Some(closure_of(m)?), ..MaterialOutputs::default() });
+            let closure = out.closure.get_or_insert_with(Closure::default);
+            let ok = closure_of(m, closure);
+            (out.color, out.specular, out.roughness, out.metalness, out.emission, out.reflect) =
+                (None, None, None, None, None, None);
+            return ok;
         }
         let rgb = |e: Entry, c: [f64; 3]| defines(e).then(|| c.map(|x| x as f32));
         let num = |e: Entry, x: f64| defines(e).then_some(x as f32);
-        Some(MaterialOutputs {
-            color: rgb(Entry::Color, m.color),
-            specular: rgb(Entry::Specular, m.specular),
-            roughness: num(Entry::Roughness, m.roughness),
-            metalness: num(Entry::Metalness, m.metalness),
-            emission: rgb(Entry::Emission, m.emission),
-            reflect: rgb(Entry::Reflect, m.reflect),
-            closure: None,
-        })
+        out.color = rgb(Entry::Color, m.color);
+        out.specular = rgb(Entry::Specular, m.specular);
+        out.roughness = num(Entry::Roughness, m.roughness);
+        out.metalness = num(Entry::Metalness, m.metalness);
+        out.emission = rgb(Entry::Emission, m.emission);
+        out.reflect = rgb(Entry::Reflect, m.reflect);
+        out.closure = None;
+        true
     }
 
     /// Writes the three points of a bump evaluation and arms the clock: the

@@ -215,12 +215,13 @@ impl ThreadState {
     }
 
     /// Calls every material output shader `id` defines, or its
-    /// `material(s)`, in one Lua call.
+    /// `material(s)`, in one Lua call, and writes what it says into `out`.
     pub(crate) fn call_material(
         &self,
         id: usize,
         input: &ShadeInput,
-    ) -> Result<MaterialOutputs, ShaderError> {
+        out: &mut MaterialOutputs,
+    ) -> Result<(), ShaderError> {
         let Some(f) = self.shaders.get(id).and_then(|s| s.material) else {
             return Err(self.no_entry(id, "material"));
         };
@@ -233,19 +234,21 @@ impl ThreadState {
         let shader = &self.shaders[id];
         let defines = self.entries(id);
         let result = self.outcome(shader, status).and_then(|()| {
-            self.io.material_outputs(|e| defines[e as usize]).ok_or_else(|| {
+            if self.io.material_outputs(|e| defines[e as usize], out) {
+                Ok(())
+            } else {
                 let msg = "shader runtime: material(s) wrote a malformed closure";
-                ShaderError::new(ShaderErrorKind::Internal, &shader.name, msg)
-            })
+                Err(ShaderError::new(ShaderErrorKind::Internal, &shader.name, msg))
+            }
         });
         if super::debug_pixel() == Some(input.pixel) {
-            let out = match &result {
-                Ok(MaterialOutputs { closure: Some(c), .. }) => format!("closure {c}"),
-                Ok(m) => describe_outputs(m),
-                Err(e) => format!("error: {}", e.message),
+            let said = match (&result, &out.closure) {
+                (Ok(()), Some(c)) => format!("closure {c}"),
+                (Ok(()), None) => describe_outputs(out),
+                (Err(e), _) => format!("error: {}", e.message),
             };
             eprintln!(
-                "[shader {} at pixel {},{}] material(s) -> {out}\n  s = {}",
+                "[shader {} at pixel {},{}] material(s) -> {said}\n  s = {}",
                 shown(&shader.name, false),
                 input.pixel[0],
                 input.pixel[1],

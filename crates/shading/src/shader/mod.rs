@@ -404,7 +404,24 @@ impl ShaderSet {
     /// its range (reflectances and `roughness`, `metalness` in 0–1,
     /// `emission` finite and not negative).
     pub fn material(&self, id: usize, input: &ShadeInput) -> Result<MaterialOutputs, ShaderError> {
-        threads::with_state(&self.shared, |state| state.call_material(id, input))
+        self.material_with(id, input, |o| *o)
+    }
+
+    /// [`material`](Self::material), with the outputs lent to `f` rather
+    /// than returned: they are written in place into the thread's own
+    /// record, so a closure (a few kilobytes, mostly unused nodes) is not
+    /// copied on its way to the renderer.
+    pub fn material_with<R>(
+        &self,
+        id: usize,
+        input: &ShadeInput,
+        f: impl FnOnce(&MaterialOutputs) -> R,
+    ) -> Result<R, ShaderError> {
+        threads::with_state(&self.shared, |state| {
+            let mut out = state.outputs.borrow_mut();
+            state.call_material(id, input, &mut out)?;
+            Ok(f(&out))
+        })
     }
 
     /// The density of volume shader `id` at `input` (a number; the caller

@@ -4,7 +4,7 @@
 //! each script into it, `invoke.rs` calls the entry points, and `shade.rs`
 //! writes the shading point.
 
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -16,7 +16,7 @@ use super::compile::{Compiled, Makers, WRAPPERS};
 use super::error::{ShaderError, ShaderErrorKind};
 use super::ffi::{self, IoBlock, Shade};
 use super::shade::{has_avx, object_random};
-use super::{Entry, ImageSampler, Shared, ENTRIES};
+use super::{Entry, ImageSampler, MaterialOutputs, Shared, ENTRIES};
 
 /// The trusted prelude (see its header comment).
 const PRELUDE: &str = include_str!("prelude.lua");
@@ -43,6 +43,8 @@ pub(crate) struct ThreadState {
     pub(super) last_random: Cell<(u32, f64)>,
     /// Whether the shading point is written with AVX ([`fill_shade`](super::shade::fill_shade)).
     pub(super) avx: bool,
+    /// The record [`ShaderSet::material_with`](super::ShaderSet::material_with) writes into.
+    pub(super) outputs: RefCell<MaterialOutputs>,
 }
 
 impl ThreadState {
@@ -163,6 +165,7 @@ impl ThreadState {
             ctype_names,
             last_random: Cell::new((0, object_random(0))),
             avx: has_avx(),
+            outputs: RefCell::new(MaterialOutputs::default()),
         };
         let make_env = api.get("make_env").map_err(internal)?;
         let make_entry = api.get("make_entry").map_err(internal)?;

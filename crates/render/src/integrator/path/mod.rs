@@ -491,22 +491,23 @@ fn escaped(scene: &Scene, ray: &Ray, came: Came, past: bool, p: PathParams, st: 
         return scene.textures.background(st.screen).unwrap_or(scene.background);
     };
     let d = ray.d.normalize();
-    let w = match came {
-        Came::Direct => 1.0,
+    match came {
+        Came::Direct => env.eval(d),
         // The density of the environment's own sampler (importance, uniform
         // or cosine about the normal), as its light samples were drawn.
         Came::Bounce { pdf, n, from } if p.mis => {
             let pick = scene.environment_light.map_or(0.0, |i| pick_chance(scene, p, i, from, Some(n)));
-            power_heuristic(pdf, env.sampling_pdf(Some(n), d) * pick)
+            let (le, env_pdf) = env.eval_with_pdf(Some(n), d);
+            le * power_heuristic(pdf, env_pdf * pick)
         }
         Came::Scatter { pdf } if p.mis => {
             let pick = scene.environment_light.map_or(0.0, |i| pick_chance(scene, p, i, ray.o, None));
-            power_heuristic(pdf, env.sampling_pdf(None, d) * pick)
+            let (le, env_pdf) = env.eval_with_pdf(None, d);
+            le * power_heuristic(pdf, env_pdf * pick)
         }
-        Came::Bounce { .. } | Came::Scatter { .. } if p.next_event => 0.0,
-        Came::Bounce { .. } | Came::Scatter { .. } => 1.0,
-    };
-    env.eval(d) * w
+        Came::Bounce { .. } | Came::Scatter { .. } if p.next_event => Vec3::ZERO,
+        Came::Bounce { .. } | Came::Scatter { .. } => env.eval(d),
+    }
 }
 
 /// The light a vertex adds. Inlined into [`li`]'s loop: out of line, its
@@ -544,7 +545,8 @@ fn shade<const V: u8>(
     // sample lights: nothing draws between here and [`next_event`], so it
     // is the value that would be drawn there (see [`LightAhead`]).
     let samples_lights = (p.next_event || p.mis) && m.traits.reflects && !inside_dielectric;
-    let ahead = if samples_lights && !past && !m.closure { LightAhead::draw(scene, p, hit.p, st) } else { None };
+    let ahead =
+        if samples_lights && !past && !m.closure { LightAhead::draw(scene, p, hit.p, st) } else { None };
 
     // Under the course's next-event estimation an object light that a
     // random bounce hits counts nothing (its samples counted it): skip the

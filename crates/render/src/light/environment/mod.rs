@@ -229,7 +229,11 @@ impl Environment {
 
     /// Density over solid angle with which importance sampling draws `d`.
     pub fn pdf(&self, d: Vec3) -> f32 {
-        let uv = self.uv(d);
+        self.pdf_at(self.uv(d))
+    }
+
+    /// [`pdf`](Self::pdf) of the direction at image coordinates `uv`.
+    fn pdf_at(&self, uv: Vec2) -> f32 {
         let j = jacobian(self.mapping, uv);
         if j <= 0.0 {
             return 0.0;
@@ -253,11 +257,26 @@ impl Environment {
         }
     }
 
+    /// [`eval`](Self::eval) and [`sampling_pdf`](Self::sampling_pdf) of
+    /// `d` together, for a ray that left the scene: its image coordinates
+    /// (two inverse trigonometric functions) worked out once.
+    pub fn eval_with_pdf(&self, n: Option<Vec3>, d: Vec3) -> (Vec3, f32) {
+        match (self.sampling, n) {
+            (EnvSampling::Uniform | EnvSampling::Cosine, Some(_)) => (self.eval(d), self.sampling_pdf(n, d)),
+            _ => {
+                let uv = self.uv(d);
+                (self.lookup(uv), self.pdf_at(uv))
+            }
+        }
+    }
+
     /// A direction for direct lighting at a surface with normal `n` (`None`
     /// in a medium, where importance sampling is used whatever the setting),
-    /// for the uniform pair `u`: the unit direction and the radiance from it
-    /// divided by its density. `None` when the draw has no density.
-    pub fn sample(&self, n: Option<Vec3>, u: (f32, f32)) -> Option<(Vec3, Vec3)> {
+    /// for the uniform pair `u`: the unit direction, the radiance from it
+    /// divided by its density, and the density over solid angle (that of
+    /// [`sampling_pdf`](Self::sampling_pdf), from the draw itself). `None`
+    /// when the draw has no density.
+    pub fn sample(&self, n: Option<Vec3>, u: (f32, f32)) -> Option<(Vec3, Vec3, f32)> {
         match (self.sampling, n) {
             (EnvSampling::Uniform, Some(n)) => {
                 // Uniform on the hemisphere: cos θ uniform in [0, 1].
@@ -265,7 +284,7 @@ impl Environment {
                 let r = (1.0 - z * z).max(0.0).sqrt();
                 let (sp, cp) = sin_cos_turns(u.1);
                 let d = frame(n, Vec3::new(r * cp, r * sp, z));
-                Some((d, self.eval(d) * (2.0 * PI)))
+                Some((d, self.eval(d) * (2.0 * PI), 0.5 / PI))
             }
             (EnvSampling::Cosine, Some(n)) => {
                 let r = u.0.sqrt();
@@ -275,7 +294,7 @@ impl Environment {
                     return None;
                 }
                 let d = frame(n, Vec3::new(r * phi.cos(), r * phi.sin(), z));
-                Some((d, self.eval(d) * (PI / z)))
+                Some((d, self.eval(d) * (PI / z), z / PI))
             }
             _ => {
                 let (uv, pdf_uv) = self.distribution.sample(u);
@@ -285,7 +304,7 @@ impl Environment {
                     return None;
                 }
                 let pdf = pdf_uv / j;
-                Some((d, self.lookup(uv) / pdf))
+                Some((d, self.lookup(uv) / pdf, pdf))
             }
         }
     }

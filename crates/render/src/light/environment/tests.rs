@@ -100,18 +100,32 @@ fn pdf_integrates_to_one_over_the_sphere() {
     }
 }
 
+/// The value and density a draw returns are the radiance and density of
+/// its direction looked up again, for every sampling mode (the density is
+/// what MIS weighs a bounce that leaves the same way with).
 #[test]
 fn sampled_value_is_radiance_over_pdf() {
-    for mapping in [EnvMapping::LatLong, EnvMapping::Probe] {
-        let env = Environment::new(&sky(32, 16), mapping, EnvSampling::Importance).expect("valid map");
+    let n = Vec3::new(0.3, 0.8, -0.2).normalize();
+    for (mapping, sampling, normal) in [
+        (EnvMapping::LatLong, EnvSampling::Importance, None),
+        (EnvMapping::Probe, EnvSampling::Importance, None),
+        (EnvMapping::LatLong, EnvSampling::Importance, Some(n)),
+        (EnvMapping::LatLong, EnvSampling::Uniform, Some(n)),
+        (EnvMapping::LatLong, EnvSampling::Cosine, Some(n)),
+    ] {
+        let env = Environment::new(&sky(32, 16), mapping, sampling).expect("valid map");
         let mut rng = Rng(11);
         for _ in 0..2000 {
-            let Some((d, e)) = env.sample(None, (rng.next(), rng.next())) else { continue };
-            let expect = env.eval(d) / env.pdf(d);
+            let Some((d, e, pdf)) = env.sample(normal, (rng.next(), rng.next())) else { continue };
+            let want_pdf = env.sampling_pdf(normal, d);
+            assert!((pdf - want_pdf).abs() <= 2e-3 * want_pdf, "{sampling:?}: pdf {pdf} vs {want_pdf}");
+            let expect = env.eval(d) / want_pdf;
             assert!(
                 (e - expect).abs().max_element() <= 2e-3 * expect.max_element().max(1.0),
-                "{e:?} vs {expect:?}"
+                "{sampling:?}: {e:?} vs {expect:?}"
             );
+            let (le, p) = env.eval_with_pdf(normal, d);
+            assert_eq!((le, p), (env.eval(d), want_pdf), "eval_with_pdf is eval and sampling_pdf");
         }
     }
 }
@@ -132,7 +146,7 @@ fn chi_square(env: &Environment, seed: u64) -> (f64, usize, f64) {
     let mut observed = vec![0f64; nz * nphi];
     let mut rng = Rng(seed);
     for _ in 0..n {
-        if let Some((d, _)) = env.sample(None, (rng.next(), rng.next())) {
+        if let Some((d, _, _)) = env.sample(None, (rng.next(), rng.next())) {
             observed[bin(d)] += 1.0;
         }
     }
@@ -218,7 +232,7 @@ fn rotation_turns_lookup_sampling_and_pdf_together() {
         let (chi2, k, limit) = chi_square(&env, 29);
         assert!(chi2 < limit, "{mapping:?} {deg}: χ² = {chi2:.1} over {k} bins (limit {limit:.1})");
         for _ in 0..2000 {
-            let Some((d, e)) = env.sample(None, (rng.next(), rng.next())) else { continue };
+            let Some((d, e, _)) = env.sample(None, (rng.next(), rng.next())) else { continue };
             let expect = env.eval(d) / env.pdf(d);
             assert!(
                 (e - expect).abs().max_element() <= 2e-3 * expect.max_element().max(1.0),
@@ -305,7 +319,7 @@ fn black_environment_gives_no_light_and_no_nan() {
         Environment::new(&constant(0.0), EnvMapping::LatLong, EnvSampling::Importance).expect("valid map");
     let mut rng = Rng(1);
     for _ in 0..100 {
-        if let Some((d, e)) = env.sample(None, (rng.next(), rng.next())) {
+        if let Some((d, e, _)) = env.sample(None, (rng.next(), rng.next())) {
             assert!((d.length() - 1.0).abs() < 1e-5);
             assert_eq!(e, Vec3::ZERO);
         }

@@ -363,9 +363,10 @@ impl Textures {
                 }
             }
             DecalMode::Material => {
-                let o = set.material(id, &input(f, f.p_object, f.uv, *n))?;
                 let at = || At::new(*n, f.ctx.ng, tangent(f), f.ctx.incident);
-                if apply_outputs(&o, m, lobes, at).is_err() {
+                let applied = set
+                    .material_with(id, &input(f, f.p_object, f.uv, *n), |o| apply_outputs(o, m, lobes, at))?;
+                if applied.is_err() {
                     let name = set.name(id).unwrap_or("?");
                     return Err(Box::new(ShaderError::new(
                         ShaderErrorKind::BadResult,
