@@ -234,7 +234,8 @@ fn a_killed_part_resumes_from_its_checkpoint_to_the_same_bytes() {
     let args = ["--part", "1/1", "--resume", "--checkpoint", "0", "--threads", "1"];
     let checkpoint = parts.join("k.png.part-1-of-1.checkpoint");
     let mut child = render(&s, &parts, &args).stdout(std::process::Stdio::null()).spawn().unwrap();
-    // 160×120 is 10×8 tiles; 16 tiles a chunk on one thread.
+    // 160×120 is 20×15 tiles of 8 pixels; 16 tiles a chunk on one thread.
+    let tiles = luster::render::tile_origins(160, 120).len();
     let start = Instant::now();
     while !checkpoint.exists() {
         assert!(child.try_wait().unwrap().is_none(), "the part ended before writing a checkpoint");
@@ -254,7 +255,7 @@ fn a_killed_part_resumes_from_its_checkpoint_to_the_same_bytes() {
     assert!(
         status.contains("0 of 2 part files finished")
             && status.contains("k.png in progress")
-            && status.contains("of 80 tiles checkpointed"),
+            && status.contains(&format!("of {tiles} tiles checkpointed")),
         "{status}"
     );
     // Not quiet, to read how many tiles came from the checkpoint.
