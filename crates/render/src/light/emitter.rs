@@ -30,7 +30,7 @@
 //! </LightSphere>
 //! ```
 
-use super::shell::Shell;
+use super::shell::{Shell, MAX_PLANES};
 use luster_core::math::{orthonormal_basis, sin_cos_turns, Mat3, Transform, Vec3};
 use std::f32::consts::PI;
 use std::sync::Arc;
@@ -61,8 +61,9 @@ pub struct LightMesh {
     /// World-space translation over the shutter interval (`MotionBlur`).
     pub motion: Vec3,
     /// Where the mesh is a convex shell, which hides its far side: its
-    /// faces, each a run of `tris`, whose normals there point out.
-    faces: Option<Faces>,
+    /// faces, each a run of `tris`, whose normals there point out (boxed:
+    /// most meshes have none).
+    faces: Option<Box<Faces>>,
 }
 
 /// A convex light mesh's faces, for drawing points only on those a point
@@ -73,6 +74,8 @@ struct Faces {
     /// Per face of `shell`: its triangles' range in `tris`, the area sum
     /// before its first triangle and its area.
     runs: Vec<Run>,
+    /// Each face's area, padded with zeros: summed over a mask at once.
+    areas: [f32; MAX_PLANES],
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -134,8 +137,12 @@ impl LightMesh {
                     let after = if end > 0 { spans[end - 1].1 } else { 0.0 };
                     Run { first: first as u32, end: end as u32, before, area: (after - before).max(0.0) }
                 })
-                .collect();
-            Faces { shell, runs }
+                .collect::<Vec<Run>>();
+            let mut areas = [0.0; MAX_PLANES];
+            for (a, r) in areas.iter_mut().zip(&runs) {
+                *a = r.area;
+            }
+            Box::new(Faces { shell, runs, areas })
         });
         (total > 0.0).then_some(LightMesh { tris, spans, scan, total, radiance, motion: Vec3::ZERO, faces })
     }
@@ -156,7 +163,7 @@ impl LightMesh {
         if mask == 0 {
             return None;
         }
-        let area = f.runs.iter().enumerate().filter(|(k, _)| mask >> k & 1 != 0).map(|(_, r)| r.area).sum();
+        let area = (0..MAX_PLANES).map(|k| if mask >> k & 1 != 0 { f.areas[k] } else { 0.0 }).sum();
         Some((mask, area))
     }
 
@@ -167,13 +174,15 @@ impl LightMesh {
     }
 
     /// A point drawn uniformly by area from `(u1, u2)` over the part of the
-    /// mesh that the point `p` (the light at rest) may see, and its unit
-    /// normal: on a convex shell, the faces `p` is outside of
+    /// mesh that the point `p` (the light at rest) may see, its unit
+    /// normal, and the area it was drawn from (for [`sample_from`](Self::sample_from)'s
+    /// density): on a convex shell, the faces `p` is outside of
     /// ([`Shell::facing`]); on any other mesh, all of it.
     #[inline(always)]
-    pub fn point_seen(&self, (u1, u2): (f32, f32), p: Vec3) -> (Vec3, Vec3) {
+    pub fn point_seen(&self, (u1, u2): (f32, f32), p: Vec3) -> (Vec3, Vec3, f32) {
         let (Some((mask, area)), Some(f)) = (self.seen(p), self.faces.as_ref()) else {
-            return self.point((u1, u2));
+            let (q, n) = self.point((u1, u2));
+            return (q, n, self.total);
         };
         // Walk the seen faces' areas; the part of `u1` left in a face picks
         // a point of its run of the sums.
@@ -189,7 +198,9 @@ impl LightMesh {
             }
             left -= r.area;
         }
-        self.point_in(last.before + left.min(last.area), u2, last.first as usize, last.end as usize)
+        let (q, n) =
+            self.point_in(last.before + left.min(last.area), u2, last.first as usize, last.end as usize);
+        (q, n, area)
     }
 
     /// The point of the sums at `target`, in the triangles `first..end`.
@@ -218,13 +229,20 @@ impl LightMesh {
     /// shutter `time`.
     #[inline]
     pub fn pdf(&self, p: Vec3, q: Vec3, n: Vec3, time: f32) -> f32 {
+        let area = self.seen(p - self.motion * time).map_or(self.total, |s| s.1);
+        LightMesh::pdf_drawn(p, q, n, area)
+    }
+
+    /// [`pdf`](Self::pdf) of the point `q` (normal `n`) from `p` where
+    /// `area` is the area it was drawn from ([`point_seen`](Self::point_seen)).
+    #[inline(always)]
+    pub fn pdf_drawn(p: Vec3, q: Vec3, n: Vec3, area: f32) -> f32 {
         let to = q - p;
         let d2 = to.length_squared();
         let cos = n.dot(to).abs() / d2.sqrt();
         if cos <= 0.0 {
             return 0.0;
         }
-        let area = self.seen(p - self.motion * time).map_or(self.total, |s| s.1);
         d2 / (area * cos)
     }
 
@@ -481,11 +499,11 @@ impl ShadedLight {
     pub fn sample(&self, p: Vec3, time: f32, u: (f32, f32)) -> Option<(Vec3, f32, f32)> {
         match &self.shape {
             ShadedShape::Mesh(l) => {
-                let (q, nq) = l.point_seen(u, p - l.motion * time);
+                let (q, nq, area) = l.point_seen(u, p - l.motion * time);
                 let q = q + l.motion * time;
                 let to = q - p;
                 let dist = to.length();
-                let pdf = l.pdf(p, q, nq, time);
+                let pdf = LightMesh::pdf_drawn(p, q, nq, area);
                 (pdf > 0.0 && pdf.is_finite() && dist > 0.0).then_some((to / dist, dist, pdf))
             }
             ShadedShape::Sphere(l) => l.sample(p - l.motion * time, u),

@@ -292,15 +292,15 @@ impl Light {
 
 impl LightMesh {
     /// [`Light::sample`] of this mesh from `p` at shutter `time`, for its
-    /// point `q` of normal `nq` ([`LightMesh::point_seen`], at rest)
-    /// already drawn.
+    /// point `q` of normal `nq`, drawn from `area` ([`LightMesh::point_seen`],
+    /// at rest).
     #[inline(always)]
-    pub fn sample_from(&self, p: Vec3, (q, nq): (Vec3, Vec3), time: f32) -> Option<LightSample> {
+    pub fn sample_from(&self, p: Vec3, (q, nq, area): (Vec3, Vec3, f32), time: f32) -> Option<LightSample> {
         let q = q + self.motion * time;
         let to = q - p;
         let dist = to.length();
         let wi = to / dist;
-        let pdf = self.pdf(p, q, nq, time);
+        let pdf = LightMesh::pdf_drawn(p, q, nq, area);
         // `pdf <= 0 || !pdf.is_finite()` in one test (NaN fails both).
         if !(pdf > 0.0 && pdf < f32::INFINITY) {
             return None;

@@ -398,9 +398,10 @@ enum Shaded {
 struct LightAhead {
     /// The light (an index into the scene's lights): the first that draws.
     light: usize,
-    /// Its point, at rest, and the normal there.
+    /// Its point, at rest, the normal there, and the area it was drawn from.
     q: Vec3,
     n: Vec3,
+    area: f32,
 }
 
 impl LightAhead {
@@ -414,8 +415,8 @@ impl LightAhead {
         }
         let light = scene.lights.iter().position(Light::draws)?;
         let Light::Mesh(l) = &scene.lights[light] else { return None };
-        let (q, n) = l.point_seen(st.sampler.next_2d(), x - l.motion * st.time);
-        Some(LightAhead { light, q, n })
+        let (q, n, area) = l.point_seen(st.sampler.next_2d(), x - l.motion * st.time);
+        Some(LightAhead { light, q, n, area })
     }
 
     /// The sample of `light`, the `i`th of the scene's, for a surface point
@@ -431,7 +432,7 @@ impl LightAhead {
         st: &mut PathState,
     ) -> Option<LightSample> {
         match (light, ahead) {
-            (Light::Mesh(l), Some(a)) if a.light == i => l.sample_from(p, (a.q, a.n), st.time),
+            (Light::Mesh(l), Some(a)) if a.light == i => l.sample_from(p, (a.q, a.n, a.area), st.time),
             _ => light.sample_at(p, n, st.time, &mut st.sampler),
         }
     }

@@ -25,9 +25,9 @@
 use luster_core::math::Vec3;
 use std::collections::HashMap;
 
-/// Meshes with more distinct face planes keep every shadow ray (testing a
-/// point against the planes is one comparison each, per sample).
-const MAX_PLANES: usize = 8;
+/// Meshes with more distinct face planes draw from all of their area
+/// (a point is tested against every plane, per sample).
+pub const MAX_PLANES: usize = 8;
 
 /// A plane `n · x = d` with unit `n` pointing out of the hull.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -51,6 +51,10 @@ pub struct Shell {
     faces: Vec<Plane>,
     /// The plane of the holes, outward, if the mesh is open.
     hole: Option<Plane>,
+    /// `faces` lane by lane (normals' x, y, z and the offsets), padded to
+    /// [`MAX_PLANES`] with planes no point is outside of: [`Shell::facing`]
+    /// tests them all at once.
+    lanes: [[f32; MAX_PLANES]; 4],
     /// Distances below this are treated as on the plane: a point must be
     /// farther than this on the side a test needs.
     tol: f32,
@@ -92,7 +96,12 @@ impl Shell {
             rim if rim.is_empty() => None,
             rim => Some(turned_out(plane_through(&rim, tol)?, &verts, tol)?),
         };
-        Some(Shell { faces, hole, tol })
+        let mut lanes =
+            [[0.0; MAX_PLANES], [0.0; MAX_PLANES], [0.0; MAX_PLANES], [f32::INFINITY; MAX_PLANES]];
+        for (k, f) in faces.iter().enumerate() {
+            (lanes[0][k], lanes[1][k], lanes[2][k], lanes[3][k]) = (f.n.x, f.n.y, f.n.z, f.d);
+        }
+        Some(Shell { faces, hole, tol, lanes })
     }
 
     /// The face (an index below [`faces`](Self::faces)) that the triangle
@@ -129,7 +138,9 @@ impl Shell {
         if self.hole.is_some_and(|h| h.dist(o) > 0.0) {
             return 0;
         }
-        self.faces.iter().enumerate().fold(0, |m, (k, f)| m | (u32::from(f.dist(o) > 0.0) << k))
+        let [nx, ny, nz, d] = &self.lanes;
+        (0..MAX_PLANES)
+            .fold(0, |m, k| m | (u32::from(nx[k] * o.x + ny[k] * o.y + nz[k] * o.z - d[k] > 0.0) << k))
     }
 }
 
