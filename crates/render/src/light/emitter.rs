@@ -154,7 +154,7 @@ impl LightMesh {
     }
 
     /// The faces the point `p` (the light at rest) sees, as
-    /// [`Shell::facing`]'s mask, and their area; `None` where `p` may see
+    /// `Shell::facing`'s mask, and their area; `None` where `p` may see
     /// every point (a mesh that is no shell, or `p` inside it).
     #[inline(always)]
     fn seen(&self, p: Vec3) -> Option<(u32, f32)> {
@@ -177,7 +177,7 @@ impl LightMesh {
     /// mesh that the point `p` (the light at rest) may see, its unit
     /// normal, and the area it was drawn from (for [`sample_from`](Self::sample_from)'s
     /// density): on a convex shell, the faces `p` is outside of
-    /// ([`Shell::facing`]); on any other mesh, all of it.
+    /// (`Shell::facing`); on any other mesh, all of it.
     #[inline(always)]
     pub fn point_seen(&self, (u1, u2): (f32, f32), p: Vec3) -> (Vec3, Vec3, f32) {
         let (Some((mask, area)), Some(f)) = (self.seen(p), self.faces.as_ref()) else {
