@@ -72,13 +72,12 @@ pub struct LightMesh {
 struct Faces {
     shell: Shell,
     /// Per face of `shell`: its triangles' range in `tris`, the area sum
-    /// before its first triangle and its area.
-    runs: Vec<Run>,
-    /// Each face's area, padded with zeros: summed over a mask at once.
-    areas: [f32; MAX_PLANES],
+    /// before its first triangle and its area; padded with empty runs to
+    /// [`MAX_PLANES`], so that a mask's areas are summed at once.
+    runs: [Run; MAX_PLANES],
 }
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 struct Run {
     first: u32,
     end: u32,
@@ -129,20 +128,15 @@ impl LightMesh {
         let spans: Vec<(f32, f32)> =
             cdf.iter().scan(0.0, |lo, &hi| Some((std::mem::replace(lo, hi), hi))).collect();
         let faces = shell.map(|(shell, face)| {
-            let runs = (0..shell.faces())
-                .map(|k| {
-                    let first = face.partition_point(|&f| f < k);
-                    let end = face.partition_point(|&f| f <= k);
-                    let before = spans.get(first).map_or(total, |s| s.0);
-                    let after = if end > 0 { spans[end - 1].1 } else { 0.0 };
-                    Run { first: first as u32, end: end as u32, before, area: (after - before).max(0.0) }
-                })
-                .collect::<Vec<Run>>();
-            let mut areas = [0.0; MAX_PLANES];
-            for (a, r) in areas.iter_mut().zip(&runs) {
-                *a = r.area;
+            let mut runs = [Run::default(); MAX_PLANES];
+            for (k, run) in runs.iter_mut().enumerate().take(shell.faces()) {
+                let first = face.partition_point(|&f| f < k);
+                let end = face.partition_point(|&f| f <= k);
+                let before = spans.get(first).map_or(total, |s| s.0);
+                let after = if end > 0 { spans[end - 1].1 } else { 0.0 };
+                *run = Run { first: first as u32, end: end as u32, before, area: (after - before).max(0.0) };
             }
-            Box::new(Faces { shell, runs, areas })
+            Box::new(Faces { shell, runs })
         });
         (total > 0.0).then_some(LightMesh { tris, spans, scan, total, radiance, motion: Vec3::ZERO, faces })
     }
@@ -163,7 +157,7 @@ impl LightMesh {
         if mask == 0 {
             return None;
         }
-        let area = (0..MAX_PLANES).map(|k| if mask >> k & 1 != 0 { f.areas[k] } else { 0.0 }).sum();
+        let area = (0..MAX_PLANES).map(|k| if mask >> k & 1 != 0 { f.runs[k].area } else { 0.0 }).sum();
         Some((mask, area))
     }
 
@@ -173,14 +167,14 @@ impl LightMesh {
         self.point_in(u1 * self.total, u2, 0, self.tris.len())
     }
 
-    /// A point drawn uniformly by area from `(u1, u2)` over the part of the
-    /// mesh that the point `p` (the light at rest) may see, its unit
-    /// normal, and the area it was drawn from (for [`sample_from`](Self::sample_from)'s
-    /// density): on a convex shell, the faces `p` is outside of
-    /// (`Shell::facing`); on any other mesh, all of it.
+    /// A point of the light at rest drawn uniformly by area from `(u1, u2)`
+    /// over the part of the mesh that the point `p` may see at shutter
+    /// `time`, its unit normal, and the area it was drawn from (for
+    /// [`sample_from`](Self::sample_from)'s density): on a convex shell, the
+    /// faces `p` is outside of (`Shell::facing`); on any other mesh, all of it.
     #[inline(always)]
-    pub fn point_seen(&self, (u1, u2): (f32, f32), p: Vec3) -> (Vec3, Vec3, f32) {
-        let (Some((mask, area)), Some(f)) = (self.seen(p), self.faces.as_ref()) else {
+    pub fn point_seen(&self, (u1, u2): (f32, f32), p: Vec3, time: f32) -> (Vec3, Vec3, f32) {
+        let (Some((mask, area)), Some(f)) = (self.seen(p - self.motion * time), self.faces.as_ref()) else {
             let (q, n) = self.point((u1, u2));
             return (q, n, self.total);
         };
@@ -499,7 +493,7 @@ impl ShadedLight {
     pub fn sample(&self, p: Vec3, time: f32, u: (f32, f32)) -> Option<(Vec3, f32, f32)> {
         match &self.shape {
             ShadedShape::Mesh(l) => {
-                let (q, nq, area) = l.point_seen(u, p - l.motion * time);
+                let (q, nq, area) = l.point_seen(u, p, time);
                 let q = q + l.motion * time;
                 let to = q - p;
                 let dist = to.length();

@@ -254,7 +254,7 @@ impl Light {
                 let pdf = dist * dist / (l.area * cos_light);
                 Some(LightSample { wi, dist, e: l.radiance / pdf, point_source: false, pdf })
             }
-            Light::Mesh(l) => l.sample_from(p, l.point_seen(sampler.next_2d(), p - l.motion * time), time),
+            Light::Mesh(l) => l.sample_from(p, l.point_seen(sampler.next_2d(), p, time), time),
             Light::Sphere(l) => {
                 // Moving the point back is moving the sphere forward.
                 let (wi, dist, pdf) = l.sample(p - l.motion * time, sampler.next_2d())?;

@@ -148,29 +148,19 @@ pub(crate) struct MaterialOut {
 }
 
 /// The closure in `m`, written into `c` (only the nodes in use: those past
-/// its count are never read); `false` when the record is not one the
+/// its count are never read); `None` when the record is not one the
 /// prelude's constructors write (an unknown kind, a child not below its
 /// parent): the renderer relies on both.
-fn closure_of(m: &MaterialOut, c: &mut Closure) -> bool {
-    let Some(len) = usize::try_from(m.closure_len).ok().filter(|n| (1..=MAX_NODES).contains(n)) else {
-        return false;
-    };
-    let Some(root) = usize::try_from(m.closure_root).ok().filter(|&r| r < len) else { return false };
+fn closure_of(m: &MaterialOut, c: &mut Closure) -> Option<()> {
+    let len = usize::try_from(m.closure_len).ok().filter(|n| (1..=MAX_NODES).contains(n))?;
+    let root = usize::try_from(m.closure_root).ok().filter(|&r| r < len)?;
     (c.len, c.root) = (len as u8, root as u8);
     for (i, (dst, src)) in c.nodes.iter_mut().zip(&m.nodes[..len]).enumerate() {
-        let Some(&kind) = usize::try_from(src.kind).ok().and_then(|k| NodeKind::ALL.get(k)) else {
-            return false;
-        };
+        let kind = *usize::try_from(src.kind).ok().and_then(|k| NodeKind::ALL.get(k))?;
         let child = |k: i32| usize::try_from(k).ok().filter(|&k| k < i).map(|k| k as u8);
         let (a, b) = match kind {
-            NodeKind::Add | NodeKind::Layer => match (child(src.a), child(src.b)) {
-                (Some(a), Some(b)) => (a, b),
-                _ => return false,
-            },
-            NodeKind::Scale => match child(src.a) {
-                Some(a) => (a, 0),
-                None => return false,
-            },
+            NodeKind::Add | NodeKind::Layer => (child(src.a)?, child(src.b)?),
+            NodeKind::Scale => (child(src.a)?, 0),
             _ => (0, 0),
         };
         *dst = Node {
@@ -182,7 +172,7 @@ fn closure_of(m: &MaterialOut, c: &mut Closure) -> bool {
             x: src.x.map(|v| v as f32),
         };
     }
-    true
+    Some(())
 }
 
 /// The per-call deadline (`luster_clock`), in periods of the watchdog's
@@ -675,7 +665,7 @@ impl IoBlock {
         let m = unsafe { &*self.material };
         if defines(Entry::Material) {
             let closure = out.closure.get_or_insert_with(Closure::default);
-            let ok = closure_of(m, closure);
+            let ok = closure_of(m, closure).is_some();
             (out.color, out.specular, out.roughness, out.metalness, out.emission, out.reflect) =
                 (None, None, None, None, None, None);
             return ok;

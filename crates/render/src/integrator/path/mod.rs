@@ -415,7 +415,7 @@ impl LightAhead {
         }
         let light = scene.lights.iter().position(Light::draws)?;
         let Light::Mesh(l) = &scene.lights[light] else { return None };
-        let (q, n, area) = l.point_seen(st.sampler.next_2d(), x - l.motion * st.time);
+        let (q, n, area) = l.point_seen(st.sampler.next_2d(), x, st.time);
         Some(LightAhead { light, q, n, area })
     }
 

@@ -165,7 +165,7 @@ fn a_moving_light_is_seen_where_it_has_moved() {
     let mut rng = Rng(3);
     for (time, want) in [(0.0, Vec3::X), (1.0, -Vec3::X)] {
         for _ in 0..200 {
-            let (_, n, _) = light.point_seen((rng.next(), rng.next()), o - light.motion * time);
+            let (_, n, _) = light.point_seen((rng.next(), rng.next()), o, time);
             assert_eq!(n, want, "time {time}");
         }
     }
@@ -180,7 +180,7 @@ fn irradiance_both_ways(tris: &[[Vec3; 3]], o: Vec3, n: Vec3, samples: usize) ->
     let mut rng = Rng(11);
     let (mut a, mut a2, mut b, mut b2) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
     for _ in 0..samples {
-        let (q, nq, area) = light.point_seen((rng.next(), rng.next()), o);
+        let (q, nq, area) = light.point_seen((rng.next(), rng.next()), o, 0.0);
         let to = q - o;
         let pdf = light.pdf(o, q, nq, 0.0);
         assert_eq!(pdf, LightMesh::pdf_drawn(o, q, nq, area), "the area drawn from is the one pdf() finds");
@@ -238,7 +238,7 @@ fn seen_faces_draw_nothing_that_is_hidden() {
         if o.abs().max_element() <= 1.0 {
             continue;
         }
-        let (q, _, _) = light.point_seen((rng.next(), rng.next()), o);
+        let (q, _, _) = light.point_seen((rng.next(), rng.next()), o, 0.0);
         let to = q - o;
         let dist = to.length();
         assert!(!accel.occluded(&Ray::new(o, to / dist), 1e-6, dist * (1.0 - 1e-4)), "o {o} q {q}");
